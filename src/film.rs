@@ -1,0 +1,265 @@
+//! The film: linear f32 accumulators, filled in sample order, and the outputs.
+
+use crate::error::{Error, Result};
+use std::io::Cursor;
+use std::path::Path;
+
+/// The accumulators of one tile. Each pixel's samples are added in sample
+/// order, so the sum does not depend on threads, tiles or kernels. Samples with
+/// a NaN or infinite component are rejected (and counted), never added.
+#[derive(Clone, Debug)]
+pub struct TileFilm {
+    pub x0: u32,
+    pub y0: u32,
+    pub w: u32,
+    pub h: u32,
+    pub sum: Vec<[f32; 3]>,
+    pub count: Vec<u32>,
+    pub rejected: u64,
+}
+
+impl TileFilm {
+    pub fn new(x0: u32, y0: u32, w: u32, h: u32) -> Self {
+        let n = (w * h) as usize;
+        TileFilm {
+            x0,
+            y0,
+            w,
+            h,
+            sum: vec![[0.0; 3]; n],
+            count: vec![0; n],
+            rejected: 0,
+        }
+    }
+
+    /// Adds one sample to pixel `local` (row-major inside the tile).
+    #[inline]
+    pub fn add(&mut self, local: usize, c: [f32; 3]) {
+        if c.iter().all(|v| v.is_finite()) {
+            let s = &mut self.sum[local];
+            s[0] += c[0];
+            s[1] += c[1];
+            s[2] += c[2];
+            self.count[local] += 1;
+        } else {
+            self.rejected += 1;
+        }
+    }
+
+    /// Pixel (x, y) of the tile's top-left corner plus `local`.
+    pub fn pixel_of(&self, local: usize) -> (u32, u32) {
+        (self.x0 + local as u32 % self.w, self.y0 + local as u32 / self.w)
+    }
+}
+
+/// A linear RGB image, row-major from the top-left.
+#[derive(Clone, Debug, PartialEq)]
+pub struct Image {
+    pub width: u32,
+    pub height: u32,
+    pub data: Vec<[f32; 3]>,
+}
+
+impl Image {
+    pub fn new(width: u32, height: u32) -> Self {
+        Image {
+            width,
+            height,
+            data: vec![[0.0; 3]; (width * height) as usize],
+        }
+    }
+
+    pub fn get(&self, x: u32, y: u32) -> [f32; 3] {
+        self.data[(y * self.width + x) as usize]
+    }
+
+    /// Writes a tile's mean values into the image.
+    pub fn put_tile(&mut self, t: &TileFilm) {
+        for local in 0..t.sum.len() {
+            let (x, y) = t.pixel_of(local);
+            let n = t.count[local];
+            let v = if n == 0 {
+                [0.0; 3]
+            } else {
+                t.sum[local].map(|s| s / n as f32)
+            };
+            self.data[(y * self.width + x) as usize] = v;
+        }
+    }
+
+    /// FNV-1a over the bits of every value: equal hashes, identical images.
+    pub fn hash(&self) -> u64 {
+        let mut h: u64 = 0xcbf2_9ce4_8422_2325;
+        for v in self.data.iter().flatten() {
+            for b in v.to_bits().to_le_bytes() {
+                h ^= b as u64;
+                h = h.wrapping_mul(0x0000_0100_0000_01b3);
+            }
+        }
+        h
+    }
+
+    /// 8-bit sRGB-ish bytes with the book's encoding: `x^(1/gamma)`, clamped
+    /// to [0, 0.999], times 256.
+    pub fn to_rgb8(&self, gamma: f32) -> Vec<u8> {
+        let inv = 1.0 / gamma;
+        self.data
+            .iter()
+            .flatten()
+            .map(|&v| {
+                let g = if gamma == 1.0 { v } else { v.max(0.0).powf(inv) };
+                (256.0 * g.clamp(0.0, 0.999)) as u8
+            })
+            .collect()
+    }
+
+    pub fn png_bytes(&self, gamma: f32) -> Vec<u8> {
+        let mut out = Vec::new();
+        let img = image::RgbImage::from_raw(self.width, self.height, self.to_rgb8(gamma)).expect("size matches");
+        img.write_to(&mut Cursor::new(&mut out), image::ImageFormat::Png)
+            .expect("PNG encodes in memory");
+        out
+    }
+
+    /// Portable float map: linear RGB, little-endian, rows bottom to top.
+    pub fn pfm_bytes(&self) -> Vec<u8> {
+        let mut out = format!("PF\n{} {}\n-1.0\n", self.width, self.height).into_bytes();
+        for y in (0..self.height).rev() {
+            for x in 0..self.width {
+                for v in self.get(x, y) {
+                    out.extend_from_slice(&v.to_le_bytes());
+                }
+            }
+        }
+        out
+    }
+
+    pub fn exr_bytes(&self) -> Vec<u8> {
+        let raw: Vec<f32> = self.data.iter().flatten().copied().collect();
+        let img = image::Rgb32FImage::from_raw(self.width, self.height, raw).expect("size matches");
+        let mut out = Vec::new();
+        image::DynamicImage::ImageRgb32F(img)
+            .write_to(&mut Cursor::new(&mut out), image::ImageFormat::OpenExr)
+            .expect("EXR encodes in memory");
+        out
+    }
+
+    /// Writes the image atomically: PNG (8-bit, `gamma`), PFM or EXR (linear), by extension.
+    pub fn save(&self, path: &Path, gamma: f32) -> Result<()> {
+        let ext = path
+            .extension()
+            .and_then(|e| e.to_str())
+            .map(|e| e.to_ascii_lowercase());
+        let bytes = match ext.as_deref() {
+            Some("png") => self.png_bytes(gamma),
+            Some("pfm") => self.pfm_bytes(),
+            Some("exr") => self.exr_bytes(),
+            _ => {
+                return Err(Error::Output {
+                    path: path.to_path_buf(),
+                    message: "unknown image type (use .png, .pfm or .exr)".into(),
+                })
+            }
+        };
+        crate::output::write_atomic(path, &bytes)
+    }
+
+    /// Reads a linear image back (PFM or EXR), e.g. a converge reference.
+    pub fn load_float(path: &Path) -> Result<Image> {
+        let bad = |m: String| Error::Input(format!("{}: {m}", path.display()));
+        let bytes = std::fs::read(path).map_err(|e| bad(e.to_string()))?;
+        if bytes.starts_with(b"PF\n") {
+            let text_end = nth_newline(&bytes, 3).ok_or_else(|| bad("truncated PFM header".into()))?;
+            let header = std::str::from_utf8(&bytes[..text_end]).map_err(|e| bad(e.to_string()))?;
+            let mut it = header.split_whitespace().skip(1);
+            let mut num = || {
+                it.next()
+                    .and_then(|s| s.parse::<f64>().ok())
+                    .ok_or_else(|| bad("bad PFM header".into()))
+            };
+            let (w, h, scale) = (num()? as u32, num()? as u32, num()?);
+            let body = &bytes[text_end + 1..];
+            if body.len() != (w * h * 12) as usize {
+                return Err(bad("PFM size does not match its header".into()));
+            }
+            let rd = |i: usize| {
+                let b: [u8; 4] = body[4 * i..4 * i + 4].try_into().unwrap();
+                if scale < 0.0 {
+                    f32::from_le_bytes(b)
+                } else {
+                    f32::from_be_bytes(b)
+                }
+            };
+            let mut img = Image::new(w, h);
+            for row in 0..h {
+                for x in 0..w {
+                    let i = ((row * w + x) * 3) as usize;
+                    img.data[((h - 1 - row) * w + x) as usize] = [rd(i), rd(i + 1), rd(i + 2)];
+                }
+            }
+            Ok(img)
+        } else {
+            let img = image::load_from_memory(&bytes)
+                .map_err(|e| bad(e.to_string()))?
+                .into_rgb32f();
+            let (w, h) = img.dimensions();
+            let data = img.into_raw().chunks_exact(3).map(|c| [c[0], c[1], c[2]]).collect();
+            Ok(Image {
+                width: w,
+                height: h,
+                data,
+            })
+        }
+    }
+}
+
+fn nth_newline(b: &[u8], n: usize) -> Option<usize> {
+    b.iter()
+        .enumerate()
+        .filter(|(_, &c)| c == b'\n')
+        .nth(n - 1)
+        .map(|(i, _)| i)
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    #[test]
+    fn nan_and_inf_never_reach_the_image() {
+        let mut t = TileFilm::new(0, 0, 1, 1);
+        t.add(0, [1.0, 1.0, 1.0]);
+        t.add(0, [f32::NAN, 0.0, 0.0]);
+        t.add(0, [0.0, f32::INFINITY, 0.0]);
+        t.add(0, [3.0, 3.0, 3.0]);
+        assert_eq!(t.rejected, 2);
+        let mut img = Image::new(1, 1);
+        img.put_tile(&t);
+        assert_eq!(img.get(0, 0), [2.0, 2.0, 2.0]);
+    }
+
+    #[test]
+    fn pfm_round_trips() {
+        let mut img = Image::new(3, 2);
+        for (i, p) in img.data.iter_mut().enumerate() {
+            *p = [i as f32, 0.5, -1.0];
+        }
+        let dir = tempfile::tempdir().unwrap();
+        let path = dir.path().join("a.pfm");
+        img.save(&path, 1.0).unwrap();
+        assert_eq!(Image::load_float(&path).unwrap(), img);
+        let path = dir.path().join("a.exr");
+        img.save(&path, 1.0).unwrap();
+        assert_eq!(Image::load_float(&path).unwrap(), img);
+    }
+
+    #[test]
+    fn book_encoding() {
+        let img = Image {
+            width: 2,
+            height: 1,
+            data: vec![[0.25, 1.0, 2.0], [0.0, -1.0, 0.5]],
+        };
+        assert_eq!(img.to_rgb8(2.0), vec![128, 255, 255, 0, 0, 181]);
+    }
+}

@@ -1,0 +1,7 @@
+//! Geometry: spheres as structure-of-arrays and the ray-sphere intersection.
+
+pub mod intersect;
+pub mod spheres;
+
+pub use intersect::{closest_hit_scalar, closest_hit_x8, spawn, sphere_disc, sphere_t, surface, Surface};
+pub use spheres::{Spheres, MISS};

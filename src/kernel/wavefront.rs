@@ -1,0 +1,377 @@
+//! The SIMD wavefront path tracer.
+//!
+//! A tile's paths for a batch of samples are generated together, then advanced
+//! one bounce at a time, all in structure-of-arrays:
+//!
+//! ```text
+//! generate camera rays (8 at a time)
+//! loop until no path is alive or max_depth rays were traced:
+//!     intersect: 8 contiguous rays per packet, every sphere broadcast against them
+//!     classify:  each path joins the queue of its hit's material kind, or the miss queue
+//!     miss pass: throughput x sky -> the path's result
+//!     one scatter pass per material kind the scene uses (8 paths at a time, gathered)
+//!     compaction: survivors are appended to the next bounce's arrays
+//! add results to the film in sample order
+//! ```
+//!
+//! Lane k of every packet computes exactly what the scalar kernel computes for
+//! that path: the formulas are the width-generic ones, the random stream is the
+//! same xoshiro128+ run lane-wise, and the closest-hit tie rule is the same.
+//! Memory is bounded: a workspace holds `tile pixels x batch samples` paths.
+
+use super::{normal_colour, sky, Counters};
+use crate::film::TileFilm;
+use crate::geometry::{closest_hit_x8, spawn, surface, Surface, MISS};
+use crate::material::{dielectric, lambertian, metal};
+use crate::plan::Prepared;
+use crate::real::Real;
+use crate::sampling::{path_state, Xoshiro128PlusX8};
+use crate::scene::{Kind, Mode};
+use crate::vec3::V3;
+use wide::{f32x8, u32x8};
+
+/// Paths in flight per workspace (per thread), at most.
+pub const MAX_PATHS: usize = 2048;
+
+const MISS_QUEUE: usize = 3;
+
+/// Path state, structure of arrays. Arrays have 8 lanes of slack so the last
+/// packet can always be loaded whole (its extra lanes are computed, never stored).
+#[derive(Default)]
+struct Paths {
+    o: [Vec<f32>; 3],
+    d: [Vec<f32>; 3],
+    thr: [Vec<f32>; 3],
+    rng: [Vec<u32>; 4],
+    /// Index of the path's result: `sample_in_batch * tile_pixels + pixel_in_tile`.
+    slot: Vec<u32>,
+    len: usize,
+}
+
+impl Paths {
+    fn with_capacity(cap: usize) -> Self {
+        let f = || vec![0.0f32; cap + 8];
+        let u = || vec![0u32; cap + 8];
+        Paths {
+            o: [f(), f(), f()],
+            d: [f(), f(), f()],
+            thr: [f(), f(), f()],
+            rng: [u(), u(), u(), u()],
+            slot: u(),
+            len: 0,
+        }
+    }
+
+    #[inline(always)]
+    fn push(&mut self, o: [f32; 3], d: [f32; 3], thr: [f32; 3], rng: [u32; 4], slot: u32) {
+        let i = self.len;
+        for a in 0..3 {
+            self.o[a][i] = o[a];
+            self.d[a][i] = d[a];
+            self.thr[a][i] = thr[a];
+        }
+        for w in 0..4 {
+            self.rng[w][i] = rng[w];
+        }
+        self.slot[i] = slot;
+        self.len = i + 1;
+    }
+}
+
+#[inline(always)]
+fn load(v: &[f32], i: usize) -> f32x8 {
+    f32x8::new(v[i..i + 8].try_into().unwrap())
+}
+
+#[inline(always)]
+fn load_u(v: &[u32], i: usize) -> u32x8 {
+    u32x8::new(v[i..i + 8].try_into().unwrap())
+}
+
+#[inline(always)]
+fn store(v: &mut [f32], i: usize, x: f32x8) {
+    v[i..i + 8].copy_from_slice(&x.to_array());
+}
+
+#[inline(always)]
+fn gather(v: &[f32], idx: &[u32; 8]) -> f32x8 {
+    f32x8::new(std::array::from_fn(|k| v[idx[k] as usize]))
+}
+
+#[inline(always)]
+fn gather_u(v: &[u32], idx: &[u32; 8]) -> u32x8 {
+    u32x8::new(std::array::from_fn(|k| v[idx[k] as usize]))
+}
+
+/// A mask with every lane on.
+#[inline(always)]
+fn all_lanes() -> f32x8 {
+    bytemuck::cast(u32x8::splat(u32::MAX))
+}
+
+#[inline(always)]
+fn v3_load(v: &[Vec<f32>; 3], i: usize) -> V3<f32x8> {
+    V3::new(load(&v[0], i), load(&v[1], i), load(&v[2], i))
+}
+
+#[inline(always)]
+fn v3_gather(v: &[Vec<f32>; 3], idx: &[u32; 8]) -> V3<f32x8> {
+    V3::new(gather(&v[0], idx), gather(&v[1], idx), gather(&v[2], idx))
+}
+
+#[inline(always)]
+fn lanes(v: V3<f32x8>) -> [[f32; 8]; 3] {
+    [v.x.to_array(), v.y.to_array(), v.z.to_array()]
+}
+
+/// A thread's wavefront state, reused across tiles (no allocation per tile).
+pub struct Workspace {
+    cur: Paths,
+    next: Paths,
+    hit: Vec<u32>,
+    t: Vec<f32>,
+    /// Indices into `cur`, one queue per material kind (by `Kind as usize`) and one for misses.
+    queue: [Vec<u32>; 4],
+    result: Vec<[f32; 3]>,
+}
+
+impl Default for Workspace {
+    fn default() -> Self {
+        Workspace {
+            cur: Paths::with_capacity(MAX_PATHS),
+            next: Paths::with_capacity(MAX_PATHS),
+            hit: vec![0; MAX_PATHS + 8],
+            t: vec![0.0; MAX_PATHS + 8],
+            queue: std::array::from_fn(|_| Vec::with_capacity(MAX_PATHS)),
+            result: vec![[0.0; 3]; MAX_PATHS],
+        }
+    }
+}
+
+/// Renders every sample of every pixel of `tile` (at most `MAX_PATHS` pixels).
+pub fn render_tile(prep: &Prepared, ws: &mut Workspace, tile: &mut TileFilm, counters: &mut Counters) {
+    let px = tile.sum.len();
+    assert!(
+        px <= MAX_PATHS,
+        "tile of {px} pixels exceeds the wavefront's {MAX_PATHS} paths"
+    );
+    let spp = prep.settings.spp as usize;
+    let batch = (MAX_PATHS / px).max(1);
+    let mut s0 = 0;
+    while s0 < spp {
+        let s1 = (s0 + batch).min(spp);
+        ws.result[..(s1 - s0) * px].fill([0.0; 3]);
+        generate(prep, ws, tile, s0, s1);
+        for _ in 0..prep.settings.max_depth {
+            if ws.cur.len == 0 {
+                break;
+            }
+            bounce(prep, ws, counters);
+        }
+        for s in 0..s1 - s0 {
+            for local in 0..px {
+                tile.add(local, ws.result[s * px + local]);
+            }
+        }
+        s0 = s1;
+    }
+}
+
+/// Camera rays for samples `s0..s1` of every pixel of the tile, 8 at a time.
+fn generate(prep: &Prepared, ws: &mut Workspace, tile: &TileFilm, s0: usize, s1: usize) {
+    let st = &prep.settings;
+    let px = tile.sum.len();
+    let p = &mut ws.cur;
+    let n = (s1 - s0) * px;
+    // Pixel coordinates ride in the throughput arrays until the rays exist.
+    for slot in 0..n {
+        let (x, y) = tile.pixel_of(slot % px);
+        let sample = (s0 + slot / px) as u64;
+        let state = path_state(st.seed, y as u64 * st.width as u64 + x as u64, sample);
+        for w in 0..4 {
+            p.rng[w][slot] = state[w];
+        }
+        p.thr[0][slot] = x as f32;
+        p.thr[1][slot] = y as f32;
+        p.slot[slot] = slot as u32;
+    }
+    for i in (0..n).step_by(8) {
+        let mut rng = Xoshiro128PlusX8 {
+            s: std::array::from_fn(|w| load_u(&p.rng[w], i)),
+        };
+        let (o, d) = prep.camera.ray(load(&p.thr[0], i), load(&p.thr[1], i), &mut rng);
+        for a in 0..3 {
+            let (oa, da) = [(o.x, d.x), (o.y, d.y), (o.z, d.z)][a];
+            store(&mut p.o[a], i, oa);
+            store(&mut p.d[a], i, da);
+            store(&mut p.thr[a], i, f32x8::splat(1.0));
+        }
+        for w in 0..4 {
+            p.rng[w][i..i + 8].copy_from_slice(&rng.s[w].to_array());
+        }
+    }
+    p.len = n;
+}
+
+/// One bounce of every live path: intersect, classify, shade misses, scatter.
+fn bounce(prep: &Prepared, ws: &mut Workspace, counters: &mut Counters) {
+    let n = ws.cur.len;
+    counters.rays += n as u64;
+    let cur = &ws.cur;
+    for i in (0..n).step_by(8) {
+        let (hit, t) = closest_hit_x8(&prep.spheres, v3_load(&cur.o, i), v3_load(&cur.d, i));
+        ws.hit[i..i + 8].copy_from_slice(&hit.to_array());
+        store(&mut ws.t, i, t);
+        counters.isect_active += (n - i).min(8) as u64;
+        counters.isect_lanes += 8;
+    }
+    for q in ws.queue.iter_mut() {
+        q.clear();
+    }
+    for i in 0..n {
+        let h = ws.hit[i];
+        let q = if h == MISS {
+            MISS_QUEUE
+        } else {
+            prep.spheres.kind[h as usize] as usize
+        };
+        ws.queue[q].push(i as u32);
+    }
+    let queues = std::mem::take(&mut ws.queue);
+    ws.next.len = 0;
+    for_packets(&queues[MISS_QUEUE], counters, |idx, active| {
+        let c = v3_gather(&ws.cur.thr, idx).mul_elem(sky(&prep.sky, v3_gather(&ws.cur.d, idx)));
+        write_results(ws, idx, active, c);
+    });
+    match prep.plan.mode {
+        Mode::Path => {
+            for kind in Kind::ALL {
+                if prep.plan.uses(kind) {
+                    for_packets(&queues[kind as usize], counters, |idx, active| {
+                        scatter(prep, ws, kind, idx, active)
+                    });
+                }
+            }
+        }
+        mode => {
+            for q in &queues[..MISS_QUEUE] {
+                for_packets(q, counters, |idx, active| debug_shade(prep, ws, mode, idx, active));
+            }
+        }
+    }
+    ws.queue = queues;
+    std::mem::swap(&mut ws.cur, &mut ws.next);
+}
+
+/// Calls `f` with each packet of 8 indices of `queue` (the last one padded by
+/// repeating its first index) and the number of real lanes.
+#[inline(always)]
+fn for_packets(queue: &[u32], counters: &mut Counters, mut f: impl FnMut(&[u32; 8], usize)) {
+    for chunk in queue.chunks(8) {
+        let idx: [u32; 8] = std::array::from_fn(|k| *chunk.get(k).unwrap_or(&chunk[0]));
+        counters.scatter_active += chunk.len() as u64;
+        counters.scatter_lanes += 8;
+        f(&idx, chunk.len());
+    }
+}
+
+#[inline(always)]
+fn write_results(ws: &mut Workspace, idx: &[u32; 8], active: usize, c: V3<f32x8>) {
+    let c = lanes(c);
+    for k in 0..active {
+        let slot = ws.cur.slot[idx[k] as usize] as usize;
+        ws.result[slot] = [c[0][k], c[1][k], c[2][k]];
+    }
+}
+
+/// The hit surfaces of 8 queued paths.
+#[inline(always)]
+fn surfaces(prep: &Prepared, ws: &Workspace, idx: &[u32; 8]) -> (V3<f32x8>, Surface<f32x8>, [u32; 8]) {
+    let sp = &prep.spheres;
+    let sph: [u32; 8] = std::array::from_fn(|k| ws.hit[idx[k] as usize]);
+    let c = V3::new(gather(&sp.cx, &sph), gather(&sp.cy, &sph), gather(&sp.cz, &sph));
+    let d = v3_gather(&ws.cur.d, idx);
+    let srf = surface(v3_gather(&ws.cur.o, idx), d, gather(&ws.t, idx), c, gather(&sp.r, &sph));
+    (d, srf, sph)
+}
+
+fn debug_shade(prep: &Prepared, ws: &mut Workspace, mode: Mode, idx: &[u32; 8], active: usize) {
+    let (_, srf, sph) = surfaces(prep, ws, idx);
+    let c = match mode {
+        Mode::Normals => normal_colour(srf.n),
+        _ => {
+            let sp = &prep.spheres;
+            let cols: [[f32; 3]; 8] = std::array::from_fn(|k| {
+                prep.materials
+                    .flat_colour(sp.kind[sph[k] as usize], sp.row[sph[k] as usize])
+            });
+            V3::new(
+                f32x8::new(cols.map(|c| c[0])),
+                f32x8::new(cols.map(|c| c[1])),
+                f32x8::new(cols.map(|c| c[2])),
+            )
+        }
+    };
+    write_results(ws, idx, active, c);
+}
+
+/// Scatters 8 paths that hit material `kind`; survivors join the next bounce.
+#[inline(always)]
+fn scatter(prep: &Prepared, ws: &mut Workspace, kind: Kind, idx: &[u32; 8], active: usize) {
+    let (d, srf, sph) = surfaces(prep, ws, idx);
+    let cur = &ws.cur;
+    let mut rng = Xoshiro128PlusX8 {
+        s: std::array::from_fn(|w| gather_u(&cur.rng[w], idx)),
+    };
+    let rows: [usize; 8] = std::array::from_fn(|k| prep.spheres.row[sph[k] as usize] as usize);
+    let m = &prep.materials;
+    let thr = v3_gather(&cur.thr, idx);
+    let (dir, thr, alive) = match kind {
+        Kind::Lambertian => {
+            let albedo = rows.map(|r| m.lambertian[r]);
+            let a = V3::new(
+                f32x8::new(albedo.map(|c| c[0])),
+                f32x8::new(albedo.map(|c| c[1])),
+                f32x8::new(albedo.map(|c| c[2])),
+            );
+            (lambertian(srf.n, &mut rng), thr.mul_elem(a), all_lanes())
+        }
+        Kind::Metal => {
+            let params = rows.map(|r| m.metal[r]);
+            let a = V3::new(
+                f32x8::new(params.map(|p| p.0[0])),
+                f32x8::new(params.map(|p| p.0[1])),
+                f32x8::new(params.map(|p| p.0[2])),
+            );
+            let (dir, ok) = metal(d, srf.n, f32x8::new(params.map(|p| p.1)), &mut rng);
+            (dir, thr.mul_elem(a), ok)
+        }
+        Kind::Dielectric => {
+            let ior = f32x8::new(rows.map(|r| m.dielectric[r]));
+            let one = V3::splat3([1.0; 3]);
+            (
+                dielectric(d, srf.n, srf.front, ior, &mut rng),
+                thr.mul_elem(one),
+                all_lanes(),
+            )
+        }
+    };
+    let zero = f32x8::splat(0.0);
+    let dark = thr.x.eq(zero) & thr.y.eq(zero) & thr.z.eq(zero);
+    let alive = (alive & !dark).to_bitmask();
+    let o = lanes(spawn(&srf, dir));
+    let (dl, tl) = (lanes(dir), lanes(thr));
+    let rl: [[u32; 8]; 4] = rng.s.map(|w| w.to_array());
+    for k in 0..active {
+        if alive & (1 << k) != 0 {
+            let slot = ws.cur.slot[idx[k] as usize];
+            ws.next.push(
+                [o[0][k], o[1][k], o[2][k]],
+                [dl[0][k], dl[1][k], dl[2][k]],
+                [tl[0][k], tl[1][k], tl[2][k]],
+                [rl[0][k], rl[1][k], rl[2][k], rl[3][k]],
+                slot,
+            );
+        }
+    }
+}

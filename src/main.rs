@@ -1,0 +1,262 @@
+//! The `rtow` command line: parse, call the library, show progress.
+
+use clap::{Args, CommandFactory, FromArgMatches, Parser, Subcommand};
+use indicatif::{ProgressBar, ProgressStyle};
+use rtow::scene::{self, Scene};
+use rtow::{Error, KernelKind, RenderOptions, Result, Settings};
+use std::io::IsTerminal;
+use std::path::{Path, PathBuf};
+use std::process::ExitCode;
+use std::time::Instant;
+
+#[derive(Parser)]
+#[command(
+    name = "rtow",
+    about = "A data-oriented SIMD path tracer for Ray Tracing in One Weekend"
+)]
+struct Cli {
+    #[command(subcommand)]
+    command: Command,
+}
+
+#[derive(Subcommand)]
+enum Command {
+    /// Render a preset or a scene file (.json / .toml) to PNG (and optionally a float image).
+    Render(RenderArgs),
+    /// List the built-in scenes.
+    Scenes,
+    /// Write a preset as a scene file (.json or .toml).
+    Export {
+        /// Preset name (see `rtow scenes`).
+        preset: String,
+        /// Output scene file.
+        #[arg(short, long)]
+        output: PathBuf,
+    },
+}
+
+/// Image settings shared by every command that renders.
+#[derive(Args, Clone, Debug)]
+struct ImageArgs {
+    /// Image width in pixels [default: the scene's]
+    #[arg(long)]
+    width: Option<u32>,
+    /// Image height in pixels [default: the scene's]
+    #[arg(long)]
+    height: Option<u32>,
+    /// Samples per pixel [default: the scene's]
+    #[arg(long)]
+    spp: Option<u32>,
+    /// Maximum rays per path [default: the scene's, the book's 50]
+    #[arg(long)]
+    depth: Option<u32>,
+    /// Seed of the random streams [default: the scene's, else 0]
+    #[arg(long)]
+    seed: Option<u64>,
+    /// The book's final settings: 1200x675, 500 spp, depth 50 (flags given explicitly still win)
+    #[arg(long)]
+    book: bool,
+    /// Worker threads [default: one per core]
+    #[arg(long)]
+    threads: Option<usize>,
+    /// Tile edge in pixels
+    #[arg(long, default_value_t = 16)]
+    tile: u32,
+}
+
+#[derive(Args)]
+struct RenderArgs {
+    /// A preset name (see `rtow scenes`) or a scene file (.json / .toml).
+    scene: String,
+    /// Output PNG (8-bit, gamma encoded) [default: <scene name>.png]
+    #[arg(short, long)]
+    output: Option<PathBuf>,
+    #[command(flatten)]
+    image: ImageArgs,
+    /// Kernel: the scalar reference or the SIMD wavefront.
+    #[arg(long, value_enum, default_value_t = KernelKind::Simd)]
+    kernel: KernelKind,
+    /// Also write the linear image: .pfm or .exr.
+    #[arg(long, value_name = "FILE")]
+    float: Option<PathBuf>,
+    /// Write render statistics as JSON.
+    #[arg(long, value_name = "FILE")]
+    stats_json: Option<PathBuf>,
+    /// PNG gamma [default: 2 for path traced scenes, 1 for the debug chapters, as in the book]
+    #[arg(long)]
+    gamma: Option<f32>,
+    /// Print the render plan (what the scene needs) before rendering.
+    #[arg(long)]
+    explain: bool,
+    /// No progress bar and no summary line.
+    #[arg(short, long)]
+    quiet: bool,
+}
+
+/// A preset or a file: the scene and a short name for default outputs.
+fn load(spec: &str) -> Result<(Scene, String)> {
+    if let Some(s) = scene::preset(spec) {
+        return Ok((s, spec.to_string()));
+    }
+    let path = Path::new(spec);
+    if path.extension().is_some() || path.exists() {
+        let s = scene::load_scene(path)?;
+        let name = path
+            .file_stem()
+            .map(|s| s.to_string_lossy().into_owned())
+            .unwrap_or_else(|| "scene".into());
+        return Ok((s, name));
+    }
+    Err(Error::Input(format!(
+        "unknown scene '{spec}': not a preset (see `rtow scenes`) and not a .json/.toml file"
+    )))
+}
+
+fn settings(scene: &Scene, a: &ImageArgs) -> Settings {
+    let mut s = rtow::default_settings(scene);
+    if a.book {
+        s.width = 1200;
+        s.height = 675;
+        s.spp = 500;
+        s.max_depth = 50;
+    }
+    s.width = a.width.unwrap_or(s.width);
+    s.height = a.height.unwrap_or(s.height);
+    s.spp = a.spp.unwrap_or(s.spp);
+    s.max_depth = a.depth.unwrap_or(s.max_depth);
+    s.seed = a.seed.unwrap_or(s.seed);
+    s
+}
+
+fn check_writable_ext(path: &Path, allowed: &[&str], what: &str) -> Result<()> {
+    let ext = path
+        .extension()
+        .and_then(|e| e.to_str())
+        .map(|e| e.to_ascii_lowercase())
+        .unwrap_or_default();
+    if allowed.contains(&ext.as_str()) {
+        Ok(())
+    } else {
+        Err(Error::Output {
+            path: path.to_path_buf(),
+            message: format!("{what} must end in .{}", allowed.join(" or .")),
+        })
+    }
+}
+
+fn progress_bar(quiet: bool) -> Option<ProgressBar> {
+    if quiet || !std::io::stderr().is_terminal() {
+        return None;
+    }
+    let bar = ProgressBar::new(0);
+    bar.set_style(
+        ProgressStyle::with_template("{spinner} [{elapsed_precise}] {wide_bar} {percent:>3}% ETA {eta} {msg}")
+            .expect("valid template"),
+    );
+    Some(bar)
+}
+
+/// Renders with a progress bar (on a terminal) showing live Mrays/s.
+fn render_with_progress(scene: &Scene, s: Settings, opts: RenderOptions, quiet: bool) -> Result<rtow::Rendered> {
+    let bar = progress_bar(quiet);
+    let start = Instant::now();
+    let cb = |p: rtow::render::Progress| {
+        if let Some(b) = &bar {
+            b.set_length(p.tiles_total);
+            b.set_position(p.tiles_done);
+            let secs = start.elapsed().as_secs_f64().max(1e-9);
+            b.set_message(format!("{:.2} Mrays/s", p.rays as f64 / secs / 1e6));
+        }
+    };
+    let out = rtow::render(scene, s, opts, Some(&cb));
+    if let Some(b) = bar {
+        b.finish_and_clear();
+    }
+    out
+}
+
+fn cmd_render(a: RenderArgs) -> Result<()> {
+    let (scene, name) = load(&a.scene)?;
+    let s = settings(&scene, &a.image);
+    let out = a.output.clone().unwrap_or_else(|| PathBuf::from(format!("{name}.png")));
+    check_writable_ext(&out, &["png"], "the output image")?;
+    if let Some(f) = &a.float {
+        check_writable_ext(f, &["pfm", "exr"], "--float")?;
+    }
+    let opts = RenderOptions {
+        kernel: a.kernel,
+        threads: a.image.threads,
+        tile: a.image.tile,
+    };
+    if a.explain {
+        let prep = rtow::plan::Prepared::new(&scene, s)?;
+        println!("{}", prep.plan.explain());
+    }
+    let r = render_with_progress(&scene, s, opts, a.quiet)?;
+    let gamma = a.gamma.unwrap_or(scene.mode.default_gamma());
+    r.image.save(&out, gamma)?;
+    if let Some(f) = &a.float {
+        r.image.save(f, 1.0)?;
+    }
+    if let Some(j) = &a.stats_json {
+        let text = serde_json::to_string_pretty(&r.stats).expect("stats serialize") + "\n";
+        rtow::output::write_atomic(j, text.as_bytes())?;
+    }
+    if !a.quiet {
+        let st = &r.stats;
+        println!(
+            "{name}: {}x{} {} spp -> {}: {} rays, {} samples in {:.3} s = {:.2} Mrays/s ({} kernel, {} threads, {}){}",
+            st.width,
+            st.height,
+            st.spp,
+            out.display(),
+            st.rays,
+            st.samples,
+            st.seconds,
+            st.mrays_per_s,
+            st.kernel,
+            st.threads,
+            st.isa,
+            if st.rejected_samples > 0 {
+                format!(", {} NaN/Inf samples rejected", st.rejected_samples)
+            } else {
+                String::new()
+            }
+        );
+    }
+    Ok(())
+}
+
+fn run(cli: Cli) -> Result<()> {
+    match cli.command {
+        Command::Render(a) => cmd_render(a),
+        Command::Scenes => {
+            for p in scene::presets() {
+                println!("{:<16} {}", p.name, p.description);
+            }
+            Ok(())
+        }
+        Command::Export { preset, output } => {
+            let s = scene::preset(&preset)
+                .ok_or_else(|| Error::Input(format!("unknown preset '{preset}' (see `rtow scenes`)")))?;
+            scene::save_scene(&s, &output)
+        }
+    }
+}
+
+fn main() -> ExitCode {
+    let version = format!("{} (SIMD: {})", env!("CARGO_PKG_VERSION"), rtow::isa());
+    let version: &'static str = Box::leak(version.into_boxed_str());
+    let matches = Cli::command().version(version).get_matches();
+    let cli = match Cli::from_arg_matches(&matches) {
+        Ok(c) => c,
+        Err(e) => e.exit(),
+    };
+    match run(cli) {
+        Ok(()) => ExitCode::SUCCESS,
+        Err(e) => {
+            eprintln!("error: {e}");
+            ExitCode::from(e.exit_code() as u8)
+        }
+    }
+}

@@ -1,0 +1,100 @@
+//! Scatter functions of the book's three materials, for both widths, and the
+//! per-kind material tables.
+//!
+//! Physics as in the book (v4), not the seed's slips (SEED-NOTES.md): a true
+//! Lambertian (normal + uniform unit vector, falling back to the normal when the
+//! sum nearly vanishes), metal fuzz from a unit-sphere sample, dielectrics with
+//! Snell refraction, total internal reflection and Schlick's reflectance drawn
+//! against a uniform random number. All directions leave normalized.
+
+use crate::real::Real;
+use crate::sampling::{unit_vector, Stream};
+use crate::scene::{Kind, Material};
+use crate::vec3::V3;
+
+/// One table per material kind; a sphere's (kind, row) indexes them.
+#[derive(Clone, Debug, Default)]
+pub struct MaterialTables {
+    pub lambertian: Vec<[f32; 3]>,
+    /// (albedo, fuzz)
+    pub metal: Vec<([f32; 3], f32)>,
+    pub dielectric: Vec<f32>,
+}
+
+impl MaterialTables {
+    /// Adds a material to its kind's table; returns (kind, row).
+    pub fn push(&mut self, m: &Material) -> (Kind, u32) {
+        match *m {
+            Material::Lambertian { albedo } => {
+                self.lambertian.push(albedo);
+                (Kind::Lambertian, self.lambertian.len() as u32 - 1)
+            }
+            Material::Metal { albedo, fuzz } => {
+                self.metal.push((albedo, fuzz));
+                (Kind::Metal, self.metal.len() as u32 - 1)
+            }
+            Material::Dielectric { ior } => {
+                self.dielectric.push(ior);
+                (Kind::Dielectric, self.dielectric.len() as u32 - 1)
+            }
+        }
+    }
+
+    /// The colour of chapter 4's flat shading: the albedo, white for glass.
+    pub fn flat_colour(&self, kind: u8, row: u32) -> [f32; 3] {
+        match kind {
+            k if k == Kind::Lambertian as u8 => self.lambertian[row as usize],
+            k if k == Kind::Metal as u8 => self.metal[row as usize].0,
+            _ => [1.0, 1.0, 1.0],
+        }
+    }
+}
+
+/// Mirror `d` about `n`: `d - 2 (d.n) n`.
+#[inline(always)]
+pub fn reflect<R: Real>(d: V3<R>, n: V3<R>) -> V3<R> {
+    d - n * (R::splat(2.0) * d.dot(n))
+}
+
+/// Lambertian: the new direction (cosine distributed about `n`). Draws 2.
+#[inline(always)]
+pub fn lambertian<R: Real, S: Stream<R>>(n: V3<R>, rng: &mut S) -> V3<R> {
+    let s = n + unit_vector(rng);
+    let tiny = R::splat(1e-8);
+    let near_zero = s.x.abs().lt(tiny) & s.y.abs().lt(tiny) & s.z.abs().lt(tiny);
+    V3::select(near_zero, n, s).normalize()
+}
+
+/// Metal: the new direction and whether the path survives (a fuzzed direction
+/// below the surface is absorbed). Draws 2.
+#[inline(always)]
+pub fn metal<R: Real, S: Stream<R>>(d: V3<R>, n: V3<R>, fuzz: R, rng: &mut S) -> (V3<R>, R::Mask) {
+    let dir = (reflect(d, n) + unit_vector(rng) * fuzz).normalize();
+    (dir, dir.dot(n).gt(R::splat(0.0)))
+}
+
+/// Dielectric: the new direction (refracted or reflected). Draws 1.
+///
+/// `front` says the ray enters from outside (ratio 1/ior) or leaves (ior).
+/// An ior of exactly 1 is no interface at all: the ray goes straight on
+/// (Schlick's approximation would still reflect at grazing angles).
+#[inline(always)]
+pub fn dielectric<R: Real, S: Stream<R>>(d: V3<R>, n: V3<R>, front: R::Mask, ior: R, rng: &mut S) -> V3<R> {
+    let one = R::splat(1.0);
+    let ri = R::select(front, one / ior, ior);
+    let cos = (-d.dot(n)).min(one);
+    let sin = (one - cos * cos).max(R::splat(0.0)).sqrt();
+    let cannot_refract = (ri * sin).gt(one);
+    let r0 = (one - ri) / (one + ri);
+    let r0 = r0 * r0;
+    let x = one - cos;
+    let x2 = x * x;
+    let reflectance = r0 + (one - r0) * (x2 * x2 * x);
+    let u = rng.next();
+    let do_reflect = cannot_refract | reflectance.gt(u);
+    let perp = (d + n * cos) * ri;
+    let par = n * -(one - perp.length_squared()).abs().sqrt();
+    let refracted = perp + par;
+    let dir = V3::select(do_reflect, reflect(d, n), refracted).normalize();
+    V3::select(ior.eq(one), d, dir)
+}

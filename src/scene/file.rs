@@ -1,0 +1,143 @@
+//! Scene files: JSON or TOML by extension, one schema (the `Scene` type).
+
+use super::Scene;
+use crate::error::{Error, Result};
+use std::path::Path;
+
+#[derive(Clone, Copy, Debug, PartialEq, Eq)]
+pub enum Format {
+    Json,
+    Toml,
+}
+
+impl Format {
+    pub fn from_path(path: &Path) -> Result<Format> {
+        match path
+            .extension()
+            .and_then(|e| e.to_str())
+            .map(|e| e.to_ascii_lowercase())
+            .as_deref()
+        {
+            Some("json") => Ok(Format::Json),
+            Some("toml") => Ok(Format::Toml),
+            _ => Err(Error::Input(format!(
+                "{}: unknown scene file type (use .json or .toml)",
+                path.display()
+            ))),
+        }
+    }
+}
+
+/// 1-based line and column of byte `offset` in `text`.
+fn line_col(text: &str, offset: usize) -> (usize, usize) {
+    let before = &text[..offset.min(text.len())];
+    let line = before.matches('\n').count() + 1;
+    let col = before.len() - before.rfind('\n').map_or(0, |i| i + 1) + 1;
+    (line, col)
+}
+
+fn field_prefix(path: &serde_path_to_error::Path) -> String {
+    let p = path.to_string();
+    if p == "." || p.is_empty() {
+        String::new()
+    } else {
+        format!("{p}: ")
+    }
+}
+
+/// Parses and validates a scene; `origin` names the source in errors.
+pub fn scene_from_str(text: &str, format: Format, origin: &Path) -> Result<Scene> {
+    let parse_err = |message: String| Error::Parse {
+        path: origin.to_path_buf(),
+        message,
+    };
+    let scene: Scene = match format {
+        Format::Json => {
+            let mut de = serde_json::Deserializer::from_str(text);
+            let scene = serde_path_to_error::deserialize(&mut de).map_err(|e| {
+                let inner = e.inner();
+                parse_err(format!(
+                    "{}{} (line {}, column {})",
+                    field_prefix(e.path()),
+                    strip_position(&inner.to_string()),
+                    inner.line(),
+                    inner.column()
+                ))
+            })?;
+            de.end().map_err(|e| parse_err(format!("{e}")))?;
+            scene
+        }
+        Format::Toml => {
+            let de = toml::de::Deserializer::parse(text).map_err(|e| toml_err(text, &e, "", &parse_err))?;
+            serde_path_to_error::deserialize(de)
+                .map_err(|e| toml_err(text, e.inner(), &field_prefix(e.path()), &parse_err))?
+        }
+    };
+    scene.validate()?;
+    Ok(scene)
+}
+
+fn toml_err(text: &str, e: &toml::de::Error, prefix: &str, mk: &dyn Fn(String) -> Error) -> Error {
+    let msg = e.message().trim().replace('\n', "; ");
+    match e.span() {
+        Some(span) => {
+            let (l, c) = line_col(text, span.start);
+            mk(format!("{prefix}{msg} (line {l}, column {c})"))
+        }
+        None => mk(format!("{prefix}{msg}")),
+    }
+}
+
+/// serde_json appends " at line L column C"; we print position our own way.
+fn strip_position(s: &str) -> String {
+    match s.rfind(" at line ") {
+        Some(i) => s[..i].to_string(),
+        None => s.to_string(),
+    }
+}
+
+/// Reads, parses and validates a scene file (.json or .toml).
+pub fn load_scene(path: &Path) -> Result<Scene> {
+    let format = Format::from_path(path)?;
+    let text =
+        std::fs::read_to_string(path).map_err(|e| Error::Input(format!("cannot read {}: {e}", path.display())))?;
+    scene_from_str(&text, format, path)
+}
+
+pub fn scene_to_string(scene: &Scene, format: Format) -> String {
+    match format {
+        Format::Json => serde_json::to_string_pretty(scene).expect("a scene always serializes") + "\n",
+        Format::Toml => toml::to_string_pretty(scene).expect("a scene always serializes"),
+    }
+}
+
+/// Writes a scene file, atomically, in the format its extension names.
+pub fn save_scene(scene: &Scene, path: &Path) -> Result<()> {
+    let format = Format::from_path(path)?;
+    crate::output::write_atomic(path, scene_to_string(scene, format).as_bytes())
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+    use crate::scene::presets;
+
+    #[test]
+    fn every_preset_round_trips_through_both_formats() {
+        for p in presets() {
+            let scene = (p.build)();
+            for format in [Format::Json, Format::Toml] {
+                let text = scene_to_string(&scene, format);
+                let back = scene_from_str(&text, format, Path::new("x"))
+                    .unwrap_or_else(|e| panic!("{} {format:?}: {e}\n{text}", p.name));
+                assert_eq!(back, scene, "{} {format:?}", p.name);
+            }
+        }
+    }
+
+    #[test]
+    fn line_and_column_are_one_based() {
+        assert_eq!(line_col("ab\ncd", 0), (1, 1));
+        assert_eq!(line_col("ab\ncd", 4), (2, 2));
+    }
+}

@@ -1,0 +1,330 @@
+//! The user-facing scene: what a scene file or a preset describes, validated.
+//!
+//! This is also the schema of scene files (JSON or TOML, see `file.rs`), so a
+//! scene written by `rtow export` loads back into the identical value.
+
+mod file;
+mod presets;
+
+pub use file::{load_scene, save_scene, scene_from_str, scene_to_string, Format};
+pub use presets::{final_scene, preset, presets, Preset};
+
+use crate::error::{Error, Result};
+use serde::{Deserialize, Serialize};
+
+/// What the renderer computes for each camera ray.
+#[derive(Serialize, Deserialize, Clone, Copy, Debug, PartialEq, Eq, Default)]
+#[serde(rename_all = "lowercase")]
+pub enum Mode {
+    /// Chapter 1: no rays; r = x / width, g = (rows from the bottom) / height, b = 0.2.
+    Gradient,
+    /// Chapters 3-4: the sky where a camera ray misses, the hit material's colour where it hits.
+    Flat,
+    /// Chapters 5-6: 0.5 * (n + 1) of the outward normal where a camera ray hits.
+    Normals,
+    /// Chapter 7 on: the path tracer.
+    #[default]
+    Path,
+}
+
+impl Mode {
+    /// The book writes the debug images without gamma and the path traced ones with gamma 2.
+    pub fn default_gamma(self) -> f32 {
+        match self {
+            Mode::Path => 2.0,
+            _ => 1.0,
+        }
+    }
+}
+
+#[derive(Serialize, Deserialize, Clone, Copy, Debug, PartialEq)]
+#[serde(tag = "type", rename_all = "lowercase", deny_unknown_fields)]
+pub enum Material {
+    Lambertian { albedo: [f32; 3] },
+    Metal { albedo: [f32; 3], fuzz: f32 },
+    Dielectric { ior: f32 },
+}
+
+/// Material kinds, one wavefront queue each.
+#[derive(Clone, Copy, Debug, PartialEq, Eq, Hash, PartialOrd, Ord)]
+#[repr(u8)]
+pub enum Kind {
+    Lambertian = 0,
+    Metal = 1,
+    Dielectric = 2,
+}
+
+impl Kind {
+    pub const ALL: [Kind; 3] = [Kind::Lambertian, Kind::Metal, Kind::Dielectric];
+    pub fn name(self) -> &'static str {
+        match self {
+            Kind::Lambertian => "lambertian",
+            Kind::Metal => "metal",
+            Kind::Dielectric => "dielectric",
+        }
+    }
+}
+
+impl Material {
+    pub fn kind(&self) -> Kind {
+        match self {
+            Material::Lambertian { .. } => Kind::Lambertian,
+            Material::Metal { .. } => Kind::Metal,
+            Material::Dielectric { .. } => Kind::Dielectric,
+        }
+    }
+}
+
+#[derive(Serialize, Deserialize, Clone, Copy, Debug, PartialEq)]
+#[serde(deny_unknown_fields)]
+pub struct Sphere {
+    pub center: [f32; 3],
+    /// Signed: a negative radius is the book's hollow sphere (normal flipped inwards).
+    pub radius: f32,
+    pub material: Material,
+}
+
+fn default_vup() -> [f32; 3] {
+    [0.0, 1.0, 0.0]
+}
+fn default_vfov() -> f32 {
+    90.0
+}
+
+#[derive(Serialize, Deserialize, Clone, Copy, Debug, PartialEq)]
+#[serde(deny_unknown_fields)]
+pub struct Camera {
+    pub look_from: [f32; 3],
+    pub look_at: [f32; 3],
+    #[serde(default = "default_vup")]
+    pub vup: [f32; 3],
+    #[serde(default = "default_vfov")]
+    pub vfov_deg: f32,
+    /// Cone angle of the thin lens seen from the focus plane; 0 = pinhole.
+    #[serde(default, skip_serializing_if = "Option::is_none")]
+    pub defocus_angle_deg: Option<f32>,
+    /// The seed's lens diameter: `2 * focus_dist * tan(defocus_angle / 2)`. Either this
+    /// or `defocus_angle_deg`, not both.
+    #[serde(default, skip_serializing_if = "Option::is_none")]
+    pub aperture: Option<f32>,
+    /// Distance to the plane in focus; defaults to |look_from - look_at|.
+    #[serde(default, skip_serializing_if = "Option::is_none")]
+    pub focus_dist: Option<f32>,
+}
+
+impl Camera {
+    pub fn looking(look_from: [f32; 3], look_at: [f32; 3], vfov_deg: f32) -> Self {
+        Camera {
+            look_from,
+            look_at,
+            vup: default_vup(),
+            vfov_deg,
+            defocus_angle_deg: None,
+            aperture: None,
+            focus_dist: None,
+        }
+    }
+
+    pub fn focus_distance(&self) -> f64 {
+        match self.focus_dist {
+            Some(f) => f as f64,
+            None => {
+                let d: [f64; 3] = std::array::from_fn(|i| self.look_from[i] as f64 - self.look_at[i] as f64);
+                (d[0] * d[0] + d[1] * d[1] + d[2] * d[2]).sqrt()
+            }
+        }
+    }
+
+    /// The lens radius in world units (0 for a pinhole).
+    pub fn lens_radius(&self) -> f64 {
+        match (self.defocus_angle_deg, self.aperture) {
+            (Some(a), _) => self.focus_distance() * (a as f64 / 2.0).to_radians().tan(),
+            (None, Some(ap)) => ap as f64 / 2.0,
+            (None, None) => 0.0,
+        }
+    }
+}
+
+#[derive(Serialize, Deserialize, Clone, Copy, Debug, PartialEq)]
+#[serde(deny_unknown_fields)]
+pub struct Sky {
+    pub horizon: [f32; 3],
+    pub zenith: [f32; 3],
+}
+
+impl Default for Sky {
+    fn default() -> Self {
+        Sky {
+            horizon: [1.0, 1.0, 1.0],
+            zenith: [0.5, 0.7, 1.0],
+        }
+    }
+}
+
+impl Sky {
+    pub fn uniform(c: [f32; 3]) -> Self {
+        Sky { horizon: c, zenith: c }
+    }
+}
+
+/// Render settings a scene may carry; command-line flags override them.
+#[derive(Serialize, Deserialize, Clone, Copy, Debug, PartialEq, Default)]
+#[serde(deny_unknown_fields)]
+pub struct RenderDefaults {
+    #[serde(default, skip_serializing_if = "Option::is_none")]
+    pub width: Option<u32>,
+    #[serde(default, skip_serializing_if = "Option::is_none")]
+    pub height: Option<u32>,
+    #[serde(default, skip_serializing_if = "Option::is_none")]
+    pub samples_per_pixel: Option<u32>,
+    #[serde(default, skip_serializing_if = "Option::is_none")]
+    pub max_depth: Option<u32>,
+    #[serde(default, skip_serializing_if = "Option::is_none")]
+    pub seed: Option<u64>,
+}
+
+fn is_default<T: Default + PartialEq>(v: &T) -> bool {
+    *v == T::default()
+}
+
+#[derive(Serialize, Deserialize, Clone, Debug, PartialEq)]
+#[serde(deny_unknown_fields)]
+pub struct Scene {
+    #[serde(default, skip_serializing_if = "is_default")]
+    pub mode: Mode,
+    pub camera: Camera,
+    #[serde(default)]
+    pub spheres: Vec<Sphere>,
+    #[serde(default)]
+    pub sky: Sky,
+    #[serde(default, skip_serializing_if = "is_default")]
+    pub render: RenderDefaults,
+}
+
+/// Most spheres a scene may have (the SoA index is a u32 and memory is finite).
+pub const MAX_SPHERES: usize = 1 << 24;
+
+fn finite3(field: &str, v: [f32; 3]) -> Result<()> {
+    if v.iter().all(|x| x.is_finite()) {
+        Ok(())
+    } else {
+        Err(Error::invalid(field, format!("must be finite, got {v:?}")))
+    }
+}
+
+fn finite(field: &str, v: f32) -> Result<()> {
+    if v.is_finite() {
+        Ok(())
+    } else {
+        Err(Error::invalid(field, format!("must be finite, got {v}")))
+    }
+}
+
+fn colour(field: &str, v: [f32; 3]) -> Result<()> {
+    finite3(field, v)?;
+    if v.iter().any(|&x| x < 0.0) {
+        return Err(Error::invalid(
+            field,
+            format!("colour components must be >= 0, got {v:?}"),
+        ));
+    }
+    Ok(())
+}
+
+impl Scene {
+    /// Checks every value a render depends on; the error names the field.
+    pub fn validate(&self) -> Result<()> {
+        let c = &self.camera;
+        finite3("camera.look_from", c.look_from)?;
+        finite3("camera.look_at", c.look_at)?;
+        finite3("camera.vup", c.vup)?;
+        finite("camera.vfov_deg", c.vfov_deg)?;
+        if self.mode != Mode::Gradient {
+            if c.look_from == c.look_at {
+                return Err(Error::invalid("camera.look_at", "must differ from camera.look_from"));
+            }
+            let w: [f64; 3] = std::array::from_fn(|i| c.look_from[i] as f64 - c.look_at[i] as f64);
+            let up = glam::DVec3::from_array(c.vup.map(|x| x as f64));
+            let wv = glam::DVec3::from_array(w);
+            if up.length() == 0.0 {
+                return Err(Error::invalid("camera.vup", "must not be zero"));
+            }
+            let sin = up.cross(wv).length() / (up.length() * wv.length());
+            if !(sin > 1e-6) {
+                return Err(Error::invalid(
+                    "camera.vup",
+                    "must not be parallel to the view direction",
+                ));
+            }
+        }
+        if !(c.vfov_deg > 0.0 && c.vfov_deg < 180.0) {
+            return Err(Error::invalid(
+                "camera.vfov_deg",
+                format!("must be in (0, 180), got {}", c.vfov_deg),
+            ));
+        }
+        if c.defocus_angle_deg.is_some() && c.aperture.is_some() {
+            return Err(Error::invalid(
+                "camera.aperture",
+                "give either aperture or defocus_angle_deg, not both",
+            ));
+        }
+        if let Some(a) = c.defocus_angle_deg {
+            finite("camera.defocus_angle_deg", a)?;
+            if !(0.0..180.0).contains(&a) {
+                return Err(Error::invalid(
+                    "camera.defocus_angle_deg",
+                    format!("must be in [0, 180), got {a}"),
+                ));
+            }
+        }
+        if let Some(a) = c.aperture {
+            finite("camera.aperture", a)?;
+            if a < 0.0 {
+                return Err(Error::invalid("camera.aperture", format!("must be >= 0, got {a}")));
+            }
+        }
+        if let Some(f) = c.focus_dist {
+            finite("camera.focus_dist", f)?;
+            if f <= 0.0 {
+                return Err(Error::invalid("camera.focus_dist", format!("must be > 0, got {f}")));
+            }
+        }
+        colour("sky.horizon", self.sky.horizon)?;
+        colour("sky.zenith", self.sky.zenith)?;
+        if self.spheres.len() > MAX_SPHERES {
+            return Err(Error::invalid(
+                "spheres",
+                format!("at most {MAX_SPHERES} spheres, got {}", self.spheres.len()),
+            ));
+        }
+        for (i, s) in self.spheres.iter().enumerate() {
+            let f = |name: &str| format!("spheres[{i}].{name}");
+            finite3(&f("center"), s.center)?;
+            finite(&f("radius"), s.radius)?;
+            if s.radius == 0.0 {
+                return Err(Error::invalid(f("radius"), "must not be 0"));
+            }
+            match s.material {
+                Material::Lambertian { albedo } => colour(&f("material.albedo"), albedo)?,
+                Material::Metal { albedo, fuzz } => {
+                    colour(&f("material.albedo"), albedo)?;
+                    finite(&f("material.fuzz"), fuzz)?;
+                    if !(0.0..=1.0).contains(&fuzz) {
+                        return Err(Error::invalid(
+                            f("material.fuzz"),
+                            format!("must be in [0, 1], got {fuzz}"),
+                        ));
+                    }
+                }
+                Material::Dielectric { ior } => {
+                    finite(&f("material.ior"), ior)?;
+                    if ior <= 0.0 {
+                        return Err(Error::invalid(f("material.ior"), format!("must be > 0, got {ior}")));
+                    }
+                }
+            }
+        }
+        Ok(())
+    }
+}

@@ -1,0 +1,305 @@
+//! A preset for every image of the seed (SEED-NOTES.md), with the book's physics.
+
+use super::{Camera, Material, Mode, RenderDefaults, Scene, Sky, Sphere};
+use crate::real::Real;
+use rand_core::{Rng, SeedableRng};
+use rand_xoshiro::Xoshiro128Plus;
+
+pub struct Preset {
+    pub name: &'static str,
+    pub description: &'static str,
+    pub build: fn() -> Scene,
+}
+
+const fn lam(albedo: [f32; 3]) -> Material {
+    Material::Lambertian { albedo }
+}
+const fn metal(albedo: [f32; 3], fuzz: f32) -> Material {
+    Material::Metal { albedo, fuzz }
+}
+const fn glass(ior: f32) -> Material {
+    Material::Dielectric { ior }
+}
+const fn sphere(center: [f32; 3], radius: f32, material: Material) -> Sphere {
+    Sphere {
+        center,
+        radius,
+        material,
+    }
+}
+
+fn settings(width: u32, height: u32, spp: u32, depth: u32) -> RenderDefaults {
+    RenderDefaults {
+        width: Some(width),
+        height: Some(height),
+        samples_per_pixel: Some(spp),
+        max_depth: Some(depth),
+        seed: None,
+    }
+}
+
+/// The book's early camera: eye at the origin looking down -z, viewport 2 high
+/// at focal length 1 (vfov 90), width from the image's aspect ratio.
+fn origin_camera() -> Camera {
+    Camera::looking([0.0, 0.0, 0.0], [0.0, 0.0, -1.0], 90.0)
+}
+
+fn scene(mode: Mode, camera: Camera, spheres: Vec<Sphere>, render: RenderDefaults) -> Scene {
+    Scene {
+        mode,
+        camera,
+        spheres,
+        sky: Sky::default(),
+        render,
+    }
+}
+
+const SMALL: fn() -> RenderDefaults = || settings(400, 225, 1, 1);
+
+fn ch01() -> Scene {
+    scene(Mode::Gradient, origin_camera(), vec![], settings(1280, 720, 1, 1))
+}
+fn ch03() -> Scene {
+    scene(Mode::Flat, origin_camera(), vec![], SMALL())
+}
+fn red_ball() -> Sphere {
+    sphere([0.0, 0.0, -1.0], 0.5, lam([1.0, 0.0, 0.0]))
+}
+fn ground_100() -> Sphere {
+    sphere([0.0, -100.5, -1.0], 100.0, lam([0.5, 0.5, 0.5]))
+}
+fn ch04() -> Scene {
+    scene(Mode::Flat, origin_camera(), vec![red_ball()], SMALL())
+}
+fn ch05_normals() -> Scene {
+    scene(Mode::Normals, origin_camera(), vec![red_ball()], SMALL())
+}
+fn ch05_ground() -> Scene {
+    scene(Mode::Normals, origin_camera(), vec![red_ball(), ground_100()], SMALL())
+}
+fn ch06() -> Scene {
+    scene(
+        Mode::Normals,
+        origin_camera(),
+        vec![red_ball(), ground_100()],
+        settings(400, 225, 100, 1),
+    )
+}
+fn ch07() -> Scene {
+    let grey = lam([0.5, 0.5, 0.5]);
+    let spheres = vec![
+        sphere([0.0, 0.0, -1.0], 0.5, grey),
+        sphere([0.0, -100.5, -1.0], 100.0, grey),
+    ];
+    scene(Mode::Path, origin_camera(), spheres, settings(400, 225, 100, 50))
+}
+fn metals(center: [f32; 3], fuzz_left: f32, fuzz_right: f32) -> Vec<Sphere> {
+    vec![
+        sphere([0.0, 0.0, -1.0], 0.5, lam(center)),
+        sphere([0.0, -100.5, -1.0], 100.0, lam([0.8, 0.8, 0.0])),
+        sphere([1.0, 0.0, -1.0], 0.5, metal([0.8, 0.6, 0.2], fuzz_right)),
+        sphere([-1.0, 0.0, -1.0], 0.5, metal([0.8, 0.8, 0.8], fuzz_left)),
+    ]
+}
+fn ch08_metal() -> Scene {
+    scene(
+        Mode::Path,
+        origin_camera(),
+        metals([0.8, 0.3, 0.3], 0.0, 0.0),
+        settings(400, 225, 100, 50),
+    )
+}
+fn ch08_fuzz() -> Scene {
+    scene(
+        Mode::Path,
+        origin_camera(),
+        metals([0.8, 0.3, 0.3], 0.3, 1.0),
+        settings(400, 225, 100, 50),
+    )
+}
+/// Chapter 9's scene: a hollow glass ball on the left (a negative-radius sphere inside).
+fn glass_scene() -> Vec<Sphere> {
+    vec![
+        sphere([0.0, 0.0, -1.0], 0.5, lam([0.1, 0.2, 0.5])),
+        sphere([0.0, -100.5, -1.0], 100.0, lam([0.8, 0.8, 0.0])),
+        sphere([1.0, 0.0, -1.0], 0.5, metal([0.8, 0.6, 0.2], 0.0)),
+        sphere([-1.0, 0.0, -1.0], 0.5, glass(1.5)),
+        sphere([-1.0, 0.0, -1.0], -0.45, glass(1.5)),
+    ]
+}
+fn ch09() -> Scene {
+    scene(Mode::Path, origin_camera(), glass_scene(), settings(400, 225, 100, 50))
+}
+fn ch10_wide() -> Scene {
+    let r = std::f32::consts::FRAC_PI_4.cos();
+    let spheres = vec![
+        sphere([-r, 0.0, -1.0], r, lam([0.0, 0.0, 1.0])),
+        sphere([r, 0.0, -1.0], r, lam([1.0, 0.0, 0.0])),
+    ];
+    scene(Mode::Path, origin_camera(), spheres, settings(400, 225, 100, 50))
+}
+fn ch10_look(vfov: f32) -> Scene {
+    let cam = Camera::looking([-2.0, 2.0, 1.0], [0.0, 0.0, -1.0], vfov);
+    scene(Mode::Path, cam, glass_scene(), settings(400, 225, 100, 50))
+}
+fn ch11() -> Scene {
+    let mut cam = Camera::looking([3.0, 3.0, 2.0], [0.0, 0.0, -1.0], 20.0);
+    cam.aperture = Some(2.0);
+    scene(Mode::Path, cam, glass_scene(), settings(400, 225, 100, 50))
+}
+
+/// The fixed seed of the final scene's sphere layout.
+pub const FINAL_LAYOUT_SEED: u64 = 0x5EED_2016;
+
+/// The book's final scene: a big ground sphere, a 22 x 22 grid of small random
+/// spheres (80% lambertian, 15% metal, 5% glass) and three big spheres, laid out
+/// from a fixed seed, seen through the book's thin-lens camera.
+pub fn final_scene() -> Scene {
+    let mut rng = Xoshiro128Plus::seed_from_u64(FINAL_LAYOUT_SEED);
+    let mut rnd = || f32::unit_from_bits(rng.next_u32());
+    let mut spheres = vec![sphere([0.0, -1000.0, 0.0], 1000.0, lam([0.5, 0.5, 0.5]))];
+    for a in -11..11 {
+        for b in -11..11 {
+            let choose = rnd();
+            let center = [a as f32 + 0.9 * rnd(), 0.2, b as f32 + 0.9 * rnd()];
+            let d = [center[0] - 4.0, center[1] - 0.2, center[2]];
+            if (d[0] * d[0] + d[1] * d[1] + d[2] * d[2]).sqrt() <= 0.9 {
+                continue;
+            }
+            let material = if choose < 0.8 {
+                let a: [f32; 3] = std::array::from_fn(|_| rnd());
+                let b: [f32; 3] = std::array::from_fn(|_| rnd());
+                lam(std::array::from_fn(|i| a[i] * b[i]))
+            } else if choose < 0.95 {
+                let albedo = std::array::from_fn(|_| 0.5 + 0.5 * rnd());
+                metal(albedo, 0.5 * rnd())
+            } else {
+                glass(1.5)
+            };
+            spheres.push(sphere(center, 0.2, material));
+        }
+    }
+    spheres.push(sphere([0.0, 1.0, 0.0], 1.0, glass(1.5)));
+    spheres.push(sphere([-4.0, 1.0, 0.0], 1.0, lam([0.4, 0.2, 0.1])));
+    spheres.push(sphere([4.0, 1.0, 0.0], 1.0, metal([0.7, 0.6, 0.5], 0.0)));
+    let mut cam = Camera::looking([13.0, 2.0, 3.0], [0.0, 0.0, 0.0], 20.0);
+    cam.defocus_angle_deg = Some(0.6);
+    cam.focus_dist = Some(10.0);
+    scene(Mode::Path, cam, spheres, settings(400, 225, 32, 50))
+}
+
+static PRESETS: &[Preset] = &[
+    Preset {
+        name: "ch01-gradient",
+        description: "ch. 1: the first image, a red/green gradient (no rays)",
+        build: ch01,
+    },
+    Preset {
+        name: "ch03-sky",
+        description: "ch. 3: camera rays and the white-to-blue sky",
+        build: ch03,
+    },
+    Preset {
+        name: "ch04-sphere",
+        description: "ch. 4: a sphere hit test, drawn flat red over the sky",
+        build: ch04,
+    },
+    Preset {
+        name: "ch05-normals",
+        description: "ch. 5: the sphere shaded by its surface normal",
+        build: ch05_normals,
+    },
+    Preset {
+        name: "ch05-ground",
+        description: "ch. 5: normal shading of a list of hitables (sphere + ground)",
+        build: ch05_ground,
+    },
+    Preset {
+        name: "ch06-antialias",
+        description: "ch. 6: the same, antialiased with 100 samples per pixel",
+        build: ch06,
+    },
+    Preset {
+        name: "ch07-diffuse",
+        description: "ch. 7: Lambertian spheres reflecting half the light, gamma 2",
+        build: ch07,
+    },
+    Preset {
+        name: "ch08-metal",
+        description: "ch. 8: two polished metal spheres beside a diffuse one",
+        build: ch08_metal,
+    },
+    Preset {
+        name: "ch08-fuzz",
+        description: "ch. 8: the metal spheres with fuzz 0.3 (left) and 1.0 (right)",
+        build: ch08_fuzz,
+    },
+    Preset {
+        name: "ch09-glass",
+        description: "ch. 9: a hollow glass ball (negative-radius inner sphere)",
+        build: ch09,
+    },
+    Preset {
+        name: "ch10-wide-fov",
+        description: "ch. 10: two touching spheres seen with a 90 degree field of view",
+        build: ch10_wide,
+    },
+    Preset {
+        name: "ch10-look-from",
+        description: "ch. 10: the glass scene from (-2,2,1) with vfov 90",
+        build: || ch10_look(90.0),
+    },
+    Preset {
+        name: "ch10-zoom",
+        description: "ch. 10: the glass scene from (-2,2,1) with vfov 20",
+        build: || ch10_look(20.0),
+    },
+    Preset {
+        name: "ch11-defocus",
+        description: "ch. 11: defocus blur, aperture 2.0 from (3,3,2)",
+        build: ch11,
+    },
+    Preset {
+        name: "final",
+        description: "ch. 12: the book's random spheres (487 spheres, thin lens)",
+        build: final_scene,
+    },
+];
+
+/// Every built-in scene, in chapter order.
+pub fn presets() -> &'static [Preset] {
+    PRESETS
+}
+
+/// The preset of that name.
+pub fn preset(name: &str) -> Option<Scene> {
+    PRESETS.iter().find(|p| p.name == name).map(|p| (p.build)())
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    #[test]
+    fn every_preset_is_valid() {
+        for p in presets() {
+            (p.build)().validate().unwrap_or_else(|e| panic!("{}: {e}", p.name));
+        }
+    }
+
+    #[test]
+    fn final_scene_has_the_book_shape() {
+        let s = final_scene();
+        assert!(
+            s.spheres.len() > 400 && s.spheres.len() <= 1 + 22 * 22 + 3,
+            "{}",
+            s.spheres.len()
+        );
+        assert_eq!(s.spheres[0].radius, 1000.0);
+        let kinds = |k| s.spheres.iter().filter(|sp| sp.material.kind() == k).count();
+        use crate::scene::Kind;
+        let small = (s.spheres.len() - 4) as f64;
+        assert!((kinds(Kind::Lambertian) as f64 - 2.0) / small > 0.7);
+        assert!(kinds(Kind::Metal) > 30 && kinds(Kind::Dielectric) > 10);
+    }
+}
