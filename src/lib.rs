@@ -10,6 +10,7 @@
 //! [`real::Real`] and instantiated for `f32` and `wide::f32x8`, so for the same
 //! seed they produce bit-identical images.
 
+pub mod bench;
 pub mod camera;
 pub mod error;
 pub mod film;

@@ -25,6 +25,8 @@ enum Command {
     Render(RenderArgs),
     /// List the built-in scenes.
     Scenes,
+    /// Measure rays/s of each kernel on a scene; compare with a saved baseline.
+    Bench(BenchArgs),
     /// Write a preset as a scene file (.json or .toml).
     Export {
         /// Preset name (see `rtow scenes`).
@@ -91,6 +93,85 @@ struct RenderArgs {
     /// No progress bar and no summary line.
     #[arg(short, long)]
     quiet: bool,
+}
+
+#[derive(Args)]
+struct BenchArgs {
+    /// A preset name or a scene file.
+    #[arg(default_value = "final")]
+    scene: String,
+    /// Kernels to measure, in order.
+    #[arg(long, value_delimiter = ',', default_value = "scalar,simd")]
+    kernels: Vec<KernelKind>,
+    #[command(flatten)]
+    image: ImageArgs,
+    /// Renders per kernel; the median-time one is reported.
+    #[arg(long, default_value_t = 3)]
+    repeat: usize,
+    /// Write the report as JSON.
+    #[arg(long, value_name = "FILE")]
+    json: Option<PathBuf>,
+    /// Save the report as a baseline for later runs.
+    #[arg(long, value_name = "FILE")]
+    save: Option<PathBuf>,
+    /// Compare with a saved baseline: exit status 1 if throughput fell by more
+    /// than the tolerance or the image changed.
+    #[arg(long, value_name = "FILE")]
+    baseline: Option<PathBuf>,
+    /// Allowed throughput drop against the baseline, in percent.
+    #[arg(long, default_value_t = 5.0)]
+    tolerance: f64,
+}
+
+fn cmd_bench(a: BenchArgs) -> Result<bool> {
+    let (scene, name) = load(&a.scene)?;
+    let s = settings(&scene, &a.image);
+    if a.image.tile != 16 {
+        return Err(Error::invalid("--tile", "rtow bench uses the default tile size"));
+    }
+    if !(a.tolerance >= 0.0) {
+        return Err(Error::invalid("--tolerance", "must be a percentage >= 0"));
+    }
+    let baseline = a.baseline.as_deref().map(rtow::bench::Baseline::load).transpose()?;
+    eprintln!(
+        "bench {name}: {}x{} {} spp depth {} seed {}, {} repetition(s) per kernel, built for {}",
+        s.width,
+        s.height,
+        s.spp,
+        s.max_depth,
+        s.seed,
+        a.repeat,
+        rtow::isa()
+    );
+    let report = rtow::bench::run(&scene, &name, s, &a.kernels, a.image.threads, a.repeat, |k, i, st| {
+        eprintln!(
+            "  {} run {}: {:.3} s, {:.2} Mrays/s",
+            k.name(),
+            i + 1,
+            st.seconds,
+            st.mrays_per_s
+        )
+    })?;
+    print!("{}", report.table());
+    for path in [&a.json, &a.save].into_iter().flatten() {
+        rtow::output::write_atomic(path, report.to_json().as_bytes())?;
+    }
+    let mut ok = true;
+    if let Some(b) = &baseline {
+        for c in rtow::bench::compare(&report, b, a.tolerance)? {
+            println!(
+                "{:<7} baseline {:.2} Mrays/s -> {:.2} Mrays/s ({:+.1}%), image {}: {}",
+                c.kernel,
+                c.baseline_mrays,
+                c.mrays,
+                c.change_percent,
+                if c.image_same { "identical" } else { "CHANGED" },
+                if c.regressed { "REGRESSION" } else { "ok" }
+            );
+            ok &= !c.regressed;
+        }
+    }
+    Ok(ok)
 }
 
 /// A preset or a file: the scene and a short name for default outputs.
@@ -227,19 +308,21 @@ fn cmd_render(a: RenderArgs) -> Result<()> {
     Ok(())
 }
 
-fn run(cli: Cli) -> Result<()> {
+/// Ok(false): the command ran but its check failed (exit status 1).
+fn run(cli: Cli) -> Result<bool> {
     match cli.command {
-        Command::Render(a) => cmd_render(a),
+        Command::Render(a) => cmd_render(a).map(|_| true),
+        Command::Bench(a) => cmd_bench(a),
         Command::Scenes => {
             for p in scene::presets() {
                 println!("{:<16} {}", p.name, p.description);
             }
-            Ok(())
+            Ok(true)
         }
         Command::Export { preset, output } => {
             let s = scene::preset(&preset)
                 .ok_or_else(|| Error::Input(format!("unknown preset '{preset}' (see `rtow scenes`)")))?;
-            scene::save_scene(&s, &output)
+            scene::save_scene(&s, &output).map(|_| true)
         }
     }
 }
@@ -253,7 +336,8 @@ fn main() -> ExitCode {
         Err(e) => e.exit(),
     };
     match run(cli) {
-        Ok(()) => ExitCode::SUCCESS,
+        Ok(true) => ExitCode::SUCCESS,
+        Ok(false) => ExitCode::from(1),
         Err(e) => {
             eprintln!("error: {e}");
             ExitCode::from(e.exit_code() as u8)

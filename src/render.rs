@@ -56,9 +56,9 @@ pub struct Stats {
     pub seed: u64,
     /// Samples with a NaN or infinite component, kept out of the image.
     pub rejected_samples: u64,
-    /// Active lanes / issued lanes in intersection and scatter (SIMD kernel; 1 for scalar).
-    pub isect_occupancy: f64,
-    pub scatter_occupancy: f64,
+    /// Active lanes / issued lanes in intersection and scatter (SIMD kernel; none for scalar).
+    pub isect_occupancy: Option<f64>,
+    pub scatter_occupancy: Option<f64>,
     pub image_hash: String,
     pub plan: Plan,
 }
@@ -116,7 +116,7 @@ pub fn render(
     let (image, counters, rejected) = pool.install(|| render_prepared(&prep, opts, progress));
     let seconds = t1.elapsed().as_secs_f64();
     let (w, h) = (settings.width, settings.height);
-    let occ = |a: u64, l: u64| if l == 0 { 1.0 } else { a as f64 / l as f64 };
+    let occ = |a: u64, l: u64| (l > 0).then(|| a as f64 / l as f64);
     let stats = Stats {
         rays: counters.rays,
         samples: w as u64 * h as u64 * settings.spp as u64,
