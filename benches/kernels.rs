@@ -10,26 +10,16 @@ use criterion::{criterion_group, criterion_main, Criterion, Throughput};
 use rtow::film::TileFilm;
 use rtow::geometry::{closest_hit_scalar, closest_hit_x8};
 use rtow::kernel::{scalar, wavefront, Counters};
-use rtow::plan::{Prepared, Settings};
+use rtow::plan::{AccelChoice, Prepared, Settings};
 use rtow::sampling::ScalarStream;
 use rtow::vec3::V3;
 use std::hint::black_box;
 use std::time::Duration;
 use wide::f32x8;
 
-fn prepared(spp: u32) -> Prepared {
+fn prepared(spp: u32, accel: AccelChoice) -> Prepared {
     let scene = rtow::scene::final_scene();
-    Prepared::new(
-        &scene,
-        Settings {
-            width: 400,
-            height: 225,
-            spp,
-            max_depth: 50,
-            seed: 1,
-        },
-    )
-    .unwrap()
+    Prepared::new(&scene, Settings { width: 400, height: 225, spp, max_depth: 50, seed: 1 }, accel).unwrap()
 }
 
 /// 4096 camera rays of the final scene (jittered, through the lens), SoA.
@@ -47,13 +37,11 @@ fn rays(prep: &Prepared) -> [Vec<f32>; 6] {
 }
 
 fn intersect(c: &mut Criterion) {
-    let prep = prepared(1);
+    let prep = prepared(1, AccelChoice::Brute);
     let r = rays(&prep);
     let n = r[0].len();
     let mut g = c.benchmark_group("intersect");
-    g.sample_size(10)
-        .measurement_time(Duration::from_secs(4))
-        .throughput(Throughput::Elements(n as u64));
+    g.sample_size(10).measurement_time(Duration::from_secs(4)).throughput(Throughput::Elements(n as u64));
     g.bench_function("scalar", |b| {
         b.iter(|| {
             let mut acc = 0u32;
@@ -81,14 +69,12 @@ fn intersect(c: &mut Criterion) {
 }
 
 fn render_tile(c: &mut Criterion) {
-    let prep = prepared(2);
+    let prep = prepared(2, AccelChoice::Brute);
     let tile = || TileFilm::new(160, 96, 32, 32);
     let mut counters = Counters::default();
     scalar::render_tile(&prep, &mut tile(), &mut counters);
     let mut g = c.benchmark_group("render");
-    g.sample_size(10)
-        .measurement_time(Duration::from_secs(6))
-        .throughput(Throughput::Elements(counters.rays));
+    g.sample_size(10).measurement_time(Duration::from_secs(6)).throughput(Throughput::Elements(counters.rays));
     g.bench_function("scalar", |b| {
         b.iter(|| {
             let mut t = tile();

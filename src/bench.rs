@@ -4,7 +4,7 @@
 
 use crate::error::{Error, Result};
 use crate::kernel::KernelKind;
-use crate::plan::Settings;
+use crate::plan::{AccelChoice, Settings};
 use crate::render::{render, RenderOptions, Stats};
 use crate::scene::Scene;
 use serde::{Deserialize, Serialize};
@@ -35,6 +35,7 @@ pub fn run(
     settings: Settings,
     kernels: &[KernelKind],
     threads: Option<usize>,
+    accel: AccelChoice,
     repeat: usize,
     mut on_run: impl FnMut(KernelKind, usize, &Stats),
 ) -> Result<BenchReport> {
@@ -43,11 +44,7 @@ pub fn run(
     }
     let mut entries = Vec::new();
     for &kernel in kernels {
-        let opts = RenderOptions {
-            kernel,
-            threads,
-            ..RenderOptions::default()
-        };
+        let opts = RenderOptions { kernel, threads, accel, ..RenderOptions::default() };
         let mut runs = Vec::new();
         for i in 0..repeat {
             let r = render(scene, settings, opts, None)?;
@@ -65,26 +62,15 @@ pub fn run(
         }
         runs.sort_by(|a, b| a.seconds.total_cmp(&b.seconds));
         let median = runs.swap_remove(runs.len() / 2);
-        entries.push(BenchEntry {
-            stats: median,
-            speedup: None,
-            runs_seconds,
-        });
+        entries.push(BenchEntry { stats: median, speedup: None, runs_seconds });
     }
-    let scalar = entries
-        .iter()
-        .find(|e| e.stats.kernel == "scalar")
-        .map(|e| e.stats.mrays_per_s);
+    let scalar = entries.iter().find(|e| e.stats.kernel == "scalar").map(|e| e.stats.mrays_per_s);
     if let Some(base) = scalar {
         for e in &mut entries {
             e.speedup = Some(e.stats.mrays_per_s / base);
         }
     }
-    Ok(BenchReport {
-        scene: name.to_string(),
-        repeat,
-        kernels: entries,
-    })
+    Ok(BenchReport { scene: name.to_string(), repeat, kernels: entries })
 }
 
 impl BenchReport {
@@ -143,10 +129,8 @@ impl Baseline {
     pub fn load(path: &Path) -> Result<Baseline> {
         let text = std::fs::read_to_string(path)
             .map_err(|e| Error::Input(format!("cannot read baseline {}: {e}", path.display())))?;
-        serde_json::from_str(&text).map_err(|e| Error::Parse {
-            path: path.to_path_buf(),
-            message: format!("not a rtow bench baseline: {e}"),
-        })
+        serde_json::from_str(&text)
+            .map_err(|e| Error::Parse { path: path.to_path_buf(), message: format!("not a rtow bench baseline: {e}") })
     }
 }
 
@@ -165,10 +149,7 @@ pub struct Comparison {
 /// Compares a fresh report with a baseline. An error if they measured different things.
 pub fn compare(report: &BenchReport, base: &Baseline, tolerance_percent: f64) -> Result<Vec<Comparison>> {
     if report.scene != base.scene {
-        return Err(Error::Input(format!(
-            "baseline is of scene '{}', this run of '{}'",
-            base.scene, report.scene
-        )));
+        return Err(Error::Input(format!("baseline is of scene '{}', this run of '{}'", base.scene, report.scene)));
     }
     let mut out = Vec::new();
     for e in &report.kernels {

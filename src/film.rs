@@ -21,15 +21,7 @@ pub struct TileFilm {
 impl TileFilm {
     pub fn new(x0: u32, y0: u32, w: u32, h: u32) -> Self {
         let n = (w * h) as usize;
-        TileFilm {
-            x0,
-            y0,
-            w,
-            h,
-            sum: vec![[0.0; 3]; n],
-            count: vec![0; n],
-            rejected: 0,
-        }
+        TileFilm { x0, y0, w, h, sum: vec![[0.0; 3]; n], count: vec![0; n], rejected: 0 }
     }
 
     /// Adds one sample to pixel `local` (row-major inside the tile).
@@ -62,11 +54,7 @@ pub struct Image {
 
 impl Image {
     pub fn new(width: u32, height: u32) -> Self {
-        Image {
-            width,
-            height,
-            data: vec![[0.0; 3]; (width * height) as usize],
-        }
+        Image { width, height, data: vec![[0.0; 3]; (width * height) as usize] }
     }
 
     pub fn get(&self, x: u32, y: u32) -> [f32; 3] {
@@ -78,11 +66,7 @@ impl Image {
         for local in 0..t.sum.len() {
             let (x, y) = t.pixel_of(local);
             let n = t.count[local];
-            let v = if n == 0 {
-                [0.0; 3]
-            } else {
-                t.sum[local].map(|s| s / n as f32)
-            };
+            let v = if n == 0 { [0.0; 3] } else { t.sum[local].map(|s| s / n as f32) };
             self.data[(y * self.width + x) as usize] = v;
         }
     }
@@ -116,8 +100,7 @@ impl Image {
     pub fn png_bytes(&self, gamma: f32) -> Vec<u8> {
         let mut out = Vec::new();
         let img = image::RgbImage::from_raw(self.width, self.height, self.to_rgb8(gamma)).expect("size matches");
-        img.write_to(&mut Cursor::new(&mut out), image::ImageFormat::Png)
-            .expect("PNG encodes in memory");
+        img.write_to(&mut Cursor::new(&mut out), image::ImageFormat::Png).expect("PNG encodes in memory");
         out
     }
 
@@ -146,10 +129,7 @@ impl Image {
 
     /// Writes the image atomically: PNG (8-bit, `gamma`), PFM or EXR (linear), by extension.
     pub fn save(&self, path: &Path, gamma: f32) -> Result<()> {
-        let ext = path
-            .extension()
-            .and_then(|e| e.to_str())
-            .map(|e| e.to_ascii_lowercase());
+        let ext = path.extension().and_then(|e| e.to_str()).map(|e| e.to_ascii_lowercase());
         let bytes = match ext.as_deref() {
             Some("png") => self.png_bytes(gamma),
             Some("pfm") => self.pfm_bytes(),
@@ -172,11 +152,7 @@ impl Image {
             let text_end = nth_newline(&bytes, 3).ok_or_else(|| bad("truncated PFM header".into()))?;
             let header = std::str::from_utf8(&bytes[..text_end]).map_err(|e| bad(e.to_string()))?;
             let mut it = header.split_whitespace().skip(1);
-            let mut num = || {
-                it.next()
-                    .and_then(|s| s.parse::<f64>().ok())
-                    .ok_or_else(|| bad("bad PFM header".into()))
-            };
+            let mut num = || it.next().and_then(|s| s.parse::<f64>().ok()).ok_or_else(|| bad("bad PFM header".into()));
             let (w, h, scale) = (num()? as u32, num()? as u32, num()?);
             let body = &bytes[text_end + 1..];
             if body.len() != (w * h * 12) as usize {
@@ -199,26 +175,16 @@ impl Image {
             }
             Ok(img)
         } else {
-            let img = image::load_from_memory(&bytes)
-                .map_err(|e| bad(e.to_string()))?
-                .into_rgb32f();
+            let img = image::load_from_memory(&bytes).map_err(|e| bad(e.to_string()))?.into_rgb32f();
             let (w, h) = img.dimensions();
             let data = img.into_raw().chunks_exact(3).map(|c| [c[0], c[1], c[2]]).collect();
-            Ok(Image {
-                width: w,
-                height: h,
-                data,
-            })
+            Ok(Image { width: w, height: h, data })
         }
     }
 }
 
 fn nth_newline(b: &[u8], n: usize) -> Option<usize> {
-    b.iter()
-        .enumerate()
-        .filter(|(_, &c)| c == b'\n')
-        .nth(n - 1)
-        .map(|(i, _)| i)
+    b.iter().enumerate().filter(|(_, &c)| c == b'\n').nth(n - 1).map(|(i, _)| i)
 }
 
 #[cfg(test)]
@@ -255,11 +221,7 @@ mod tests {
 
     #[test]
     fn book_encoding() {
-        let img = Image {
-            width: 2,
-            height: 1,
-            data: vec![[0.25, 1.0, 2.0], [0.0, -1.0, 0.5]],
-        };
+        let img = Image { width: 2, height: 1, data: vec![[0.25, 1.0, 2.0], [0.0, -1.0, 0.5]] };
         assert_eq!(img.to_rgb8(2.0), vec![128, 255, 255, 0, 0, 181]);
     }
 }

@@ -2,6 +2,7 @@
 
 use clap::{Args, CommandFactory, FromArgMatches, Parser, Subcommand};
 use indicatif::{ProgressBar, ProgressStyle};
+use rtow::plan::AccelChoice;
 use rtow::scene::{self, Scene};
 use rtow::{Error, KernelKind, RenderOptions, Result, Settings};
 use std::io::IsTerminal;
@@ -10,10 +11,7 @@ use std::process::ExitCode;
 use std::time::Instant;
 
 #[derive(Parser)]
-#[command(
-    name = "rtow",
-    about = "A data-oriented SIMD path tracer for Ray Tracing in One Weekend"
-)]
+#[command(name = "rtow", about = "A data-oriented SIMD path tracer for Ray Tracing in One Weekend")]
 struct Cli {
     #[command(subcommand)]
     command: Command,
@@ -64,6 +62,9 @@ struct ImageArgs {
     /// Tile edge in pixels
     #[arg(long, default_value_t = 16)]
     tile: u32,
+    /// Closest-hit search: auto (by the plan), brute force, or BVH
+    #[arg(long, value_enum, default_value_t = AccelChoice::Auto)]
+    accel: AccelChoice,
 }
 
 #[derive(Args)]
@@ -143,15 +144,10 @@ fn cmd_bench(a: BenchArgs) -> Result<bool> {
         a.repeat,
         rtow::isa()
     );
-    let report = rtow::bench::run(&scene, &name, s, &a.kernels, a.image.threads, a.repeat, |k, i, st| {
-        eprintln!(
-            "  {} run {}: {:.3} s, {:.2} Mrays/s",
-            k.name(),
-            i + 1,
-            st.seconds,
-            st.mrays_per_s
-        )
-    })?;
+    let report =
+        rtow::bench::run(&scene, &name, s, &a.kernels, a.image.threads, a.image.accel, a.repeat, |k, i, st| {
+            eprintln!("  {} run {}: {:.3} s, {:.2} Mrays/s", k.name(), i + 1, st.seconds, st.mrays_per_s)
+        })?;
     print!("{}", report.table());
     for path in [&a.json, &a.save].into_iter().flatten() {
         rtow::output::write_atomic(path, report.to_json().as_bytes())?;
@@ -182,15 +178,10 @@ fn load(spec: &str) -> Result<(Scene, String)> {
     let path = Path::new(spec);
     if path.extension().is_some() || path.exists() {
         let s = scene::load_scene(path)?;
-        let name = path
-            .file_stem()
-            .map(|s| s.to_string_lossy().into_owned())
-            .unwrap_or_else(|| "scene".into());
+        let name = path.file_stem().map(|s| s.to_string_lossy().into_owned()).unwrap_or_else(|| "scene".into());
         return Ok((s, name));
     }
-    Err(Error::Input(format!(
-        "unknown scene '{spec}': not a preset (see `rtow scenes`) and not a .json/.toml file"
-    )))
+    Err(Error::Input(format!("unknown scene '{spec}': not a preset (see `rtow scenes`) and not a .json/.toml file")))
 }
 
 fn settings(scene: &Scene, a: &ImageArgs) -> Settings {
@@ -210,11 +201,7 @@ fn settings(scene: &Scene, a: &ImageArgs) -> Settings {
 }
 
 fn check_writable_ext(path: &Path, allowed: &[&str], what: &str) -> Result<()> {
-    let ext = path
-        .extension()
-        .and_then(|e| e.to_str())
-        .map(|e| e.to_ascii_lowercase())
-        .unwrap_or_default();
+    let ext = path.extension().and_then(|e| e.to_str()).map(|e| e.to_ascii_lowercase()).unwrap_or_default();
     if allowed.contains(&ext.as_str()) {
         Ok(())
     } else {
@@ -264,13 +251,9 @@ fn cmd_render(a: RenderArgs) -> Result<()> {
     if let Some(f) = &a.float {
         check_writable_ext(f, &["pfm", "exr"], "--float")?;
     }
-    let opts = RenderOptions {
-        kernel: a.kernel,
-        threads: a.image.threads,
-        tile: a.image.tile,
-    };
+    let opts = RenderOptions { kernel: a.kernel, threads: a.image.threads, tile: a.image.tile, accel: a.image.accel };
     if a.explain {
-        let prep = rtow::plan::Prepared::new(&scene, s)?;
+        let prep = rtow::plan::Prepared::new(&scene, s, a.image.accel)?;
         println!("{}", prep.plan.explain());
     }
     let r = render_with_progress(&scene, s, opts, a.quiet)?;

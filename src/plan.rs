@@ -3,10 +3,12 @@
 
 use crate::camera::Camera;
 use crate::error::{Error, Result};
-use crate::geometry::Spheres;
+use crate::geometry::{closest_hit_scalar, closest_hit_x8, Bvh, Spheres};
 use crate::material::MaterialTables;
 use crate::scene::{Kind, Mode, Scene, Sky};
+use crate::vec3::V3;
 use serde::Serialize;
+use wide::{f32x8, u32x8};
 
 /// The decisions that make each render do only the work its scene needs.
 #[derive(Clone, Debug, Serialize, PartialEq, Eq)]
@@ -31,11 +33,7 @@ impl Plan {
 
     /// A human-readable account of the plan (`rtow render --explain`).
     pub fn explain(&self) -> String {
-        let kinds = if self.kinds.is_empty() {
-            "none".to_string()
-        } else {
-            self.kinds.join(", ")
-        };
+        let kinds = if self.kinds.is_empty() { "none".to_string() } else { self.kinds.join(", ") };
         format!(
             "plan: mode {:?}; material passes: {kinds}; camera: {} rays, {}; closest hit: {}; paths stop at zero throughput: {}",
             self.mode,
@@ -46,6 +44,23 @@ impl Plan {
         )
     }
 }
+
+/// How closest hits are found.
+#[derive(Clone, Copy, Debug, PartialEq, Eq, Default, Serialize, clap::ValueEnum)]
+#[serde(rename_all = "lowercase")]
+pub enum AccelChoice {
+    /// Brute force below the measured crossover, BVH above it.
+    #[default]
+    Auto,
+    /// Every ray tests every sphere (8 rays per packet in the SIMD kernel).
+    Brute,
+    /// The 8-wide BVH.
+    Bvh,
+}
+
+/// With at least this many spheres `auto` builds a BVH. Measured with
+/// `rtow bench` on random scenes (see README, "Skip what a scene doesn't need").
+pub const BVH_CROSSOVER: usize = 12;
 
 /// The settings a render runs with, after scene defaults and flags are merged.
 #[derive(Clone, Copy, Debug, Serialize, PartialEq)]
@@ -62,12 +77,9 @@ pub const MAX_PIXELS: u64 = 1 << 27;
 
 impl Settings {
     pub fn validate(&self) -> Result<()> {
-        for (name, v) in [
-            ("width", self.width),
-            ("height", self.height),
-            ("spp", self.spp),
-            ("max_depth", self.max_depth),
-        ] {
+        for (name, v) in
+            [("width", self.width), ("height", self.height), ("spp", self.spp), ("max_depth", self.max_depth)]
+        {
             if v == 0 {
                 return Err(Error::invalid(name, "must be at least 1"));
             }
@@ -76,17 +88,11 @@ impl Settings {
         if px > MAX_PIXELS {
             return Err(Error::invalid(
                 "width x height",
-                format!(
-                    "{}x{} = {px} pixels; at most {MAX_PIXELS} fit in memory",
-                    self.width, self.height
-                ),
+                format!("{}x{} = {px} pixels; at most {MAX_PIXELS} fit in memory", self.width, self.height),
             ));
         }
         if px * self.spp as u64 > u32::MAX as u64 * 1024 {
-            return Err(Error::invalid(
-                "spp",
-                format!("{} samples per pixel at {px} pixels is too many", self.spp),
-            ));
+            return Err(Error::invalid("spp", format!("{} samples per pixel at {px} pixels is too many", self.spp)));
         }
         Ok(())
     }
@@ -101,10 +107,7 @@ pub struct SkyColours {
 
 impl From<Sky> for SkyColours {
     fn from(s: Sky) -> Self {
-        SkyColours {
-            horizon: s.horizon,
-            zenith: s.zenith,
-        }
+        SkyColours { horizon: s.horizon, zenith: s.zenith }
     }
 }
 
@@ -117,10 +120,12 @@ pub struct Prepared {
     pub materials: MaterialTables,
     pub camera: Camera,
     pub sky: SkyColours,
+    /// Present when the plan chose the BVH.
+    pub bvh: Option<Bvh>,
 }
 
 impl Prepared {
-    pub fn new(scene: &Scene, settings: Settings) -> Result<Self> {
+    pub fn new(scene: &Scene, settings: Settings, accel: AccelChoice) -> Result<Self> {
         scene.validate()?;
         settings.validate()?;
         let mut materials = MaterialTables::default();
@@ -133,27 +138,60 @@ impl Prepared {
         let camera = Camera::new(&scene.camera, settings.width, settings.height, jitter);
         let plan = Plan {
             mode: scene.mode,
-            kinds: if scene.mode == Mode::Path {
-                kinds.iter().map(|k| k.name()).collect()
-            } else {
-                vec![]
-            },
+            kinds: if scene.mode == Mode::Path { kinds.iter().map(|k| k.name()).collect() } else { vec![] },
             lens: camera.lens && scene.mode != Mode::Gradient,
             jitter,
             accel: "brute force",
             stop_at_zero_throughput: true,
         };
-        let camera = Camera {
-            lens: plan.lens,
-            ..camera
-        };
-        Ok(Prepared {
-            plan,
-            settings,
-            spheres,
-            materials,
-            camera,
-            sky: scene.sky.into(),
-        })
+        let camera = Camera { lens: plan.lens, ..camera };
+        let use_bvh = match accel {
+            AccelChoice::Brute => false,
+            AccelChoice::Bvh => true,
+            AccelChoice::Auto => spheres.len >= BVH_CROSSOVER,
+        } && scene.mode != Mode::Gradient
+            && !spheres.is_empty();
+        let bvh = use_bvh.then(|| {
+            let c = &scene.camera;
+            let extent = c.look_from.iter().fold(0.0f32, |m, x| m.max(x.abs())) + c.lens_radius() as f32;
+            Bvh::build(&spheres, extent)
+        });
+        let plan = Plan { accel: if bvh.is_some() { "bvh8" } else { "brute force" }, ..plan };
+        Ok(Prepared { plan, settings, spheres, materials, camera, sky: scene.sky.into(), bvh })
+    }
+
+    /// The closest hit of one ray (scalar kernel).
+    #[inline(always)]
+    pub fn closest_hit(&self, o: V3<f32>, d: V3<f32>) -> (u32, f32) {
+        match &self.bvh {
+            Some(b) => b.closest_hit_scalar(o, d),
+            None => closest_hit_scalar(&self.spheres, o, d),
+        }
+    }
+
+    /// The closest hits of the `n <= 8` rays at `i..i + n` of SoA arrays `o`, `d`
+    /// (SIMD kernel): 8 rays per packet against every sphere by brute force, or
+    /// one ray at a time through the BVH with 8-wide node and leaf tests.
+    #[inline(always)]
+    pub fn closest_hits8(&self, o: [&[f32]; 3], d: [&[f32]; 3], i: usize, n: usize) -> ([u32; 8], [f32; 8]) {
+        match &self.bvh {
+            Some(b) => {
+                let mut hit = [crate::geometry::MISS; 8];
+                let mut t = [f32::INFINITY; 8];
+                for k in 0..n {
+                    let j = i + k;
+                    (hit[k], t[k]) =
+                        b.closest_hit_wide(V3::new(o[0][j], o[1][j], o[2][j]), V3::new(d[0][j], d[1][j], d[2][j]));
+                }
+                (hit, t)
+            }
+            None => {
+                let ld = |v: &[f32]| f32x8::new(v[i..i + 8].try_into().unwrap());
+                let o8 = V3::new(ld(o[0]), ld(o[1]), ld(o[2]));
+                let d8 = V3::new(ld(d[0]), ld(d[1]), ld(d[2]));
+                let (h, t): (u32x8, f32x8) = closest_hit_x8(&self.spheres, o8, d8);
+                (h.to_array(), t.to_array())
+            }
+        }
     }
 }

@@ -3,7 +3,7 @@
 use crate::error::Result;
 use crate::film::{Image, TileFilm};
 use crate::kernel::{gradient, scalar, wavefront, Counters, KernelKind};
-use crate::plan::{Plan, Prepared, Settings};
+use crate::plan::{AccelChoice, Plan, Prepared, Settings};
 use crate::scene::{Mode, Scene};
 use rayon::prelude::*;
 use serde::Serialize;
@@ -18,15 +18,13 @@ pub struct RenderOptions {
     pub threads: Option<usize>,
     /// Tile edge in pixels (tiles are the unit of parallel work).
     pub tile: u32,
+    /// Closest-hit search: brute force, BVH, or chosen by the plan.
+    pub accel: AccelChoice,
 }
 
 impl Default for RenderOptions {
     fn default() -> Self {
-        RenderOptions {
-            kernel: KernelKind::Simd,
-            threads: None,
-            tile: 16,
-        }
+        RenderOptions { kernel: KernelKind::Simd, threads: None, tile: 16, accel: AccelChoice::Auto }
     }
 }
 
@@ -102,7 +100,7 @@ pub fn render(
     progress: Option<&(dyn Fn(Progress) + Sync)>,
 ) -> Result<Rendered> {
     let t0 = Instant::now();
-    let prep = Prepared::new(scene, settings)?;
+    let prep = Prepared::new(scene, settings, opts.accel)?;
     if !(1..=45).contains(&opts.tile) {
         return Err(crate::error::Error::invalid("tile", "must be between 1 and 45 pixels"));
     }
@@ -163,11 +161,7 @@ fn render_prepared(
         let d = done.fetch_add(1, Ordering::Relaxed) + 1;
         let r = rays.fetch_add(c.rays, Ordering::Relaxed) + c.rays;
         if let Some(p) = progress {
-            p(Progress {
-                tiles_done: d,
-                tiles_total: total,
-                rays: r,
-            });
+            p(Progress { tiles_done: d, tiles_total: total, rays: r });
         }
     };
     let counters: Counters = match opts.kernel {

@@ -147,19 +147,15 @@ mod tests {
 
     fn lanes(keys: [(u64, u64, u64); 8]) -> Xoshiro128PlusX8 {
         let st: Vec<[u32; 4]> = keys.iter().map(|&(a, b, c)| path_state(a, b, c)).collect();
-        Xoshiro128PlusX8 {
-            s: std::array::from_fn(|w| u32x8::new(std::array::from_fn(|k| st[k][w]))),
-        }
+        Xoshiro128PlusX8 { s: std::array::from_fn(|w| u32x8::new(std::array::from_fn(|k| st[k][w]))) }
     }
 
     #[test]
     fn lanes_draw_exactly_what_rand_xoshiro_draws() {
         let keys: [(u64, u64, u64); 8] = std::array::from_fn(|k| (7, 1000 + k as u64 * 13, k as u64 % 3));
         let mut x8 = lanes(keys);
-        let mut scalar: Vec<Xoshiro128Plus> = keys
-            .iter()
-            .map(|&(a, b, c)| Xoshiro128Plus::seed_from_u64(path_key(a, b, c)))
-            .collect();
+        let mut scalar: Vec<Xoshiro128Plus> =
+            keys.iter().map(|&(a, b, c)| Xoshiro128Plus::seed_from_u64(path_key(a, b, c))).collect();
         for _ in 0..1000 {
             let w = x8.next_u32().to_array();
             for k in 0..8 {

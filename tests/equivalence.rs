@@ -5,6 +5,7 @@
 mod common;
 use common::*;
 use proptest::prelude::*;
+use rtow::plan::AccelChoice;
 use rtow::scene::{self, Camera, Material, Mode, Scene, Sky, Sphere};
 use rtow::KernelKind::{Scalar, Simd};
 
@@ -15,10 +16,12 @@ fn every_preset_is_bit_identical_across_kernels() {
         let d = rtow::default_settings(&sc);
         // Small images, the preset's own depth and a few samples (jitter on).
         let s = settings(40, 24, 3, d.max_depth, 11);
-        let a = render_with(&sc, s, Scalar, 2, 16);
-        let b = render_with(&sc, s, Simd, 2, 16);
-        assert_identical(&a.image, &b.image, p.name);
-        assert_eq!(a.stats.rays, b.stats.rays, "{}: ray counts differ", p.name);
+        let a = render_accel(&sc, s, Scalar, 2, 16, AccelChoice::Brute);
+        for (kernel, accel) in [(Simd, AccelChoice::Brute), (Scalar, AccelChoice::Bvh), (Simd, AccelChoice::Bvh)] {
+            let b = render_accel(&sc, s, kernel, 2, 16, accel);
+            assert_identical(&a.image, &b.image, &format!("{} {kernel:?} {accel:?}", p.name));
+            assert_eq!(a.stats.rays, b.stats.rays, "{}: ray counts differ", p.name);
+        }
         assert_eq!(a.stats.rejected_samples, 0, "{}", p.name);
         // 1 spp takes pixel centres (no jitter): also identical.
         let s1 = settings(24, 16, 1, d.max_depth, 3);
@@ -57,30 +60,17 @@ fn arb_material() -> impl Strategy<Value = Material> {
 }
 
 fn arb_sphere() -> impl Strategy<Value = Sphere> {
-    (
-        prop::array::uniform3(-4.0f32..4.0),
-        prop_oneof![0.05f32..2.0, -2.0f32..-0.05],
-        arb_material(),
-    )
-        .prop_map(|(center, radius, material)| Sphere {
-            center,
-            radius,
-            material,
-        })
+    (prop::array::uniform3(-4.0f32..4.0), prop_oneof![0.05f32..2.0, -2.0f32..-0.05], arb_material())
+        .prop_map(|(center, radius, material)| Sphere { center, radius, material })
 }
 
 fn arb_scene() -> impl Strategy<Value = Scene> {
     (
-        prop::collection::vec(arb_sphere(), 0..24),
+        prop::collection::vec(arb_sphere(), 0..60),
         prop::array::uniform3(-8.0f32..8.0),
         10.0f32..120.0,
         prop_oneof![Just(None), (0.0f32..5.0).prop_map(Some)],
-        prop_oneof![
-            Just(Mode::Path),
-            Just(Mode::Path),
-            Just(Mode::Normals),
-            Just(Mode::Flat)
-        ],
+        prop_oneof![Just(Mode::Path), Just(Mode::Path), Just(Mode::Normals), Just(Mode::Flat)],
     )
         .prop_filter("camera must not sit at its target", |(_, from, _, _, _)| {
             from.iter().map(|x| x * x).sum::<f32>() > 0.5
@@ -88,13 +78,7 @@ fn arb_scene() -> impl Strategy<Value = Scene> {
         .prop_map(|(spheres, from, vfov, defocus, mode)| {
             let mut camera = Camera::looking(from, [0.0, 0.0, 0.0], vfov);
             camera.defocus_angle_deg = defocus;
-            Scene {
-                mode,
-                camera,
-                spheres,
-                sky: Sky::default(),
-                render: Default::default(),
-            }
+            Scene { mode, camera, spheres, sky: Sky::default(), render: Default::default() }
         })
         .prop_filter("valid scene (vup not parallel)", |s| s.validate().is_ok())
 }
@@ -105,11 +89,13 @@ proptest! {
     #[test]
     fn random_scenes_are_bit_identical_across_kernels(sc in arb_scene(), seed in 0u64..1000, spp in 1u32..4) {
         let s = settings(19, 11, spp, 12, seed);
-        let a = render_with(&sc, s, Scalar, 1, 8);
-        let b = render_with(&sc, s, Simd, 1, 8);
-        assert_identical(&a.image, &b.image, "random scene");
-        prop_assert_eq!(a.stats.rays, b.stats.rays);
+        let a = render_accel(&sc, s, Scalar, 1, 8, AccelChoice::Brute);
         prop_assert_eq!(a.stats.rejected_samples, 0);
-        prop_assert_eq!(b.stats.rejected_samples, 0);
+        for (kernel, accel) in [(Simd, AccelChoice::Brute), (Scalar, AccelChoice::Bvh), (Simd, AccelChoice::Bvh)] {
+            let b = render_accel(&sc, s, kernel, 1, 8, accel);
+            assert_identical(&a.image, &b.image, &format!("random scene, {kernel:?} {accel:?}"));
+            prop_assert_eq!(a.stats.rays, b.stats.rays);
+            prop_assert_eq!(b.stats.rejected_samples, 0);
+        }
     }
 }

@@ -12,11 +12,7 @@ fn one_sphere(material: Material, sky: Sky) -> Scene {
     Scene {
         mode: Mode::Path,
         camera: Camera::looking([0.0, 0.0, 3.0], [0.0, 0.0, 0.0], 40.0),
-        spheres: vec![Sphere {
-            center: [0.0, 0.0, 0.0],
-            radius: 1.0,
-            material,
-        }],
+        spheres: vec![Sphere { center: [0.0, 0.0, 0.0], radius: 1.0, material }],
         sky,
         render: Default::default(),
     }
@@ -88,13 +84,7 @@ fn hit_f64(o: DVec3, d: DVec3, c: DVec3, r: f64) -> Option<f64> {
 /// A perfect mirror (albedo 1, fuzz 0) shows the reflected sky exactly.
 #[test]
 fn mirror_reflects_the_sky() {
-    let sc = one_sphere(
-        Material::Metal {
-            albedo: [1.0; 3],
-            fuzz: 0.0,
-        },
-        Sky::default(),
-    );
+    let sc = one_sphere(Material::Metal { albedo: [1.0; 3], fuzz: 0.0 }, Sky::default());
     let (w, h) = (40, 30);
     for kernel in KERNELS {
         let img = image(&sc, settings(w, h, 1, 50, 0), kernel);
@@ -111,10 +101,7 @@ fn mirror_reflects_the_sky() {
                     None => sky_f64(&sc.sky, d),
                 };
                 let got = DVec3::from_array(img.get(x, y).map(f64::from));
-                assert!(
-                    (got - want).abs().max_element() < 2e-5,
-                    "{kernel:?} ({x},{y}): {got} vs {want}"
-                );
+                assert!((got - want).abs().max_element() < 2e-5, "{kernel:?} ({x},{y}): {got} vs {want}");
             }
         }
         assert!(mirrored > 200, "the sphere covers part of the image");
@@ -164,10 +151,7 @@ fn ch04_and_ch05_pixels() {
                 let got = DVec3::from_array(fi.get(x, y).map(f64::from));
                 assert!((got - want_flat).abs().max_element() < 1e-6, "ch04 ({x},{y})");
                 let got = DVec3::from_array(ni.get(x, y).map(f64::from));
-                assert!(
-                    (got - want_normal).abs().max_element() < 1e-5,
-                    "ch05 ({x},{y}): {got} {want_normal}"
-                );
+                assert!((got - want_normal).abs().max_element() < 1e-5, "ch05 ({x},{y}): {got} {want_normal}");
             }
         }
         // The centre of the sphere faces the camera: normal (0, 0, 1).

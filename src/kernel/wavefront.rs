@@ -21,7 +21,7 @@
 
 use super::{normal_colour, sky, Counters};
 use crate::film::TileFilm;
-use crate::geometry::{closest_hit_x8, spawn, surface, Surface, MISS};
+use crate::geometry::{spawn, surface, Surface, MISS};
 use crate::material::{dielectric, lambertian, metal};
 use crate::plan::Prepared;
 use crate::real::Real;
@@ -110,11 +110,6 @@ fn all_lanes() -> f32x8 {
 }
 
 #[inline(always)]
-fn v3_load(v: &[Vec<f32>; 3], i: usize) -> V3<f32x8> {
-    V3::new(load(&v[0], i), load(&v[1], i), load(&v[2], i))
-}
-
-#[inline(always)]
 fn v3_gather(v: &[Vec<f32>; 3], idx: &[u32; 8]) -> V3<f32x8> {
     V3::new(gather(&v[0], idx), gather(&v[1], idx), gather(&v[2], idx))
 }
@@ -151,10 +146,7 @@ impl Default for Workspace {
 /// Renders every sample of every pixel of `tile` (at most `MAX_PATHS` pixels).
 pub fn render_tile(prep: &Prepared, ws: &mut Workspace, tile: &mut TileFilm, counters: &mut Counters) {
     let px = tile.sum.len();
-    assert!(
-        px <= MAX_PATHS,
-        "tile of {px} pixels exceeds the wavefront's {MAX_PATHS} paths"
-    );
+    assert!(px <= MAX_PATHS, "tile of {px} pixels exceeds the wavefront's {MAX_PATHS} paths");
     let spp = prep.settings.spp as usize;
     let batch = (MAX_PATHS / px).max(1);
     let mut s0 = 0;
@@ -196,9 +188,7 @@ fn generate(prep: &Prepared, ws: &mut Workspace, tile: &TileFilm, s0: usize, s1:
         p.slot[slot] = slot as u32;
     }
     for i in (0..n).step_by(8) {
-        let mut rng = Xoshiro128PlusX8 {
-            s: std::array::from_fn(|w| load_u(&p.rng[w], i)),
-        };
+        let mut rng = Xoshiro128PlusX8 { s: std::array::from_fn(|w| load_u(&p.rng[w], i)) };
         let (o, d) = prep.camera.ray(load(&p.thr[0], i), load(&p.thr[1], i), &mut rng);
         for a in 0..3 {
             let (oa, da) = [(o.x, d.x), (o.y, d.y), (o.z, d.z)][a];
@@ -219,10 +209,13 @@ fn bounce(prep: &Prepared, ws: &mut Workspace, counters: &mut Counters) {
     counters.rays += n as u64;
     let cur = &ws.cur;
     for i in (0..n).step_by(8) {
-        let (hit, t) = closest_hit_x8(&prep.spheres, v3_load(&cur.o, i), v3_load(&cur.d, i));
-        ws.hit[i..i + 8].copy_from_slice(&hit.to_array());
-        store(&mut ws.t, i, t);
-        counters.isect_active += (n - i).min(8) as u64;
+        let live = (n - i).min(8);
+        let o = [&cur.o[0][..], &cur.o[1][..], &cur.o[2][..]];
+        let d = [&cur.d[0][..], &cur.d[1][..], &cur.d[2][..]];
+        let (hit, t) = prep.closest_hits8(o, d, i, live);
+        ws.hit[i..i + 8].copy_from_slice(&hit);
+        ws.t[i..i + 8].copy_from_slice(&t);
+        counters.isect_active += live as u64;
         counters.isect_lanes += 8;
     }
     for q in ws.queue.iter_mut() {
@@ -230,11 +223,7 @@ fn bounce(prep: &Prepared, ws: &mut Workspace, counters: &mut Counters) {
     }
     for i in 0..n {
         let h = ws.hit[i];
-        let q = if h == MISS {
-            MISS_QUEUE
-        } else {
-            prep.spheres.kind[h as usize] as usize
-        };
+        let q = if h == MISS { MISS_QUEUE } else { prep.spheres.kind[h as usize] as usize };
         ws.queue[q].push(i as u32);
     }
     let queues = std::mem::take(&mut ws.queue);
@@ -247,9 +236,7 @@ fn bounce(prep: &Prepared, ws: &mut Workspace, counters: &mut Counters) {
         Mode::Path => {
             for kind in Kind::ALL {
                 if prep.plan.uses(kind) {
-                    for_packets(&queues[kind as usize], counters, |idx, active| {
-                        scatter(prep, ws, kind, idx, active)
-                    });
+                    for_packets(&queues[kind as usize], counters, |idx, active| scatter(prep, ws, kind, idx, active));
                 }
             }
         }
@@ -301,15 +288,9 @@ fn debug_shade(prep: &Prepared, ws: &mut Workspace, mode: Mode, idx: &[u32; 8], 
         Mode::Normals => normal_colour(srf.n),
         _ => {
             let sp = &prep.spheres;
-            let cols: [[f32; 3]; 8] = std::array::from_fn(|k| {
-                prep.materials
-                    .flat_colour(sp.kind[sph[k] as usize], sp.row[sph[k] as usize])
-            });
-            V3::new(
-                f32x8::new(cols.map(|c| c[0])),
-                f32x8::new(cols.map(|c| c[1])),
-                f32x8::new(cols.map(|c| c[2])),
-            )
+            let cols: [[f32; 3]; 8] =
+                std::array::from_fn(|k| prep.materials.flat_colour(sp.kind[sph[k] as usize], sp.row[sph[k] as usize]));
+            V3::new(f32x8::new(cols.map(|c| c[0])), f32x8::new(cols.map(|c| c[1])), f32x8::new(cols.map(|c| c[2])))
         }
     };
     write_results(ws, idx, active, c);
@@ -320,9 +301,7 @@ fn debug_shade(prep: &Prepared, ws: &mut Workspace, mode: Mode, idx: &[u32; 8], 
 fn scatter(prep: &Prepared, ws: &mut Workspace, kind: Kind, idx: &[u32; 8], active: usize) {
     let (d, srf, sph) = surfaces(prep, ws, idx);
     let cur = &ws.cur;
-    let mut rng = Xoshiro128PlusX8 {
-        s: std::array::from_fn(|w| gather_u(&cur.rng[w], idx)),
-    };
+    let mut rng = Xoshiro128PlusX8 { s: std::array::from_fn(|w| gather_u(&cur.rng[w], idx)) };
     let rows: [usize; 8] = std::array::from_fn(|k| prep.spheres.row[sph[k] as usize] as usize);
     let m = &prep.materials;
     let thr = v3_gather(&cur.thr, idx);
@@ -349,11 +328,7 @@ fn scatter(prep: &Prepared, ws: &mut Workspace, kind: Kind, idx: &[u32; 8], acti
         Kind::Dielectric => {
             let ior = f32x8::new(rows.map(|r| m.dielectric[r]));
             let one = V3::splat3([1.0; 3]);
-            (
-                dielectric(d, srf.n, srf.front, ior, &mut rng),
-                thr.mul_elem(one),
-                all_lanes(),
-            )
+            (dielectric(d, srf.n, srf.front, ior, &mut rng), thr.mul_elem(one), all_lanes())
         }
     };
     let zero = f32x8::splat(0.0);

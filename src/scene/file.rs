@@ -12,18 +12,10 @@ pub enum Format {
 
 impl Format {
     pub fn from_path(path: &Path) -> Result<Format> {
-        match path
-            .extension()
-            .and_then(|e| e.to_str())
-            .map(|e| e.to_ascii_lowercase())
-            .as_deref()
-        {
+        match path.extension().and_then(|e| e.to_str()).map(|e| e.to_ascii_lowercase()).as_deref() {
             Some("json") => Ok(Format::Json),
             Some("toml") => Ok(Format::Toml),
-            _ => Err(Error::Input(format!(
-                "{}: unknown scene file type (use .json or .toml)",
-                path.display()
-            ))),
+            _ => Err(Error::Input(format!("{}: unknown scene file type (use .json or .toml)", path.display()))),
         }
     }
 }
@@ -47,10 +39,7 @@ fn field_prefix(path: &serde_path_to_error::Path) -> String {
 
 /// Parses and validates a scene; `origin` names the source in errors.
 pub fn scene_from_str(text: &str, format: Format, origin: &Path) -> Result<Scene> {
-    let parse_err = |message: String| Error::Parse {
-        path: origin.to_path_buf(),
-        message,
-    };
+    let parse_err = |message: String| Error::Parse { path: origin.to_path_buf(), message };
     let scene: Scene = match format {
         Format::Json => {
             let mut de = serde_json::Deserializer::from_str(text);

@@ -154,10 +154,7 @@ pub struct Sky {
 
 impl Default for Sky {
     fn default() -> Self {
-        Sky {
-            horizon: [1.0, 1.0, 1.0],
-            zenith: [0.5, 0.7, 1.0],
-        }
+        Sky { horizon: [1.0, 1.0, 1.0], zenith: [0.5, 0.7, 1.0] }
     }
 }
 
@@ -223,10 +220,7 @@ fn finite(field: &str, v: f32) -> Result<()> {
 fn colour(field: &str, v: [f32; 3]) -> Result<()> {
     finite3(field, v)?;
     if v.iter().any(|&x| x < 0.0) {
-        return Err(Error::invalid(
-            field,
-            format!("colour components must be >= 0, got {v:?}"),
-        ));
+        return Err(Error::invalid(field, format!("colour components must be >= 0, got {v:?}")));
     }
     Ok(())
 }
@@ -251,31 +245,19 @@ impl Scene {
             }
             let sin = up.cross(wv).length() / (up.length() * wv.length());
             if !(sin > 1e-6) {
-                return Err(Error::invalid(
-                    "camera.vup",
-                    "must not be parallel to the view direction",
-                ));
+                return Err(Error::invalid("camera.vup", "must not be parallel to the view direction"));
             }
         }
         if !(c.vfov_deg > 0.0 && c.vfov_deg < 180.0) {
-            return Err(Error::invalid(
-                "camera.vfov_deg",
-                format!("must be in (0, 180), got {}", c.vfov_deg),
-            ));
+            return Err(Error::invalid("camera.vfov_deg", format!("must be in (0, 180), got {}", c.vfov_deg)));
         }
         if c.defocus_angle_deg.is_some() && c.aperture.is_some() {
-            return Err(Error::invalid(
-                "camera.aperture",
-                "give either aperture or defocus_angle_deg, not both",
-            ));
+            return Err(Error::invalid("camera.aperture", "give either aperture or defocus_angle_deg, not both"));
         }
         if let Some(a) = c.defocus_angle_deg {
             finite("camera.defocus_angle_deg", a)?;
             if !(0.0..180.0).contains(&a) {
-                return Err(Error::invalid(
-                    "camera.defocus_angle_deg",
-                    format!("must be in [0, 180), got {a}"),
-                ));
+                return Err(Error::invalid("camera.defocus_angle_deg", format!("must be in [0, 180), got {a}")));
             }
         }
         if let Some(a) = c.aperture {
@@ -311,10 +293,7 @@ impl Scene {
                     colour(&f("material.albedo"), albedo)?;
                     finite(&f("material.fuzz"), fuzz)?;
                     if !(0.0..=1.0).contains(&fuzz) {
-                        return Err(Error::invalid(
-                            f("material.fuzz"),
-                            format!("must be in [0, 1], got {fuzz}"),
-                        ));
+                        return Err(Error::invalid(f("material.fuzz"), format!("must be in [0, 1], got {fuzz}")));
                     }
                 }
                 Material::Dielectric { ior } => {

@@ -21,11 +21,7 @@ const fn glass(ior: f32) -> Material {
     Material::Dielectric { ior }
 }
 const fn sphere(center: [f32; 3], radius: f32, material: Material) -> Sphere {
-    Sphere {
-        center,
-        radius,
-        material,
-    }
+    Sphere { center, radius, material }
 }
 
 fn settings(width: u32, height: u32, spp: u32, depth: u32) -> RenderDefaults {
@@ -45,13 +41,7 @@ fn origin_camera() -> Camera {
 }
 
 fn scene(mode: Mode, camera: Camera, spheres: Vec<Sphere>, render: RenderDefaults) -> Scene {
-    Scene {
-        mode,
-        camera,
-        spheres,
-        sky: Sky::default(),
-        render,
-    }
+    Scene { mode, camera, spheres, sky: Sky::default(), render }
 }
 
 const SMALL: fn() -> RenderDefaults = || settings(400, 225, 1, 1);
@@ -78,19 +68,11 @@ fn ch05_ground() -> Scene {
     scene(Mode::Normals, origin_camera(), vec![red_ball(), ground_100()], SMALL())
 }
 fn ch06() -> Scene {
-    scene(
-        Mode::Normals,
-        origin_camera(),
-        vec![red_ball(), ground_100()],
-        settings(400, 225, 100, 1),
-    )
+    scene(Mode::Normals, origin_camera(), vec![red_ball(), ground_100()], settings(400, 225, 100, 1))
 }
 fn ch07() -> Scene {
     let grey = lam([0.5, 0.5, 0.5]);
-    let spheres = vec![
-        sphere([0.0, 0.0, -1.0], 0.5, grey),
-        sphere([0.0, -100.5, -1.0], 100.0, grey),
-    ];
+    let spheres = vec![sphere([0.0, 0.0, -1.0], 0.5, grey), sphere([0.0, -100.5, -1.0], 100.0, grey)];
     scene(Mode::Path, origin_camera(), spheres, settings(400, 225, 100, 50))
 }
 fn metals(center: [f32; 3], fuzz_left: f32, fuzz_right: f32) -> Vec<Sphere> {
@@ -102,20 +84,10 @@ fn metals(center: [f32; 3], fuzz_left: f32, fuzz_right: f32) -> Vec<Sphere> {
     ]
 }
 fn ch08_metal() -> Scene {
-    scene(
-        Mode::Path,
-        origin_camera(),
-        metals([0.8, 0.3, 0.3], 0.0, 0.0),
-        settings(400, 225, 100, 50),
-    )
+    scene(Mode::Path, origin_camera(), metals([0.8, 0.3, 0.3], 0.0, 0.0), settings(400, 225, 100, 50))
 }
 fn ch08_fuzz() -> Scene {
-    scene(
-        Mode::Path,
-        origin_camera(),
-        metals([0.8, 0.3, 0.3], 0.3, 1.0),
-        settings(400, 225, 100, 50),
-    )
+    scene(Mode::Path, origin_camera(), metals([0.8, 0.3, 0.3], 0.3, 1.0), settings(400, 225, 100, 50))
 }
 /// Chapter 9's scene: a hollow glass ball on the left (a negative-radius sphere inside).
 fn glass_scene() -> Vec<Sphere> {
@@ -132,10 +104,8 @@ fn ch09() -> Scene {
 }
 fn ch10_wide() -> Scene {
     let r = std::f32::consts::FRAC_PI_4.cos();
-    let spheres = vec![
-        sphere([-r, 0.0, -1.0], r, lam([0.0, 0.0, 1.0])),
-        sphere([r, 0.0, -1.0], r, lam([1.0, 0.0, 0.0])),
-    ];
+    let spheres =
+        vec![sphere([-r, 0.0, -1.0], r, lam([0.0, 0.0, 1.0])), sphere([r, 0.0, -1.0], r, lam([1.0, 0.0, 0.0]))];
     scene(Mode::Path, origin_camera(), spheres, settings(400, 225, 100, 50))
 }
 fn ch10_look(vfov: f32) -> Scene {
@@ -194,21 +164,9 @@ static PRESETS: &[Preset] = &[
         description: "ch. 1: the first image, a red/green gradient (no rays)",
         build: ch01,
     },
-    Preset {
-        name: "ch03-sky",
-        description: "ch. 3: camera rays and the white-to-blue sky",
-        build: ch03,
-    },
-    Preset {
-        name: "ch04-sphere",
-        description: "ch. 4: a sphere hit test, drawn flat red over the sky",
-        build: ch04,
-    },
-    Preset {
-        name: "ch05-normals",
-        description: "ch. 5: the sphere shaded by its surface normal",
-        build: ch05_normals,
-    },
+    Preset { name: "ch03-sky", description: "ch. 3: camera rays and the white-to-blue sky", build: ch03 },
+    Preset { name: "ch04-sphere", description: "ch. 4: a sphere hit test, drawn flat red over the sky", build: ch04 },
+    Preset { name: "ch05-normals", description: "ch. 5: the sphere shaded by its surface normal", build: ch05_normals },
     Preset {
         name: "ch05-ground",
         description: "ch. 5: normal shading of a list of hitables (sphere + ground)",
@@ -254,11 +212,7 @@ static PRESETS: &[Preset] = &[
         description: "ch. 10: the glass scene from (-2,2,1) with vfov 20",
         build: || ch10_look(20.0),
     },
-    Preset {
-        name: "ch11-defocus",
-        description: "ch. 11: defocus blur, aperture 2.0 from (3,3,2)",
-        build: ch11,
-    },
+    Preset { name: "ch11-defocus", description: "ch. 11: defocus blur, aperture 2.0 from (3,3,2)", build: ch11 },
     Preset {
         name: "final",
         description: "ch. 12: the book's random spheres (487 spheres, thin lens)",
@@ -290,11 +244,7 @@ mod tests {
     #[test]
     fn final_scene_has_the_book_shape() {
         let s = final_scene();
-        assert!(
-            s.spheres.len() > 400 && s.spheres.len() <= 1 + 22 * 22 + 3,
-            "{}",
-            s.spheres.len()
-        );
+        assert!(s.spheres.len() > 400 && s.spheres.len() <= 1 + 22 * 22 + 3, "{}", s.spheres.len());
         assert_eq!(s.spheres[0].radius, 1000.0);
         let kinds = |k| s.spheres.iter().filter(|sp| sp.material.kind() == k).count();
         use crate::scene::Kind;
