@@ -27,7 +27,7 @@ use super::spheres::{Spheres, MISS};
 use crate::real::Real;
 use crate::vec3::V3;
 use std::mem::MaybeUninit;
-use wide::f32x8;
+use wide::{f32x8, i32x8, u32x8};
 
 const PAD: f32 = 1.0 / 524_288.0; // 2^-19
 /// 1 + 2 gamma_3 with gamma_3 = 3u / (1 - 3u), rounded up.
@@ -379,6 +379,55 @@ impl Bvh {
         (best, best_t)
     }
 
+    /// The closest hits of 8 rays walking the tree together (packet traversal):
+    /// a child is entered when any live ray (bit k of `live`) enters its box;
+    /// a leaf's spheres are each broadcast against the 8 rays, as in brute force.
+    pub fn closest_hit_packet(&self, o: V3<f32x8>, d: V3<f32x8>, live: u32) -> (u32x8, f32x8) {
+        let inv = V3::new(inv_lanes(d.x), inv_lanes(d.y), inv_lanes(d.z));
+        let live_mask: f32x8 = bytemuck::cast(u32x8::new(std::array::from_fn(|k| 0u32.wrapping_sub((live >> k) & 1))));
+        let mut best_t = f32x8::splat(f32::INFINITY);
+        let mut best = i32x8::splat(MISS as i32);
+        let mut stack = Stack::new();
+        let exit = f32x8::splat(EXIT_SCALE);
+        let prune = f32x8::splat(PRUNE_SCALE);
+        while let Some((ni, _)) = stack.pop() {
+            let node = &self.nodes[ni as usize];
+            for k in 0..8 {
+                let count = node.count[k];
+                if count == EMPTY {
+                    continue;
+                }
+                let bmin = V3::new(node.min[0][k], node.min[1][k], node.min[2][k]);
+                let bmax = V3::new(node.max[0][k], node.max[1][k], node.max[2][k]);
+                let (near, far) = slab(splat3(bmin), splat3(bmax), o, inv);
+                let enter = near.le(far * exit) & near.le(best_t * prune) & live_mask;
+                if !enter.any() {
+                    continue;
+                }
+                if count == 0 {
+                    stack.push((node.child[k], 0.0));
+                    continue;
+                }
+                let start = node.child[k] as usize;
+                for j in start..start + count as usize {
+                    let c = V3::new(f32x8::splat(self.cx[j]), f32x8::splat(self.cy[j]), f32x8::splat(self.cz[j]));
+                    let r2 = f32x8::splat(self.r2[j]);
+                    let (disc, f, b) = sphere_disc(o, d, c, r2);
+                    if !disc.ge(f32x8::splat(0.0)).any() {
+                        continue;
+                    }
+                    let (hit, t) = sphere_t(disc, f, b, r2);
+                    let i = i32x8::splat(self.index[j] as i32);
+                    let tie: f32x8 = bytemuck::cast(i.simd_lt(best));
+                    let closer = hit & (t.lt(best_t) | (t.eq(best_t) & tie));
+                    best_t = closer.select(t, best_t);
+                    best = bytemuck::cast::<f32x8, i32x8>(closer).select(i, best);
+                }
+            }
+        }
+        (bytemuck::cast(best), best_t)
+    }
+
     #[inline(always)]
     fn leaf_wide(&self, start: usize, cnt: usize, o: V3<f32x8>, d: V3<f32x8>, best_t: &mut f32, best: &mut u32) {
         let ld = |v: &[f32]| f32x8::new(v[start..start + 8].try_into().unwrap());
@@ -437,6 +486,13 @@ impl Stack {
 #[inline(always)]
 fn splat3(v: V3<f32>) -> V3<f32x8> {
     V3::new(f32x8::splat(v.x), f32x8::splat(v.y), f32x8::splat(v.z))
+}
+
+/// `1 / d` per lane, with the same tiny-component rule as [`inv_dir`].
+#[inline(always)]
+fn inv_lanes(x: f32x8) -> f32x8 {
+    let tiny = f32x8::splat(TINY_DIR);
+    f32x8::splat(1.0) / x.abs().lt(tiny).select(tiny.copysign(x), x)
 }
 
 #[inline(always)]
