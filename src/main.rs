@@ -86,7 +86,7 @@ struct RenderArgs {
     #[arg(long, value_name = "FILE")]
     stats_json: Option<PathBuf>,
     /// PNG gamma [default: 2 for path traced scenes, 1 for the debug chapters, as in the book]
-    #[arg(long)]
+    #[arg(long, value_parser = positive_f32)]
     gamma: Option<f32>,
     /// Print the render plan (what the scene needs) before rendering.
     #[arg(long)]
@@ -170,6 +170,14 @@ fn cmd_bench(a: BenchArgs) -> Result<bool> {
     Ok(ok)
 }
 
+fn positive_f32(s: &str) -> std::result::Result<f32, String> {
+    match s.parse::<f32>() {
+        Ok(v) if v.is_finite() && v > 0.0 => Ok(v),
+        Ok(v) => Err(format!("must be a finite number > 0, got {v}")),
+        Err(e) => Err(e.to_string()),
+    }
+}
+
 /// A preset or a file: the scene and a short name for default outputs.
 fn load(spec: &str) -> Result<(Scene, String)> {
     if let Some(s) = scene::preset(spec) {
@@ -251,6 +259,12 @@ fn cmd_render(a: RenderArgs) -> Result<()> {
     if let Some(f) = &a.float {
         check_writable_ext(f, &["pfm", "exr"], "--float")?;
     }
+    // Bad input first (exit 2), then every output path, before the render:
+    // a failure after it would waste the render and leave some outputs written.
+    s.validate()?;
+    for p in std::iter::once(&out).chain(&a.float).chain(&a.stats_json) {
+        rtow::output::check_writable(p)?;
+    }
     let opts = RenderOptions { kernel: a.kernel, threads: a.image.threads, tile: a.image.tile, accel: a.image.accel };
     if a.explain {
         let prep = rtow::plan::Prepared::new(&scene, s, a.image.accel)?;
@@ -310,13 +324,38 @@ fn run(cli: Cli) -> Result<bool> {
     }
 }
 
+/// Help and version print as clap prints them; usage errors print as one
+/// `error: ...` line (exit status 2), like every other error of rtow.
+fn clap_exit(e: clap::Error) -> ! {
+    use clap::error::ErrorKind;
+    if matches!(
+        e.kind(),
+        ErrorKind::DisplayHelp | ErrorKind::DisplayVersion | ErrorKind::DisplayHelpOnMissingArgumentOrSubcommand
+    ) {
+        e.exit()
+    }
+    let text = e.to_string();
+    let mut line = String::new();
+    for part in text.lines().map(str::trim).filter(|l| !l.is_empty()) {
+        if part.starts_with("For more information") {
+            continue;
+        }
+        let part = part.strip_prefix("error: ").unwrap_or(part);
+        if !line.is_empty() {
+            line.push_str(if line.ends_with(':') { " " } else { "; " });
+        }
+        line.push_str(part);
+    }
+    eprintln!("error: {line}");
+    std::process::exit(2)
+}
+
 fn main() -> ExitCode {
     let version = format!("{} (SIMD: {})", env!("CARGO_PKG_VERSION"), rtow::isa());
     let version: &'static str = Box::leak(version.into_boxed_str());
-    let matches = Cli::command().version(version).get_matches();
-    let cli = match Cli::from_arg_matches(&matches) {
+    let cli = match Cli::command().version(version).try_get_matches().and_then(|m| Cli::from_arg_matches(&m)) {
         Ok(c) => c,
-        Err(e) => e.exit(),
+        Err(e) => clap_exit(e),
     };
     match run(cli) {
         Ok(true) => ExitCode::SUCCESS,

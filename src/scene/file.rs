@@ -29,8 +29,12 @@ fn line_col(text: &str, offset: usize) -> (usize, usize) {
 }
 
 fn field_prefix(path: &serde_path_to_error::Path) -> String {
-    let p = path.to_string();
-    if p == "." || p.is_empty() {
+    let mut p = path.to_string();
+    // A syntax error inside an object ends the path in `?` (the key it could not read).
+    while let Some(rest) = p.strip_suffix(".?") {
+        p.truncate(rest.len());
+    }
+    if p == "." || p == "?" || p.is_empty() {
         String::new()
     } else {
         format!("{p}: ")
@@ -53,7 +57,9 @@ pub fn scene_from_str(text: &str, format: Format, origin: &Path) -> Result<Scene
                     inner.column()
                 ))
             })?;
-            de.end().map_err(|e| parse_err(format!("{e}")))?;
+            de.end().map_err(|e| {
+                parse_err(format!("{} (line {}, column {})", strip_position(&e.to_string()), e.line(), e.column()))
+            })?;
             scene
         }
         Format::Toml => {
@@ -101,8 +107,10 @@ pub fn scene_to_string(scene: &Scene, format: Format) -> String {
 }
 
 /// Writes a scene file, atomically, in the format its extension names.
+/// A path without .json / .toml is an output error, like any other unwritable path.
 pub fn save_scene(scene: &Scene, path: &Path) -> Result<()> {
-    let format = Format::from_path(path)?;
+    let out_err = |message: String| Error::Output { path: path.to_path_buf(), message };
+    let format = Format::from_path(path).map_err(|_| out_err("unknown scene file type (use .json or .toml)".into()))?;
     crate::output::write_atomic(path, scene_to_string(scene, format).as_bytes())
 }
 
