@@ -3,7 +3,9 @@
 //! `cargo bench` (about two minutes on 2 cores). Groups:
 //! - `intersect`: closest hit over the final scene's spheres (brute force), one
 //!   fixed batch of rays, scalar one ray at a time against 8-wide packets;
-//! - `render`: one 32x32 tile of the final scene at 2 spp, depth 50, per kernel.
+//! - `render`: one 32x32 tile of the final scene at 2 spp, depth 50, per kernel
+//!   (brute force);
+//! - `accel`: the same tile, brute force against the BVH, for both kernels.
 //! Throughput is in rays (criterion's "elements").
 
 use criterion::{criterion_group, criterion_main, Criterion, Throughput};
@@ -93,5 +95,37 @@ fn render_tile(c: &mut Criterion) {
     g.finish();
 }
 
-criterion_group!(benches, intersect, render_tile);
+/// Brute force against the BVH, for both kernels, on a tile of the final scene.
+fn accel(c: &mut Criterion) {
+    let mut g = c.benchmark_group("accel");
+    let tile = || TileFilm::new(160, 96, 32, 32);
+    for accel in [AccelChoice::Brute, AccelChoice::Bvh, AccelChoice::BvhRay] {
+        let prep = prepared(2, accel);
+        let mut counters = Counters::default();
+        scalar::render_tile(&prep, &mut tile(), &mut counters);
+        g.sample_size(10).measurement_time(Duration::from_secs(4)).throughput(Throughput::Elements(counters.rays));
+        let name = format!("{accel:?}").to_lowercase();
+        if accel != AccelChoice::BvhRay {
+            // The scalar kernel walks the BVH one ray at a time either way.
+            g.bench_function(format!("scalar/{name}"), |b| {
+                b.iter(|| {
+                    let mut t = tile();
+                    scalar::render_tile(&prep, &mut t, &mut Counters::default());
+                    black_box(t.sum[0])
+                })
+            });
+        }
+        let mut ws = wavefront::Workspace::default();
+        g.bench_function(format!("simd/{name}"), |b| {
+            b.iter(|| {
+                let mut t = tile();
+                wavefront::render_tile(&prep, &mut ws, &mut t, &mut Counters::default());
+                black_box(t.sum[0])
+            })
+        });
+    }
+    g.finish();
+}
+
+criterion_group!(benches, intersect, render_tile, accel);
 criterion_main!(benches);
