@@ -62,20 +62,49 @@ impl Paths {
         }
     }
 
+    /// Appends the lanes of `alive` (a bitmask) of 8 paths: SIMD stream
+    /// compaction, the live lanes permuted to the front and stored as whole
+    /// vectors (the arrays' 8 lanes of slack take the rest).
     #[inline(always)]
-    fn push(&mut self, o: [f32; 3], d: [f32; 3], thr: [f32; 3], rng: [u32; 4], slot: u32) {
-        let i = self.len;
-        for a in 0..3 {
-            self.o[a][i] = o[a];
-            self.d[a][i] = d[a];
-            self.thr[a][i] = thr[a];
+    fn append(&mut self, alive: u32, o: V3<f32x8>, d: V3<f32x8>, thr: V3<f32x8>, rng: &Xoshiro128PlusX8, slot: u32x8) {
+        let perm = u32x8::new(COMPRESS[alive as usize]);
+        let at = self.len;
+        let put = |v: &mut Vec<f32>, x: f32x8| {
+            let packed: u32x8 = bytemuck::cast::<f32x8, u32x8>(x).shuffle(perm);
+            v[at..at + 8].copy_from_slice(&bytemuck::cast::<u32x8, [f32; 8]>(packed));
+        };
+        for (a, (ov, dv, tv)) in [(o.x, d.x, thr.x), (o.y, d.y, thr.y), (o.z, d.z, thr.z)].into_iter().enumerate() {
+            put(&mut self.o[a], ov);
+            put(&mut self.d[a], dv);
+            put(&mut self.thr[a], tv);
         }
+        let put_u = |v: &mut Vec<u32>, x: u32x8| v[at..at + 8].copy_from_slice(&x.shuffle(perm).to_array());
         for w in 0..4 {
-            self.rng[w][i] = rng[w];
+            put_u(&mut self.rng[w], rng.s[w]);
         }
-        self.slot[i] = slot;
-        self.len = i + 1;
+        put_u(&mut self.slot, slot);
+        self.len = at + alive.count_ones() as usize;
     }
+}
+
+/// For each 8-bit lane mask, the indices of its set lanes first (stream compaction).
+static COMPRESS: [[u32; 8]; 256] = compress_table();
+
+const fn compress_table() -> [[u32; 8]; 256] {
+    let mut t = [[0u32; 8]; 256];
+    let mut m = 0;
+    while m < 256 {
+        let (mut k, mut n) = (0, 0);
+        while k < 8 {
+            if m & (1 << k) != 0 {
+                t[m][n] = k as u32;
+                n += 1;
+            }
+            k += 1;
+        }
+        m += 1;
+    }
+    t
 }
 
 #[inline(always)]
@@ -125,7 +154,8 @@ pub struct Workspace {
     next: Paths,
     hit: Vec<u32>,
     t: Vec<f32>,
-    /// Indices into `cur`, one queue per material kind (by `Kind as usize`) and one for misses.
+    /// Indices into `cur`, one queue per material kind (by `Kind as usize`) and one for
+    /// misses, each `MAX_PATHS` long (filled from the front each bounce).
     queue: [Vec<u32>; 4],
     result: Vec<[f32; 3]>,
 }
@@ -137,7 +167,7 @@ impl Default for Workspace {
             next: Paths::with_capacity(MAX_PATHS),
             hit: vec![0; MAX_PATHS + 8],
             t: vec![0.0; MAX_PATHS + 8],
-            queue: std::array::from_fn(|_| Vec::with_capacity(MAX_PATHS)),
+            queue: std::array::from_fn(|_| vec![0; MAX_PATHS]),
             result: vec![[0.0; 3]; MAX_PATHS],
         }
     }
@@ -218,17 +248,15 @@ fn bounce(prep: &Prepared, ws: &mut Workspace, counters: &mut Counters) {
         counters.isect_active += live as u64;
         counters.isect_lanes += 8;
     }
-    for q in ws.queue.iter_mut() {
-        q.clear();
-    }
-    for i in 0..n {
-        let h = ws.hit[i];
+    let mut len = [0usize; 4];
+    for (i, &h) in ws.hit[..n].iter().enumerate() {
         let q = if h == MISS { MISS_QUEUE } else { prep.spheres.kind[h as usize] as usize };
-        ws.queue[q].push(i as u32);
+        ws.queue[q][len[q]] = i as u32;
+        len[q] += 1;
     }
     let queues = std::mem::take(&mut ws.queue);
     ws.next.len = 0;
-    for_packets(&queues[MISS_QUEUE], counters, |idx, active| {
+    for_packets(&queues[MISS_QUEUE][..len[MISS_QUEUE]], counters, |idx, active| {
         let c = v3_gather(&ws.cur.thr, idx).mul_elem(sky(&prep.sky, v3_gather(&ws.cur.d, idx)));
         write_results(ws, idx, active, c);
     });
@@ -236,13 +264,14 @@ fn bounce(prep: &Prepared, ws: &mut Workspace, counters: &mut Counters) {
         Mode::Path => {
             for kind in Kind::ALL {
                 if prep.plan.uses(kind) {
-                    for_packets(&queues[kind as usize], counters, |idx, active| scatter(prep, ws, kind, idx, active));
+                    let q = &queues[kind as usize][..len[kind as usize]];
+                    for_packets(q, counters, |idx, active| scatter(prep, ws, kind, idx, active));
                 }
             }
         }
         mode => {
-            for q in &queues[..MISS_QUEUE] {
-                for_packets(q, counters, |idx, active| debug_shade(prep, ws, mode, idx, active));
+            for (q, &l) in queues[..MISS_QUEUE].iter().zip(&len) {
+                for_packets(&q[..l], counters, |idx, active| debug_shade(prep, ws, mode, idx, active));
             }
         }
     }
@@ -333,20 +362,7 @@ fn scatter(prep: &Prepared, ws: &mut Workspace, kind: Kind, idx: &[u32; 8], acti
     };
     let zero = f32x8::splat(0.0);
     let dark = thr.x.eq(zero) & thr.y.eq(zero) & thr.z.eq(zero);
-    let alive = (alive & !dark).to_bitmask();
-    let o = lanes(spawn(&srf, dir));
-    let (dl, tl) = (lanes(dir), lanes(thr));
-    let rl: [[u32; 8]; 4] = rng.s.map(|w| w.to_array());
-    for k in 0..active {
-        if alive & (1 << k) != 0 {
-            let slot = ws.cur.slot[idx[k] as usize];
-            ws.next.push(
-                [o[0][k], o[1][k], o[2][k]],
-                [dl[0][k], dl[1][k], dl[2][k]],
-                [tl[0][k], tl[1][k], tl[2][k]],
-                [rl[0][k], rl[1][k], rl[2][k], rl[3][k]],
-                slot,
-            );
-        }
-    }
+    let alive = (alive & !dark).to_bitmask() & ((1u32 << active) - 1);
+    let slot = gather_u(&cur.slot, idx);
+    ws.next.append(alive, spawn(&srf, dir), dir, thr, &rng, slot);
 }
