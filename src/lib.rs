@@ -12,6 +12,7 @@
 
 pub mod camera;
 pub mod error;
+pub mod estimator;
 pub mod film;
 pub mod geometry;
 pub mod kernel;

@@ -88,9 +88,35 @@ struct RenderArgs {
     /// Print the render plan (what the scene needs) before rendering.
     #[arg(long)]
     explain: bool,
+    #[command(flatten)]
+    estimator: EstimatorArgs,
     /// No progress bar and no summary line.
     #[arg(short, long)]
     quiet: bool,
+}
+
+/// Russian roulette and adaptive sampling (both off by default).
+#[derive(Args, Clone, Debug)]
+struct EstimatorArgs {
+    /// Russian roulette: after a few bounces a path survives with probability
+    /// min(1, max throughput component) and is reweighted (unbiased; changes the noise).
+    #[arg(long)]
+    rr: bool,
+    /// Adaptive sampling: a pixel stops taking samples once the relative
+    /// standard error of its mean is at most THRESHOLD (e.g. 0.02); --spp is the maximum.
+    #[arg(long, value_name = "THRESHOLD")]
+    adaptive: Option<f32>,
+    /// Adaptive sampling decides after N, 2N, 4N, ... samples.
+    #[arg(long, value_name = "N", default_value_t = rtow::estimator::ADAPTIVE_MIN_SPP)]
+    adaptive_min: u32,
+}
+
+impl EstimatorArgs {
+    fn adaptive(&self) -> Result<Option<rtow::estimator::Adaptive>> {
+        self.adaptive
+            .map(|t| rtow::estimator::Adaptive::new(t, self.adaptive_min))
+            .transpose()
+    }
 }
 
 /// A preset or a file: the scene and a short name for default outputs.
@@ -187,6 +213,8 @@ fn cmd_render(a: RenderArgs) -> Result<()> {
         kernel: a.kernel,
         threads: a.image.threads,
         tile: a.image.tile,
+        rr: a.estimator.rr,
+        adaptive: a.estimator.adaptive()?,
     };
     if a.explain {
         let prep = rtow::plan::Prepared::new(&scene, s)?;

@@ -3,6 +3,7 @@
 
 use crate::camera::Camera;
 use crate::error::{Error, Result};
+use crate::estimator::Estimator;
 use crate::geometry::Spheres;
 use crate::material::MaterialTables;
 use crate::scene::{Kind, Mode, Scene, Sky};
@@ -117,6 +118,8 @@ pub struct Prepared {
     pub materials: MaterialTables,
     pub camera: Camera,
     pub sky: SkyColours,
+    /// Russian roulette and adaptive sampling (off unless the render options say so).
+    pub estimator: Estimator,
 }
 
 impl Prepared {
@@ -154,6 +157,7 @@ impl Prepared {
             materials,
             camera,
             sky: scene.sky.into(),
+            estimator: Estimator::default(),
         })
     }
 }
