@@ -11,6 +11,7 @@
 //! seed they produce bit-identical images.
 
 pub mod camera;
+pub mod converge;
 pub mod error;
 pub mod estimator;
 pub mod film;
