@@ -28,6 +28,9 @@ use std::path::{Path, PathBuf};
 /// Added to a pixel's squared reference value in relMSE.
 pub const RELMSE_EPSILON: f64 = 0.01;
 
+/// Added to a pixel's reference value in the mean signed relative error.
+pub const SIGNED_EPSILON: f64 = 0.01;
+
 /// The threshold of the `adaptive` variant when none is given (`adaptive:T`).
 pub const DEFAULT_ADAPTIVE_THRESHOLD: f32 = 0.02;
 
@@ -175,10 +178,23 @@ pub fn reference_seed(seed: u64) -> u64 {
     }
 }
 
-/// Error of `image` against `reference`: (RMSE, relMSE). The sizes must match.
-pub fn error_metrics(image: &Image, reference: &Image) -> (f64, f64) {
+/// Error of an image against the reference.
+#[derive(Clone, Copy, Debug, PartialEq)]
+pub struct Metrics {
+    pub rmse: f64,
+    /// Mean of `(x - r)^2 / (r^2 + 0.01)`.
+    pub relmse: f64,
+    /// Mean signed relative error, `(x - r) / (r + 0.01)` averaged over every
+    /// channel of every pixel: zero in expectation for an unbiased estimator
+    /// (it is linear in `x`), so it shows a bias such as adaptive sampling's.
+    pub mean_rel_error: f64,
+}
+
+/// Error of `image` against `reference` (the sizes must match).
+pub fn error_metrics(image: &Image, reference: &Image) -> Metrics {
     let mut se = 0.0;
     let mut rel = 0.0;
+    let mut signed = 0.0;
     let mut n = 0usize;
     for (p, r) in image.data.iter().zip(&reference.data) {
         for k in 0..3 {
@@ -186,11 +202,16 @@ pub fn error_metrics(image: &Image, reference: &Image) -> (f64, f64) {
             let r = r[k] as f64;
             se += d * d;
             rel += d * d / (r * r + RELMSE_EPSILON);
+            signed += d / (r.abs() + SIGNED_EPSILON);
             n += 1;
         }
     }
     let n = n.max(1) as f64;
-    ((se / n).sqrt(), rel / n)
+    Metrics {
+        rmse: (se / n).sqrt(),
+        relmse: rel / n,
+        mean_rel_error: signed / n,
+    }
 }
 
 /// One measured render.
@@ -204,6 +225,7 @@ pub struct Row {
     pub samples: u64,
     pub rmse: f64,
     pub relmse: f64,
+    pub mean_rel_error: f64,
     pub image_hash: String,
 }
 
@@ -317,7 +339,7 @@ pub fn run(scene: &Scene, name: &str, cfg: &Config, mut on: impl FnMut(Event)) -
                     best = Some(r);
                 }
                 let r = best.expect("repeat is at least 1");
-                let (rmse, relmse) = error_metrics(&r.image, &reference);
+                let m = error_metrics(&r.image, &reference);
                 let row = Row {
                     kernel,
                     variant,
@@ -325,8 +347,9 @@ pub fn run(scene: &Scene, name: &str, cfg: &Config, mut on: impl FnMut(Event)) -
                     seconds: r.stats.seconds,
                     rays: r.stats.rays,
                     samples: r.stats.samples,
-                    rmse,
-                    relmse,
+                    rmse: m.rmse,
+                    relmse: m.relmse,
+                    mean_rel_error: m.mean_rel_error,
                     image_hash: r.stats.image_hash,
                 };
                 on(Event::Measured(&row));
@@ -494,12 +517,12 @@ impl Report {
 
     pub fn csv(&self) -> String {
         let mut s = String::from(
-            "scene,width,height,kernel,variant,spp,seconds,rays,samples,mrays_per_s,rmse,relmse,efficiency,image_hash\n",
+            "scene,width,height,kernel,variant,spp,seconds,rays,samples,mrays_per_s,rmse,relmse,mean_rel_error,efficiency,image_hash\n",
         );
         for r in &self.rows {
             let _ = writeln!(
                 s,
-                "{},{},{},{},{},{},{:.6},{},{},{:.4},{:.6e},{:.6e},{:.6e},{}",
+                "{},{},{},{},{},{},{:.6},{},{},{:.4},{:.6e},{:.6e},{:.6e},{:.6e},{}",
                 self.scene,
                 self.width,
                 self.height,
@@ -512,6 +535,7 @@ impl Report {
                 r.rays as f64 / r.seconds / 1e6,
                 r.rmse,
                 r.relmse,
+                r.mean_rel_error,
                 r.efficiency(),
                 r.image_hash
             );
@@ -562,13 +586,13 @@ impl Report {
             "# Run time against error: {} ({}x{}, depth {}, seed {})\n\nReference: {}.\n\n",
             self.scene, self.width, self.height, self.max_depth, self.seed, self.reference
         );
-        s += "| kernel | variant | spp | seconds | Mrays/s | samples/px | RMSE | relMSE | efficiency 1/(MSE s) |\n";
-        s += "|---|---|---:|---:|---:|---:|---:|---:|---:|\n";
+        s += "| kernel | variant | spp | seconds | Mrays/s | samples/px | RMSE | relMSE | mean signed rel. error | efficiency 1/(MSE s) |\n";
+        s += "|---|---|---:|---:|---:|---:|---:|---:|---:|---:|\n";
         let px = (self.width as f64 * self.height as f64).max(1.0);
         for r in &self.rows {
             let _ = writeln!(
                 s,
-                "| {} | {} | {} | {:.3} | {:.2} | {:.1} | {:.5} | {:.3e} | {:.4e} |",
+                "| {} | {} | {} | {:.3} | {:.2} | {:.1} | {:.5} | {:.3e} | {:+.5} | {:.4e} |",
                 r.kernel.name(),
                 r.variant.name(),
                 r.spp,
@@ -577,6 +601,7 @@ impl Report {
                 r.samples as f64 / px,
                 r.rmse,
                 r.relmse,
+                r.mean_rel_error,
                 r.efficiency()
             );
         }
@@ -796,12 +821,15 @@ mod tests {
             height: 1,
             data: vec![[0.1, 0.1, 0.1], [1.0, 1.0, 1.3]],
         };
-        let (rmse, rel) = error_metrics(&x, &r);
+        let m = error_metrics(&x, &r);
         let want = ((3.0 * 0.01 + 0.09) / 6.0f64).sqrt();
-        assert!((rmse - want).abs() < 1e-6);
+        assert!((m.rmse - want).abs() < 1e-6);
         let want_rel = (3.0 * 0.01 / 0.01 + 0.09 / 1.01) / 6.0;
-        assert!((rel - want_rel).abs() < 1e-5);
-        assert_eq!(error_metrics(&r, &r), (0.0, 0.0));
+        assert!((m.relmse - want_rel).abs() < 1e-5);
+        let want_signed = (3.0 * 0.1 / 0.01 + 0.3 / 1.01) / 6.0;
+        assert!((m.mean_rel_error - want_signed).abs() < 1e-5);
+        let zero = error_metrics(&r, &r);
+        assert_eq!((zero.rmse, zero.relmse, zero.mean_rel_error), (0.0, 0.0, 0.0));
     }
 
     #[test]

@@ -172,6 +172,15 @@ struct ConvergeArgs {
     adaptive_min: u32,
 }
 
+/// `println!` that ignores a closed stdout (e.g. piped into `head`): the
+/// converge outputs that matter are its files.
+macro_rules! say {
+    ($($t:tt)*) => {{
+        use std::io::Write as _;
+        let _ = writeln!(std::io::stdout(), $($t)*);
+    }};
+}
+
 fn cmd_converge(a: ConvergeArgs) -> Result<()> {
     use rtow::converge::{self, Event, Reference, Variant};
     let (scene, name) = load(&a.scene)?;
@@ -216,44 +225,54 @@ fn cmd_converge(a: ConvergeArgs) -> Result<()> {
             message: "--out must be a folder".into(),
         });
     }
-    println!(
-        "{name}: {}x{}, depth {}, seed {}; {:<6} {:<18} {:>6} {:>9} {:>9} {:>8} {:>10} {:>10} {:>11}",
+    say!(
+        "{name}: {}x{}, depth {}, seed {}",
         s.width,
         s.height,
         s.max_depth,
-        s.seed,
-        "kernel",
-        "variant",
-        "spp",
-        "seconds",
-        "Mrays/s",
-        "spp/px",
-        "RMSE",
-        "relMSE",
-        "efficiency"
+        s.seed
     );
     let px = s.width as f64 * s.height as f64;
+    let mut header = false;
     let report = converge::run(&scene, &name, &cfg, |e| match e {
-        Event::ReferenceStart(n) => println!("reference: {n} spp with seed {} ...", converge::reference_seed(s.seed)),
-        Event::ReferenceDone { seconds } => println!("reference: done in {seconds:.2} s"),
-        Event::Measured(r) => println!(
-            "  {:<6} {:<18} {:>6} {:>9.3} {:>9.2} {:>8.1} {:>10.5} {:>10.3e} {:>11.4e}",
-            r.kernel.name(),
-            r.variant.name(),
-            r.spp,
-            r.seconds,
-            r.rays as f64 / r.seconds / 1e6,
-            r.samples as f64 / px,
-            r.rmse,
-            r.relmse,
-            r.efficiency()
-        ),
+        Event::ReferenceStart(n) => say!("reference: {n} spp with seed {} ...", converge::reference_seed(s.seed)),
+        Event::ReferenceDone { seconds } => say!("reference: done in {seconds:.2} s"),
+        Event::Measured(r) => {
+            if !std::mem::replace(&mut header, true) {
+                say!(
+                    "  {:<6} {:<18} {:>6} {:>9} {:>9} {:>8} {:>10} {:>10} {:>10} {:>11}",
+                    "kernel",
+                    "variant",
+                    "spp",
+                    "seconds",
+                    "Mrays/s",
+                    "spp/px",
+                    "RMSE",
+                    "relMSE",
+                    "signed err",
+                    "efficiency"
+                );
+            }
+            say!(
+                "  {:<6} {:<18} {:>6} {:>9.3} {:>9.2} {:>8.1} {:>10.5} {:>10.3e} {:>+10.5} {:>11.4e}",
+                r.kernel.name(),
+                r.variant.name(),
+                r.spp,
+                r.seconds,
+                r.rays as f64 / r.seconds / 1e6,
+                r.samples as f64 / px,
+                r.rmse,
+                r.relmse,
+                r.mean_rel_error,
+                r.efficiency()
+            )
+        }
     })?;
     for l in report.comparison_lines() {
-        println!("{l}");
+        say!("{l}");
     }
     for p in report.write(&a.out)? {
-        println!("wrote {}", p.display());
+        say!("wrote {}", p.display());
     }
     let mismatches = report.kernel_mismatches();
     if !mismatches.is_empty() {
