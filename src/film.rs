@@ -7,6 +7,10 @@ use std::path::Path;
 /// The accumulators of one tile. Each pixel's samples are added in sample
 /// order, so the sum does not depend on threads, tiles or kernels. Samples with
 /// a NaN or infinite component are rejected (and counted), never added.
+///
+/// Besides the f32 sums that make the image, each pixel keeps f64 first and
+/// second moments of its samples: the per-pixel error estimate of adaptive
+/// sampling is computed from them (see [`TileFilm::relative_error`]).
 #[derive(Clone, Debug)]
 pub struct TileFilm {
     pub x0: u32,
@@ -15,13 +19,24 @@ pub struct TileFilm {
     pub h: u32,
     pub sum: Vec<[f32; 3]>,
     pub count: Vec<u32>,
+    /// Per pixel: the sum of the samples and of their squares, per channel, in f64.
+    pub moments: Vec<[[f64; 3]; 2]>,
     pub rejected: u64,
 }
 
 impl TileFilm {
     pub fn new(x0: u32, y0: u32, w: u32, h: u32) -> Self {
         let n = (w * h) as usize;
-        TileFilm { x0, y0, w, h, sum: vec![[0.0; 3]; n], count: vec![0; n], rejected: 0 }
+        TileFilm {
+            x0,
+            y0,
+            w,
+            h,
+            sum: vec![[0.0; 3]; n],
+            count: vec![0; n],
+            moments: vec![[[0.0; 3]; 2]; n],
+            rejected: 0,
+        }
     }
 
     /// Adds one sample to pixel `local` (row-major inside the tile).
@@ -33,9 +48,37 @@ impl TileFilm {
             s[1] += c[1];
             s[2] += c[2];
             self.count[local] += 1;
+            let m = &mut self.moments[local];
+            for k in 0..3 {
+                let v = c[k] as f64;
+                m[0][k] += v;
+                m[1][k] += v * v;
+            }
         } else {
             self.rejected += 1;
         }
+    }
+
+    /// The relative standard error of pixel `local`'s mean: the standard error
+    /// (root of the channels' mean sample variance over the sample count)
+    /// over the pixel's mean value (the channels' average, at least
+    /// [`RELATIVE_ERROR_FLOOR`](crate::estimator::RELATIVE_ERROR_FLOOR)).
+    /// Infinite below 2 samples. It is computed from the very samples being
+    /// averaged, so stopping on it is slightly biased (see the README).
+    pub fn relative_error(&self, local: usize) -> f64 {
+        let n = self.count[local] as f64;
+        if n < 2.0 {
+            return f64::INFINITY;
+        }
+        let [s1, s2] = self.moments[local];
+        let mut var = 0.0;
+        let mut mean = 0.0;
+        for k in 0..3 {
+            var += ((s2[k] - s1[k] * s1[k] / n) / (n - 1.0)).max(0.0);
+            mean += s1[k] / n;
+        }
+        let se = (var / 3.0 / n).sqrt();
+        se / (mean / 3.0).max(crate::estimator::RELATIVE_ERROR_FLOOR)
     }
 
     /// Pixel (x, y) of the tile's top-left corner plus `local`.
@@ -202,6 +245,26 @@ mod tests {
         let mut img = Image::new(1, 1);
         img.put_tile(&t);
         assert_eq!(img.get(0, 0), [2.0, 2.0, 2.0]);
+    }
+
+    #[test]
+    fn relative_error_of_known_samples() {
+        let mut t = TileFilm::new(0, 0, 2, 1);
+        assert_eq!(t.relative_error(0), f64::INFINITY);
+        // Pixel 0: samples 1 and 3 in every channel: mean 2, variance 2, se 1.
+        t.add(0, [1.0; 3]);
+        t.add(0, [3.0; 3]);
+        assert!((t.relative_error(0) - 0.5).abs() < 1e-12);
+        // Pixel 1: identical samples have no error; a dark noisy pixel is
+        // measured against the floor.
+        t.add(1, [0.5; 3]);
+        t.add(1, [0.5; 3]);
+        assert_eq!(t.relative_error(1), 0.0);
+        let mut d = TileFilm::new(0, 0, 1, 1);
+        d.add(0, [0.0; 3]);
+        d.add(0, [0.02; 3]);
+        let se = (0.0002f64 / 2.0).sqrt();
+        assert!((d.relative_error(0) - se / crate::estimator::RELATIVE_ERROR_FLOOR).abs() < 1e-6);
     }
 
     #[test]

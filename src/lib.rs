@@ -12,7 +12,9 @@
 
 pub mod bench;
 pub mod camera;
+pub mod converge;
 pub mod error;
+pub mod estimator;
 pub mod film;
 pub mod geometry;
 pub mod kernel;

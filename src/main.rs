@@ -25,6 +25,9 @@ enum Command {
     Scenes,
     /// Measure rays/s of each kernel on a scene; compare with a saved baseline.
     Bench(BenchArgs),
+    /// Run time against error: measure kernels and estimator variants at several
+    /// sample counts against a reference; write a CSV, a markdown table and a log-log plot.
+    Converge(ConvergeArgs),
     /// Write a preset as a scene file (.json or .toml).
     Export {
         /// Preset name (see `rtow scenes`).
@@ -91,6 +94,8 @@ struct RenderArgs {
     /// Print the render plan (what the scene needs) before rendering.
     #[arg(long)]
     explain: bool,
+    #[command(flatten)]
+    estimator: EstimatorArgs,
     /// No progress bar and no summary line.
     #[arg(short, long)]
     quiet: bool,
@@ -176,6 +181,171 @@ fn positive_f32(s: &str) -> std::result::Result<f32, String> {
         Ok(v) => Err(format!("must be a finite number > 0, got {v}")),
         Err(e) => Err(e.to_string()),
     }
+}
+
+/// Russian roulette and adaptive sampling (both off by default).
+#[derive(Args, Clone, Debug)]
+struct EstimatorArgs {
+    /// Russian roulette: after a few bounces a path survives with probability
+    /// min(1, max throughput component) and is reweighted (unbiased; changes the noise).
+    #[arg(long)]
+    rr: bool,
+    /// Adaptive sampling: a pixel stops taking samples once the relative
+    /// standard error of its mean is at most THRESHOLD (e.g. 0.02); --spp is the maximum.
+    #[arg(long, value_name = "THRESHOLD")]
+    adaptive: Option<f32>,
+    /// Adaptive sampling decides after N, 2N, 4N, ... samples.
+    #[arg(long, value_name = "N", default_value_t = rtow::estimator::ADAPTIVE_MIN_SPP)]
+    adaptive_min: u32,
+}
+
+impl EstimatorArgs {
+    fn adaptive(&self) -> Result<Option<rtow::estimator::Adaptive>> {
+        self.adaptive.map(|t| rtow::estimator::Adaptive::new(t, self.adaptive_min)).transpose()
+    }
+}
+
+#[derive(Args)]
+struct ConvergeArgs {
+    /// A preset name (see `rtow scenes`) or a scene file (.json / .toml).
+    scene: String,
+    /// Kernels to measure, comma separated.
+    #[arg(long, value_enum, value_delimiter = ',', default_value = "simd")]
+    kernels: Vec<KernelKind>,
+    /// Estimator variants, comma separated: plain, rr, adaptive (threshold 0.02),
+    /// adaptive:THRESHOLD, rr+adaptive:THRESHOLD. The first kernel's first variant is the baseline.
+    #[arg(long, value_delimiter = ',', default_value = "plain,rr,adaptive")]
+    variants: Vec<String>,
+    /// Samples per pixel to measure, increasing (the maximum, for adaptive variants).
+    #[arg(long, value_delimiter = ',', default_value = "4,16,64,256")]
+    spp_list: Vec<u32>,
+    /// A linear reference image (.exr or .pfm) of the same size.
+    #[arg(long, value_name = "FILE", conflicts_with = "reference_spp")]
+    reference: Option<PathBuf>,
+    /// Render the reference with N samples per pixel (and a different seed)
+    /// [default: 8 x the largest --spp-list value]
+    #[arg(long, value_name = "N")]
+    reference_spp: Option<u32>,
+    /// Output folder for <scene>.csv, <scene>.md, <scene>.svg (and <scene>-reference.exr).
+    #[arg(long, default_value = "converge")]
+    out: PathBuf,
+    /// Image width in pixels [default: the scene's]
+    #[arg(long)]
+    width: Option<u32>,
+    /// Image height in pixels [default: the scene's]
+    #[arg(long)]
+    height: Option<u32>,
+    /// Maximum rays per path [default: the scene's]
+    #[arg(long)]
+    depth: Option<u32>,
+    /// Seed of the measured renders (the reference uses a seed derived from it) [default: the scene's, else 0]
+    #[arg(long)]
+    seed: Option<u64>,
+    /// Worker threads [default: one per core]
+    #[arg(long)]
+    threads: Option<usize>,
+    /// Tile edge in pixels
+    #[arg(long, default_value_t = 16)]
+    tile: u32,
+    /// Render each measurement N times and keep the fastest (the image is the same).
+    #[arg(long, value_name = "N", default_value_t = 1)]
+    repeat: u32,
+    /// Adaptive variants decide after N, 2N, 4N, ... samples.
+    #[arg(long, value_name = "N", default_value_t = rtow::estimator::ADAPTIVE_MIN_SPP)]
+    adaptive_min: u32,
+}
+
+/// `println!` that ignores a closed stdout (e.g. piped into `head`): the
+/// converge outputs that matter are its files.
+macro_rules! say {
+    ($($t:tt)*) => {{
+        use std::io::Write as _;
+        let _ = writeln!(std::io::stdout(), $($t)*);
+    }};
+}
+
+fn cmd_converge(a: ConvergeArgs) -> Result<()> {
+    use rtow::converge::{self, Event, Reference, Variant};
+    let (scene, name) = load(&a.scene)?;
+    let mut s = rtow::default_settings(&scene);
+    s.width = a.width.unwrap_or(s.width);
+    s.height = a.height.unwrap_or(s.height);
+    s.max_depth = a.depth.unwrap_or(s.max_depth);
+    s.seed = a.seed.unwrap_or(s.seed);
+    let variants = a.variants.iter().map(|v| Variant::parse(v)).collect::<Result<Vec<_>>>()?;
+    let reference = match (&a.reference, a.reference_spp) {
+        (Some(p), _) => Reference::File(p.clone()),
+        (None, Some(n)) => Reference::Spp(n),
+        (None, None) => {
+            let max = a.spp_list.iter().copied().max().unwrap_or(1);
+            Reference::Spp(max.checked_mul(8).ok_or_else(|| {
+                Error::invalid("--spp-list", format!("{max} is too large for the default --reference-spp (8x)"))
+            })?)
+        }
+    };
+    let cfg = converge::Config {
+        settings: s,
+        kernels: a.kernels.clone(),
+        variants,
+        spp_list: a.spp_list.clone(),
+        reference: reference.clone(),
+        threads: a.threads,
+        tile: a.tile,
+        repeat: a.repeat,
+        adaptive_min: a.adaptive_min,
+    };
+    cfg.validate()?;
+    if a.out.exists() && !a.out.is_dir() {
+        return Err(Error::Output { path: a.out.clone(), message: "--out must be a folder".into() });
+    }
+    say!("{name}: {}x{}, depth {}, seed {}", s.width, s.height, s.max_depth, s.seed);
+    let px = s.width as f64 * s.height as f64;
+    let mut header = false;
+    let report = converge::run(&scene, &name, &cfg, |e| match e {
+        Event::ReferenceStart(n) => say!("reference: {n} spp with seed {} ...", converge::reference_seed(s.seed)),
+        Event::ReferenceDone { seconds } => say!("reference: done in {seconds:.2} s"),
+        Event::Measured(r) => {
+            if !std::mem::replace(&mut header, true) {
+                say!(
+                    "  {:<6} {:<18} {:>6} {:>9} {:>9} {:>8} {:>10} {:>10} {:>10} {:>11}",
+                    "kernel",
+                    "variant",
+                    "spp",
+                    "seconds",
+                    "Mrays/s",
+                    "spp/px",
+                    "RMSE",
+                    "relMSE",
+                    "signed err",
+                    "efficiency"
+                );
+            }
+            say!(
+                "  {:<6} {:<18} {:>6} {:>9.3} {:>9.2} {:>8.1} {:>10.5} {:>10.3e} {:>+10.5} {:>11.4e}",
+                r.kernel.name(),
+                r.variant.name(),
+                r.spp,
+                r.seconds,
+                r.rays as f64 / r.seconds / 1e6,
+                r.samples as f64 / px,
+                r.rmse,
+                r.relmse,
+                r.mean_rel_error,
+                r.efficiency()
+            )
+        }
+    })?;
+    for l in report.comparison_lines() {
+        say!("{l}");
+    }
+    for p in report.write(&a.out)? {
+        say!("wrote {}", p.display());
+    }
+    let mismatches = report.kernel_mismatches();
+    if !mismatches.is_empty() {
+        return Err(Error::Input(format!("the kernels must agree bit for bit, but {}", mismatches.join("; "))));
+    }
+    Ok(())
 }
 
 /// A preset or a file: the scene and a short name for default outputs.
@@ -265,7 +435,14 @@ fn cmd_render(a: RenderArgs) -> Result<()> {
     for p in std::iter::once(&out).chain(&a.float).chain(&a.stats_json) {
         rtow::output::check_writable(p)?;
     }
-    let opts = RenderOptions { kernel: a.kernel, threads: a.image.threads, tile: a.image.tile, accel: a.image.accel };
+    let opts = RenderOptions {
+        kernel: a.kernel,
+        threads: a.image.threads,
+        tile: a.image.tile,
+        accel: a.image.accel,
+        rr: a.estimator.rr,
+        adaptive: a.estimator.adaptive()?,
+    };
     if a.explain {
         let prep = rtow::plan::Prepared::new(&scene, s, a.image.accel)?;
         println!("{}", prep.plan.explain());
@@ -310,6 +487,7 @@ fn run(cli: Cli) -> Result<bool> {
     match cli.command {
         Command::Render(a) => cmd_render(a).map(|_| true),
         Command::Bench(a) => cmd_bench(a),
+        Command::Converge(a) => cmd_converge(a).map(|_| true),
         Command::Scenes => {
             for p in scene::presets() {
                 println!("{:<16} {}", p.name, p.description);

@@ -3,6 +3,7 @@
 
 use crate::camera::Camera;
 use crate::error::{Error, Result};
+use crate::estimator::Estimator;
 use crate::geometry::{closest_hit_scalar, closest_hit_x8, Bvh, Spheres};
 use crate::material::MaterialTables;
 use crate::scene::{Kind, Mode, Scene, Sky};
@@ -128,6 +129,8 @@ pub struct Prepared {
     pub bvh: Option<Bvh>,
     /// The SIMD kernel walks the BVH with 8-ray packets.
     pub packets: bool,
+    /// Russian roulette and adaptive sampling (off unless the render options say so).
+    pub estimator: Estimator,
 }
 
 impl Prepared {
@@ -169,7 +172,17 @@ impl Prepared {
             (Some(_), true) => "bvh8, 8-ray packets (scalar kernel: one ray at a time)",
         };
         let plan = Plan { accel, ..plan };
-        Ok(Prepared { plan, settings, spheres, materials, camera, sky: scene.sky.into(), bvh, packets })
+        Ok(Prepared {
+            plan,
+            settings,
+            spheres,
+            materials,
+            camera,
+            sky: scene.sky.into(),
+            bvh,
+            packets,
+            estimator: Estimator::default(),
+        })
     }
 
     /// The closest hit of one ray (scalar kernel).

@@ -1,6 +1,7 @@
 //! The render driver: tiles, threads, progress and statistics.
 
 use crate::error::Result;
+use crate::estimator::{Adaptive, Estimator};
 use crate::film::{Image, TileFilm};
 use crate::kernel::{gradient, scalar, wavefront, Counters, KernelKind};
 use crate::plan::{AccelChoice, Plan, Prepared, Settings};
@@ -20,11 +21,22 @@ pub struct RenderOptions {
     pub tile: u32,
     /// Closest-hit search: brute force, BVH, or chosen by the plan.
     pub accel: AccelChoice,
+    /// Russian roulette on the path throughput (unbiased; changes the noise).
+    pub rr: bool,
+    /// Adaptive sampling: pixels stop once their relative error is low enough.
+    pub adaptive: Option<Adaptive>,
 }
 
 impl Default for RenderOptions {
     fn default() -> Self {
-        RenderOptions { kernel: KernelKind::Simd, threads: None, tile: 16, accel: AccelChoice::Auto }
+        RenderOptions {
+            kernel: KernelKind::Simd,
+            threads: None,
+            tile: 16,
+            accel: AccelChoice::Auto,
+            rr: false,
+            adaptive: None,
+        }
     }
 }
 
@@ -40,6 +52,7 @@ pub struct Progress {
 #[derive(Clone, Debug, Serialize)]
 pub struct Stats {
     pub rays: u64,
+    /// Samples actually traced (fewer than width x height x spp with adaptive sampling).
     pub samples: u64,
     pub seconds: f64,
     pub prepare_seconds: f64,
@@ -52,6 +65,8 @@ pub struct Stats {
     pub spp: u32,
     pub max_depth: u32,
     pub seed: u64,
+    pub russian_roulette: bool,
+    pub adaptive: Option<Adaptive>,
     /// Samples with a NaN or infinite component, kept out of the image.
     pub rejected_samples: u64,
     /// Active lanes / issued lanes in intersection and scatter (SIMD kernel; none for scalar).
@@ -100,10 +115,14 @@ pub fn render(
     progress: Option<&(dyn Fn(Progress) + Sync)>,
 ) -> Result<Rendered> {
     let t0 = Instant::now();
-    let prep = Prepared::new(scene, settings, opts.accel)?;
+    let mut prep = Prepared::new(scene, settings, opts.accel)?;
     if !(1..=45).contains(&opts.tile) {
         return Err(crate::error::Error::invalid("tile", "must be between 1 and 45 pixels"));
     }
+    if let Some(a) = opts.adaptive {
+        Adaptive::new(a.threshold, a.min_spp)?;
+    }
+    prep.estimator = Estimator { russian_roulette: opts.rr, adaptive: opts.adaptive };
     let prepare_seconds = t0.elapsed().as_secs_f64();
     let pool = rayon::ThreadPoolBuilder::new()
         .num_threads(opts.threads.unwrap_or(0))
@@ -111,13 +130,13 @@ pub fn render(
         .map_err(|e| crate::error::Error::Input(format!("cannot start threads: {e}")))?;
     let threads = pool.current_num_threads();
     let t1 = Instant::now();
-    let (image, counters, rejected) = pool.install(|| render_prepared(&prep, opts, progress));
+    let (image, counters, rejected, traced) = pool.install(|| render_prepared(&prep, opts, progress));
     let seconds = t1.elapsed().as_secs_f64();
     let (w, h) = (settings.width, settings.height);
     let occ = |a: u64, l: u64| (l > 0).then(|| a as f64 / l as f64);
     let stats = Stats {
         rays: counters.rays,
-        samples: w as u64 * h as u64 * settings.spp as u64,
+        samples: traced.unwrap_or(w as u64 * h as u64 * settings.spp as u64),
         seconds,
         prepare_seconds,
         mrays_per_s: counters.rays as f64 / seconds / 1e6,
@@ -129,6 +148,8 @@ pub fn render(
         spp: settings.spp,
         max_depth: settings.max_depth,
         seed: settings.seed,
+        russian_roulette: opts.rr,
+        adaptive: opts.adaptive,
         rejected_samples: rejected,
         isect_occupancy: occ(counters.isect_active, counters.isect_lanes),
         scatter_occupancy: occ(counters.scatter_active, counters.scatter_lanes),
@@ -138,11 +159,13 @@ pub fn render(
     Ok(Rendered { image, stats })
 }
 
+/// The image, the counters, the rejected samples and the samples traced (`None`
+/// when no sample is traced: the gradient).
 fn render_prepared(
     prep: &Prepared,
     opts: RenderOptions,
     progress: Option<&(dyn Fn(Progress) + Sync)>,
-) -> (Image, Counters, u64) {
+) -> (Image, Counters, u64, Option<u64>) {
     let s = prep.settings;
     let mut image = Image::new(s.width, s.height);
     if prep.plan.mode == Mode::Gradient {
@@ -151,7 +174,7 @@ fn render_prepared(
                 image.data[(y * s.width + x) as usize] = gradient(x, y, s.width, s.height);
             }
         }
-        return (image, Counters::default(), 0);
+        return (image, Counters::default(), 0, None);
     }
     let mut films = tiles(s.width, s.height, opts.tile);
     let total = films.len() as u64;
@@ -191,9 +214,11 @@ fn render_prepared(
             }),
     };
     let mut rejected = 0;
+    let mut traced = 0;
     for t in &films {
         image.put_tile(t);
         rejected += t.rejected;
+        traced += t.rejected + t.count.iter().map(|&c| c as u64).sum::<u64>();
     }
-    (image, counters, rejected)
+    (image, counters, rejected, Some(traced))
 }

@@ -2,6 +2,7 @@
 //! Every formula comes from the width-generic modules, instantiated at `f32`.
 
 use super::{normal_colour, sky, Counters};
+use crate::estimator::{roulette, roulette_applies};
 use crate::film::TileFilm;
 use crate::geometry::{spawn, surface, MISS};
 use crate::material::{dielectric, lambertian, metal};
@@ -10,16 +11,27 @@ use crate::sampling::ScalarStream;
 use crate::scene::{Kind, Mode};
 use crate::vec3::V3;
 
-/// Renders every sample of every pixel of `tile`, in sample order.
+/// Renders every sample of every pixel of `tile`, in sample order. With
+/// adaptive sampling a pixel stops at the first decision point where its
+/// error estimate is low enough.
 pub fn render_tile(prep: &Prepared, tile: &mut TileFilm, counters: &mut Counters) {
     let s = &prep.settings;
+    let est = &prep.estimator;
     for local in 0..tile.sum.len() {
         let (x, y) = tile.pixel_of(local);
         let pixel = y as u64 * s.width as u64 + x as u64;
-        for sample in 0..s.spp {
-            let mut rng = ScalarStream::for_path(s.seed, pixel, sample as u64);
-            let c = trace(prep, x, y, &mut rng, counters);
-            tile.add(local, c);
+        let mut done = 0;
+        while done < s.spp {
+            let end = est.round_end(done, s.spp);
+            for sample in done..end {
+                let mut rng = ScalarStream::for_path(s.seed, pixel, sample as u64);
+                let c = trace(prep, x, y, &mut rng, counters);
+                tile.add(local, c);
+            }
+            done = end;
+            if done < s.spp && est.adaptive.is_some_and(|a| a.converged(tile, local)) {
+                break;
+            }
         }
     }
 }
@@ -29,7 +41,7 @@ pub fn trace(prep: &Prepared, x: u32, y: u32, rng: &mut ScalarStream, counters: 
     let sp = &prep.spheres;
     let (mut o, mut d) = prep.camera.ray(x as f32, y as f32, rng);
     let mut thr = V3::new(1.0f32, 1.0, 1.0);
-    for _ in 0..prep.settings.max_depth {
+    for depth in 0..prep.settings.max_depth {
         counters.rays += 1;
         let (hit, t) = prep.closest_hit(o, d);
         if hit == MISS {
@@ -59,6 +71,13 @@ pub fn trace(prep: &Prepared, x: u32, y: u32, rng: &mut ScalarStream, counters: 
         thr = thr.mul_elem(V3::from_array(atten));
         if thr.x == 0.0 && thr.y == 0.0 && thr.z == 0.0 {
             return [0.0; 3];
+        }
+        if roulette_applies(&prep.estimator, depth + 1) {
+            let (t, survives) = roulette(thr, rng);
+            if !survives {
+                return [0.0; 3];
+            }
+            thr = t;
         }
         o = spawn(&srf, dir);
         d = dir;

@@ -20,6 +20,7 @@
 //! Memory is bounded: a workspace holds `tile pixels x batch samples` paths.
 
 use super::{normal_colour, sky, Counters};
+use crate::estimator::{roulette, roulette_applies};
 use crate::film::TileFilm;
 use crate::geometry::{spawn, surface, Surface, MISS};
 use crate::material::{dielectric, lambertian, metal};
@@ -158,6 +159,8 @@ pub struct Workspace {
     /// misses, each `MAX_PATHS` long (filled from the front each bounce).
     queue: [Vec<u32>; 4],
     result: Vec<[f32; 3]>,
+    /// The tile's pixels (row-major local indices) that still take samples.
+    active: Vec<u32>,
 }
 
 impl Default for Workspace {
@@ -169,46 +172,70 @@ impl Default for Workspace {
             t: vec![0.0; MAX_PATHS + 8],
             queue: std::array::from_fn(|_| vec![0; MAX_PATHS]),
             result: vec![[0.0; 3]; MAX_PATHS],
+            active: Vec::with_capacity(MAX_PATHS),
         }
     }
 }
 
 /// Renders every sample of every pixel of `tile` (at most `MAX_PATHS` pixels).
+///
+/// Samples are rendered in rounds that end at the adaptive decision points
+/// (one round of `spp` samples without adaptive sampling). After each round,
+/// pixels whose error estimate is low enough leave the active list; the next
+/// round traces only the others, so fewer active pixels get more samples per
+/// batch and the packets stay full.
 pub fn render_tile(prep: &Prepared, ws: &mut Workspace, tile: &mut TileFilm, counters: &mut Counters) {
     let px = tile.sum.len();
     assert!(px <= MAX_PATHS, "tile of {px} pixels exceeds the wavefront's {MAX_PATHS} paths");
-    let spp = prep.settings.spp as usize;
-    let batch = (MAX_PATHS / px).max(1);
-    let mut s0 = 0;
-    while s0 < spp {
-        let s1 = (s0 + batch).min(spp);
-        ws.result[..(s1 - s0) * px].fill([0.0; 3]);
-        generate(prep, ws, tile, s0, s1);
-        for _ in 0..prep.settings.max_depth {
-            if ws.cur.len == 0 {
-                break;
-            }
-            bounce(prep, ws, counters);
+    let spp = prep.settings.spp;
+    let est = &prep.estimator;
+    ws.active.clear();
+    ws.active.extend(0..px as u32);
+    let mut done = 0;
+    while done < spp && !ws.active.is_empty() {
+        let end = est.round_end(done, spp);
+        render_round(prep, ws, tile, done as usize, end as usize, counters);
+        done = end;
+        if let (true, Some(a)) = (done < spp, est.adaptive) {
+            ws.active.retain(|&l| !a.converged(tile, l as usize));
         }
-        for s in 0..s1 - s0 {
-            for local in 0..px {
-                tile.add(local, ws.result[s * px + local]);
-            }
-        }
-        s0 = s1;
     }
 }
 
-/// Camera rays for samples `s0..s1` of every pixel of the tile, 8 at a time.
-fn generate(prep: &Prepared, ws: &mut Workspace, tile: &TileFilm, s0: usize, s1: usize) {
+/// Samples `s0..s1` of every active pixel, in batches of at most `MAX_PATHS` paths.
+fn render_round(prep: &Prepared, ws: &mut Workspace, tile: &mut TileFilm, s0: usize, s1: usize, c: &mut Counters) {
+    let na = ws.active.len();
+    let batch = (MAX_PATHS / na).max(1);
+    let mut b0 = s0;
+    while b0 < s1 {
+        let b1 = (b0 + batch).min(s1);
+        ws.result[..(b1 - b0) * na].fill([0.0; 3]);
+        generate(prep, &mut ws.cur, &ws.active, tile, b0, b1);
+        for depth in 0..prep.settings.max_depth {
+            if ws.cur.len == 0 {
+                break;
+            }
+            bounce(prep, ws, depth, c);
+        }
+        for s in 0..b1 - b0 {
+            for (j, &local) in ws.active.iter().enumerate() {
+                tile.add(local as usize, ws.result[s * na + j]);
+            }
+        }
+        b0 = b1;
+    }
+}
+
+/// Camera rays for samples `s0..s1` of every active pixel of the tile, 8 at a time.
+/// Path `slot` is sample `s0 + slot / na` of active pixel `slot % na`.
+fn generate(prep: &Prepared, p: &mut Paths, active: &[u32], tile: &TileFilm, s0: usize, s1: usize) {
     let st = &prep.settings;
-    let px = tile.sum.len();
-    let p = &mut ws.cur;
-    let n = (s1 - s0) * px;
+    let na = active.len();
+    let n = (s1 - s0) * na;
     // Pixel coordinates ride in the throughput arrays until the rays exist.
     for slot in 0..n {
-        let (x, y) = tile.pixel_of(slot % px);
-        let sample = (s0 + slot / px) as u64;
+        let (x, y) = tile.pixel_of(active[slot % na] as usize);
+        let sample = (s0 + slot / na) as u64;
         let state = path_state(st.seed, y as u64 * st.width as u64 + x as u64, sample);
         for w in 0..4 {
             p.rng[w][slot] = state[w];
@@ -234,7 +261,8 @@ fn generate(prep: &Prepared, ws: &mut Workspace, tile: &TileFilm, s0: usize, s1:
 }
 
 /// One bounce of every live path: intersect, classify, shade misses, scatter.
-fn bounce(prep: &Prepared, ws: &mut Workspace, counters: &mut Counters) {
+/// `depth` counts the rays each path has traced before this bounce (0: camera rays).
+fn bounce(prep: &Prepared, ws: &mut Workspace, depth: u32, counters: &mut Counters) {
     let n = ws.cur.len;
     counters.rays += n as u64;
     let cur = &ws.cur;
@@ -265,7 +293,7 @@ fn bounce(prep: &Prepared, ws: &mut Workspace, counters: &mut Counters) {
             for kind in Kind::ALL {
                 if prep.plan.uses(kind) {
                     let q = &queues[kind as usize][..len[kind as usize]];
-                    for_packets(q, counters, |idx, active| scatter(prep, ws, kind, idx, active));
+                    for_packets(q, counters, |idx, active| scatter(prep, ws, kind, depth, idx, active));
                 }
             }
         }
@@ -327,7 +355,7 @@ fn debug_shade(prep: &Prepared, ws: &mut Workspace, mode: Mode, idx: &[u32; 8], 
 
 /// Scatters 8 paths that hit material `kind`; survivors join the next bounce.
 #[inline(always)]
-fn scatter(prep: &Prepared, ws: &mut Workspace, kind: Kind, idx: &[u32; 8], active: usize) {
+fn scatter(prep: &Prepared, ws: &mut Workspace, kind: Kind, depth: u32, idx: &[u32; 8], active: usize) {
     let (d, srf, sph) = surfaces(prep, ws, idx);
     let cur = &ws.cur;
     let mut rng = Xoshiro128PlusX8 { s: std::array::from_fn(|w| gather_u(&cur.rng[w], idx)) };
@@ -362,7 +390,16 @@ fn scatter(prep: &Prepared, ws: &mut Workspace, kind: Kind, idx: &[u32; 8], acti
     };
     let zero = f32x8::splat(0.0);
     let dark = thr.x.eq(zero) & thr.y.eq(zero) & thr.z.eq(zero);
-    let alive = (alive & !dark).to_bitmask() & ((1u32 << active) - 1);
+    let mut alive = alive & !dark;
+    let mut thr = thr;
+    // Every lane draws, as the scalar path does when it gets here; lanes that
+    // are already dead draw too, but their streams are never used again.
+    if roulette_applies(&prep.estimator, depth + 1) {
+        let (t, survives) = roulette(thr, &mut rng);
+        thr = t;
+        alive = alive & survives;
+    }
+    let alive = alive.to_bitmask() & ((1u32 << active) - 1);
     let slot = gather_u(&cur.slot, idx);
     ws.next.append(alive, spawn(&srf, dir), dir, thr, &rng, slot);
 }

@@ -20,7 +20,8 @@ pub fn render_accel(
     tile: u32,
     accel: AccelChoice,
 ) -> rtow::Rendered {
-    render(scene, s, RenderOptions { kernel, threads: Some(threads), tile, accel }, None).expect("render")
+    render(scene, s, RenderOptions { kernel, threads: Some(threads), tile, accel, ..Default::default() }, None)
+        .expect("render")
 }
 
 pub fn image(scene: &Scene, s: Settings, kernel: KernelKind) -> Image {

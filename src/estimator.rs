@@ -1,0 +1,191 @@
+//! Optional changes to the estimator that trade noise for work: Russian roulette
+//! and adaptive sampling. Both are off by default; with both off the kernels
+//! draw and add exactly what they drew and added before.
+//!
+//! Both kernels call the functions here, so they take the same decisions:
+//! - Russian roulette is width-generic ([`roulette`]) and draws one value from
+//!   the path's own stream, at the same bounce in both kernels.
+//! - Adaptive sampling decides at fixed sample counts ([`Adaptive::round_end`]),
+//!   from the film's own accumulated moments ([`TileFilm::relative_error`]),
+//!   which both kernels fill with the same values in the same order.
+
+use crate::error::{Error, Result};
+use crate::film::TileFilm;
+use crate::real::Real;
+use crate::sampling::Stream;
+use crate::vec3::V3;
+use serde::Serialize;
+
+/// Roulette starts once a path has traced this many rays: the camera ray and
+/// the first two bounces always continue (they carry most of the image and
+/// killing them early adds noise where it costs most).
+pub const ROULETTE_AFTER_RAYS: u32 = 3;
+
+/// Russian roulette on a path's throughput `thr` (after the bounce's albedo):
+/// the path survives with probability `p = min(1, max component of thr)` and
+/// its throughput is divided by `p`, so its expected contribution is unchanged.
+/// Draws exactly one value, in every lane. Returns (new throughput, survives).
+/// Where `p` is 1 the throughput is returned unchanged (not divided).
+#[inline(always)]
+pub fn roulette<R: Real, S: Stream<R>>(thr: V3<R>, rng: &mut S) -> (V3<R>, R::Mask) {
+    let one = R::splat(1.0);
+    let p = thr.x.max(thr.y).max(thr.z).min(one);
+    let u = rng.next();
+    let survives = u.lt(p);
+    let keep = p.ge(one);
+    let scaled = V3::new(thr.x / p, thr.y / p, thr.z / p);
+    (V3::select(keep, thr, scaled), survives)
+}
+
+/// Whether a path that has traced `rays` rays (1 = just the camera ray) and
+/// just scattered faces the roulette before its next ray.
+#[inline(always)]
+pub fn roulette_applies(est: &Estimator, rays: u32) -> bool {
+    est.russian_roulette && rays >= ROULETTE_AFTER_RAYS
+}
+
+/// Adaptive sampling: a pixel stops once its relative standard error is at
+/// most `threshold`. Decisions are taken only after `min_spp`, `2 min_spp`,
+/// `4 min_spp`, ... samples.
+#[derive(Clone, Copy, Debug, PartialEq, Serialize)]
+pub struct Adaptive {
+    pub threshold: f32,
+    pub min_spp: u32,
+}
+
+/// Default first decision point (samples per pixel).
+pub const ADAPTIVE_MIN_SPP: u32 = 16;
+
+/// Below this mean value a pixel's error is taken relative to this floor, so
+/// that (nearly) black pixels are not sampled forever for a relative error
+/// that nobody can see.
+pub const RELATIVE_ERROR_FLOOR: f64 = 0.05;
+
+impl Adaptive {
+    /// Validates the flag values (`--adaptive`, `--adaptive-min`).
+    pub fn new(threshold: f32, min_spp: u32) -> Result<Adaptive> {
+        if !(threshold.is_finite() && threshold > 0.0) {
+            return Err(Error::invalid(
+                "--adaptive",
+                format!("the relative error threshold must be a positive number, not {threshold}"),
+            ));
+        }
+        if min_spp < 2 {
+            return Err(Error::invalid(
+                "--adaptive-min",
+                format!("the first decision needs at least 2 samples to estimate an error, not {min_spp}"),
+            ));
+        }
+        Ok(Adaptive { threshold, min_spp })
+    }
+
+    /// The next decision point after `done` samples, or `spp` if there is none
+    /// before it: the kernels render samples `done..round_end(done)` and then
+    /// (if more remain) ask [`Adaptive::converged`].
+    pub fn round_end(&self, done: u32, spp: u32) -> u32 {
+        let mut c = self.min_spp as u64;
+        while c <= done as u64 {
+            c *= 2;
+        }
+        c.min(spp as u64) as u32
+    }
+
+    /// Whether pixel `local` of `tile` has reached the threshold.
+    #[inline]
+    pub fn converged(&self, tile: &TileFilm, local: usize) -> bool {
+        tile.relative_error(local) <= self.threshold as f64
+    }
+}
+
+/// The estimator's options, as the kernels see them.
+#[derive(Clone, Copy, Debug, Default, PartialEq, Serialize)]
+pub struct Estimator {
+    pub russian_roulette: bool,
+    pub adaptive: Option<Adaptive>,
+}
+
+impl Estimator {
+    /// The end of the round of samples that starts at `done` (see [`Adaptive::round_end`]).
+    #[inline]
+    pub fn round_end(&self, done: u32, spp: u32) -> u32 {
+        match &self.adaptive {
+            Some(a) => a.round_end(done, spp),
+            None => spp,
+        }
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+    use crate::sampling::{path_state, ScalarStream, Xoshiro128PlusX8};
+    use wide::{f32x8, u32x8};
+
+    #[test]
+    fn decision_points_double_from_min() {
+        let a = Adaptive::new(0.1, 16).unwrap();
+        let ends: Vec<u32> = std::iter::successors(Some(0u32), |&d| (d < 100).then(|| a.round_end(d, 100))).collect();
+        assert_eq!(ends, vec![0, 16, 32, 64, 100]);
+        assert_eq!(a.round_end(0, 8), 8);
+        assert_eq!(a.round_end(0, u32::MAX), 16);
+        assert_eq!(a.round_end(1 << 31, u32::MAX), u32::MAX);
+        assert_eq!(Estimator::default().round_end(0, 77), 77);
+    }
+
+    #[test]
+    fn bad_adaptive_values_name_the_flag() {
+        for t in [0.0, -1.0, f32::NAN, f32::INFINITY] {
+            let e = Adaptive::new(t, 16).unwrap_err().to_string();
+            assert!(e.starts_with("--adaptive:"), "{e}");
+        }
+        let e = Adaptive::new(0.1, 1).unwrap_err().to_string();
+        assert!(e.starts_with("--adaptive-min:"), "{e}");
+    }
+
+    #[test]
+    fn roulette_agrees_across_widths_and_keeps_the_mean() {
+        let thr: [[f32; 3]; 8] = [
+            [0.5, 0.25, 0.1],
+            [1.0, 0.0, 0.0],
+            [2.0, 3.0, 0.5],
+            [0.0, 0.0, 0.0],
+            [1e-6, 2e-6, 0.0],
+            [0.9, 0.9, 0.9],
+            [0.3, 0.7, 0.2],
+            [0.99999, 0.5, 0.5],
+        ];
+        let mut x8 = Xoshiro128PlusX8 {
+            s: std::array::from_fn(|w| u32x8::new(std::array::from_fn(|k| path_state(3, k as u64, 0)[w]))),
+        };
+        let mut sc: Vec<ScalarStream> = (0..8).map(|k| ScalarStream::for_path(3, k, 0)).collect();
+        let t8 = V3::new(f32x8::new(thr.map(|t| t[0])), f32x8::new(thr.map(|t| t[1])), f32x8::new(thr.map(|t| t[2])));
+        let mut mean = [[0.0f64; 3]; 8];
+        let n = 20_000;
+        for _ in 0..n {
+            let (w, live8) = roulette(t8, &mut x8);
+            let live8 = live8.to_bitmask();
+            for k in 0..8 {
+                let (s, live) = roulette(V3::from_array(thr[k]), &mut sc[k]);
+                assert_eq!(live, live8 & (1 << k) != 0);
+                if live {
+                    assert_eq!(s.x.to_bits(), w.x.to_array()[k].to_bits());
+                    assert_eq!(s.y.to_bits(), w.y.to_array()[k].to_bits());
+                    assert_eq!(s.z.to_bits(), w.z.to_array()[k].to_bits());
+                    for c in 0..3 {
+                        mean[k][c] += s.to_array()[c] as f64 / n as f64;
+                    }
+                }
+            }
+        }
+        for k in 0..8 {
+            for c in 0..3 {
+                // Survival is Bernoulli(p) and a survivor carries thr / p: the
+                // mean is thr, with standard error thr sqrt((1 - p) / (p n)).
+                let t = thr[k][c] as f64;
+                let p = thr[k].iter().fold(0.0f32, |a, &b| a.max(b)).min(1.0) as f64;
+                let se = if p > 0.0 { t * ((1.0 - p) / (p * n as f64)).sqrt() } else { 0.0 };
+                assert!((mean[k][c] - t).abs() <= 5.0 * se + 1e-9 * t, "lane {k} channel {c}: {} vs {t}", mean[k][c]);
+            }
+        }
+    }
+}

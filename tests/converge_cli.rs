@@ -1,0 +1,217 @@
+//! `rtow converge` and the estimator flags of `rtow render`, through the binary.
+
+use std::path::Path;
+use std::process::{Command, Output};
+
+fn rtow(args: &[&str]) -> Output {
+    Command::new(env!("CARGO_BIN_EXE_rtow")).args(args).output().unwrap()
+}
+
+fn text(b: &[u8]) -> String {
+    String::from_utf8_lossy(b).into_owned()
+}
+
+const SMALL: &[&str] = &["--width", "16", "--height", "9", "--threads", "1"];
+
+#[test]
+fn converge_writes_table_plot_and_reference_and_reuses_the_reference() {
+    let dir = tempfile::tempdir().unwrap();
+    let out = dir.path().join("out");
+    let out_s = out.to_str().unwrap();
+    let mut args = vec![
+        "converge",
+        "ch07-diffuse",
+        "--kernels",
+        "scalar,simd",
+        "--variants",
+        "plain,rr,adaptive:0.3",
+        "--adaptive-min",
+        "2",
+        "--spp-list",
+        "1,4,16",
+        "--reference-spp",
+        "64",
+        "--out",
+        out_s,
+    ];
+    args.extend_from_slice(SMALL);
+    let o = rtow(&args);
+    assert!(o.status.success(), "{}", text(&o.stderr));
+    let stdout = text(&o.stdout);
+    assert!(stdout.contains("reference: 64 spp with seed"), "{stdout}");
+    assert!(stdout.contains("simd/rr vs scalar/plain: equal error"), "{stdout}");
+    assert!(stdout.contains("simd/rr vs simd/plain"), "{stdout}");
+
+    let csv = std::fs::read_to_string(out.join("ch07-diffuse.csv")).unwrap();
+    let rows: Vec<Vec<&str>> = csv.lines().skip(1).map(|l| l.split(',').collect()).collect();
+    assert_eq!(rows.len(), 2 * 3 * 3, "{csv}");
+    let col = |name: &str| csv.lines().next().unwrap().split(',').position(|c| c == name).unwrap();
+    let (kernel, variant, spp, rmse, samples, hash) =
+        (col("kernel"), col("variant"), col("spp"), col("rmse"), col("samples"), col("image_hash"));
+    for r in &rows {
+        // The kernels render the same image for the same variant and spp.
+        let twin =
+            rows.iter().find(|q| q[kernel] != r[kernel] && q[variant] == r[variant] && q[spp] == r[spp]).unwrap();
+        assert_eq!(twin[hash], r[hash]);
+        let e: f64 = r[rmse].parse().unwrap();
+        assert!(e > 0.0 && e.is_finite());
+    }
+    // More samples, less error (1 vs 16 spp is far beyond the noise of the error itself).
+    let err = |v: &str, s: &str| -> f64 {
+        rows.iter().find(|r| r[kernel] == "simd" && r[variant] == v && r[spp] == s).unwrap()[rmse].parse().unwrap()
+    };
+    assert!(err("plain", "16") < 0.5 * err("plain", "1"));
+    // The adaptive variant stopped some pixels before 16 samples.
+    let ad16: u64 =
+        rows.iter().find(|r| r[variant] == "adaptive:0.3" && r[spp] == "16").unwrap()[samples].parse().unwrap();
+    assert!(ad16 < 16 * 9 * 16, "{ad16}");
+
+    let md = std::fs::read_to_string(out.join("ch07-diffuse.md")).unwrap();
+    assert!(md.contains("| kernel | variant | spp |") && md.contains("equal time"), "{md}");
+    let svg = std::fs::read_to_string(out.join("ch07-diffuse.svg")).unwrap();
+    assert!(svg.starts_with("<svg") && svg.contains("scalar/plain") && svg.contains("polyline"));
+    let reference = out.join("ch07-diffuse-reference.exr");
+    assert!(reference.exists());
+
+    // Again from the saved reference: the errors are the same as before.
+    let again = dir.path().join("again");
+    let mut args = vec![
+        "converge",
+        "ch07-diffuse",
+        "--variants",
+        "plain",
+        "--spp-list",
+        "1,4,16",
+        "--reference",
+        reference.to_str().unwrap(),
+        "--out",
+        again.to_str().unwrap(),
+    ];
+    args.extend_from_slice(SMALL);
+    let o = rtow(&args);
+    assert!(o.status.success(), "{}", text(&o.stderr));
+    assert!(!text(&o.stdout).contains("reference: 64 spp"));
+    let csv2 = std::fs::read_to_string(again.join("ch07-diffuse.csv")).unwrap();
+    for line in csv2.lines().skip(1) {
+        let r: Vec<&str> = line.split(',').collect();
+        let before = rows.iter().find(|q| q[kernel] == "simd" && q[variant] == "plain" && q[spp] == r[spp]).unwrap();
+        assert_eq!(before[rmse], r[rmse]);
+    }
+    assert!(!again.join("ch07-diffuse-reference.exr").exists());
+}
+
+fn fails_naming(args: &[&str], flag: &str, code: i32) {
+    let o = rtow(args);
+    let err = text(&o.stderr);
+    assert_eq!(o.status.code(), Some(code), "{args:?}: {err}");
+    assert!(err.contains(flag), "{args:?}: {err}");
+    assert!(!err.contains("panicked"), "{err}");
+}
+
+#[test]
+fn bad_flags_are_clear_errors() {
+    let dir = tempfile::tempdir().unwrap();
+    let out = dir.path().join("o");
+    let o = out.to_str().unwrap();
+    let conv = |extra: &[&str]| -> Vec<String> {
+        let mut v: Vec<String> = ["converge", "ch07-diffuse", "--out", o, "--width", "8", "--height", "4"]
+            .iter()
+            .map(|s| s.to_string())
+            .collect();
+        v.extend(extra.iter().map(|s| s.to_string()));
+        v
+    };
+    let cases: Vec<(Vec<String>, &str)> = vec![
+        (conv(&["--spp-list", "4,2"]), "--spp-list"),
+        (conv(&["--spp-list", "0,2"]), "--spp-list"),
+        (conv(&["--variants", "fast"]), "--variants"),
+        (conv(&["--variants", "adaptive:-1"]), "--variants"),
+        (conv(&["--variants", "plain,plain"]), "--variants"),
+        (conv(&["--kernels", "gpu"]), "--kernels"),
+        (conv(&["--reference-spp", "0"]), "--reference-spp"),
+        (conv(&["--repeat", "0"]), "--repeat"),
+        (conv(&["--variants", "adaptive", "--adaptive-min", "1"]), "--adaptive-min"),
+        (conv(&["--reference", "missing.exr"]), "--reference"),
+        (conv(&["--reference", "a.exr", "--reference-spp", "4"]), "--reference"),
+        (conv(&["--width", "0"]), "width"),
+    ];
+    for (args, flag) in &cases {
+        let a: Vec<&str> = args.iter().map(|s| s.as_str()).collect();
+        fails_naming(&a, flag, 2);
+    }
+    assert!(!out.exists(), "a failed run wrote {}", out.display());
+
+    // A reference of the wrong size.
+    let r = dir.path().join("r.pfm");
+    rtow::Image::new(3, 2).save(&r, 1.0).unwrap();
+    fails_naming(&to_refs(&conv(&["--reference", r.to_str().unwrap()])), "--reference", 2);
+
+    // --out that is a file.
+    let f = dir.path().join("file");
+    std::fs::write(&f, b"x").unwrap();
+    let a = [
+        "converge",
+        "ch07-diffuse",
+        "--out",
+        f.to_str().unwrap(),
+        "--width",
+        "8",
+        "--height",
+        "4",
+        "--spp-list",
+        "1",
+        "--reference-spp",
+        "2",
+    ];
+    fails_naming(&a, "--out", 1);
+
+    let png = dir.path().join("x.png");
+    let p = png.to_str().unwrap();
+    for (extra, flag) in [
+        (vec!["--adaptive", "nan"], "--adaptive"),
+        (vec!["--adaptive=-0.5"], "--adaptive"),
+        (vec!["--adaptive", "0"], "--adaptive"),
+        (vec!["--adaptive", "0.1", "--adaptive-min", "1"], "--adaptive-min"),
+        (vec!["--adaptive", "lots"], "--adaptive"),
+    ] {
+        let mut a = vec!["render", "ch07-diffuse", "-o", p, "--width", "8", "--height", "4", "-q"];
+        a.extend(extra);
+        fails_naming(&a, flag, 2);
+    }
+    assert!(!Path::new(p).exists());
+}
+
+fn to_refs(v: &[String]) -> Vec<&str> {
+    v.iter().map(|s| s.as_str()).collect()
+}
+
+#[test]
+fn render_flags_report_the_estimator() {
+    let dir = tempfile::tempdir().unwrap();
+    let json = dir.path().join("s.json");
+    let png = dir.path().join("x.png");
+    let o = rtow(&[
+        "render",
+        "ch07-diffuse",
+        "-o",
+        png.to_str().unwrap(),
+        "--width",
+        "16",
+        "--height",
+        "9",
+        "--spp",
+        "64",
+        "--rr",
+        "--adaptive",
+        "0.2",
+        "-q",
+        "--stats-json",
+        json.to_str().unwrap(),
+    ]);
+    assert!(o.status.success(), "{}", text(&o.stderr));
+    let v: serde_json::Value = serde_json::from_str(&std::fs::read_to_string(&json).unwrap()).unwrap();
+    assert_eq!(v["russian_roulette"], true);
+    assert_eq!(v["adaptive"]["min_spp"], 16);
+    let samples = v["samples"].as_u64().unwrap();
+    assert!(samples >= 16 * 9 * 16 && samples < 16 * 9 * 64, "{samples}");
+}

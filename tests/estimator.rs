@@ -1,0 +1,200 @@
+//! Russian roulette and adaptive sampling: unbiasedness of the roulette,
+//! bit-identical kernels with either on, adaptive decisions independent of
+//! tiles and threads, and rays counted only where traced.
+
+use rtow::estimator::Adaptive;
+use rtow::kernel::{scalar, Counters};
+use rtow::plan::{AccelChoice, Prepared};
+use rtow::sampling::ScalarStream;
+use rtow::scene::preset;
+use rtow::{render, KernelKind, RenderOptions, Rendered, Settings};
+
+fn settings(w: u32, h: u32, spp: u32, seed: u64) -> Settings {
+    Settings { width: w, height: h, spp, max_depth: 50, seed }
+}
+
+fn run(scene: &str, s: Settings, opts: RenderOptions) -> Rendered {
+    render(&preset(scene).unwrap(), s, opts, None).unwrap()
+}
+
+fn opts(kernel: KernelKind, rr: bool, adaptive: Option<Adaptive>) -> RenderOptions {
+    RenderOptions { kernel, threads: Some(2), tile: 16, rr, adaptive, ..Default::default() }
+}
+
+fn assert_same(a: &Rendered, b: &Rendered, what: &str) {
+    assert_eq!(a.stats.rays, b.stats.rays, "{what}: rays");
+    assert_eq!(a.stats.samples, b.stats.samples, "{what}: samples");
+    for (i, (p, q)) in a.image.data.iter().zip(&b.image.data).enumerate() {
+        for k in 0..3 {
+            assert_eq!(p[k].to_bits(), q[k].to_bits(), "{what}: pixel {i} channel {k}: {p:?} vs {q:?}");
+        }
+    }
+}
+
+/// Per pixel and channel: the mean and the variance of the mean, from `n`
+/// paths traced one by one with the scalar kernel.
+fn pixel_stats(prep: &Prepared, n: u32) -> Vec<[(f64, f64); 3]> {
+    let s = prep.settings;
+    let mut c = Counters::default();
+    let mut out = Vec::new();
+    for y in 0..s.height {
+        for x in 0..s.width {
+            let pixel = (y * s.width + x) as u64;
+            let mut m = [[0.0f64; 2]; 3];
+            for sample in 0..n {
+                let mut rng = ScalarStream::for_path(s.seed, pixel, sample as u64);
+                let v = scalar::trace(prep, x, y, &mut rng, &mut c);
+                for k in 0..3 {
+                    m[k][0] += v[k] as f64;
+                    m[k][1] += v[k] as f64 * v[k] as f64;
+                }
+            }
+            let n = n as f64;
+            out.push(m.map(|[s1, s2]| {
+                let mean = s1 / n;
+                let var = ((s2 - s1 * s1 / n) / (n - 1.0)).max(0.0);
+                (mean, var / n)
+            }));
+        }
+    }
+    out
+}
+
+/// Russian roulette must not change the expected image. Plain and roulette
+/// renders with independent seeds are compared pixel by pixel (a z-test per
+/// pixel and channel, Bonferroni-corrected to a 1e-3 family-wise level) and
+/// as a whole (the mean difference over all pixels, |z| < 4).
+fn roulette_keeps_the_mean(scene: &str, w: u32, h: u32, n: u32) {
+    let sc = preset(scene).unwrap();
+    let plain = Prepared::new(&sc, settings(w, h, n, 11), AccelChoice::Auto).unwrap();
+    let mut rr = Prepared::new(&sc, settings(w, h, n, 12), AccelChoice::Auto).unwrap();
+    rr.estimator.russian_roulette = true;
+    let a = pixel_stats(&plain, n);
+    let b = pixel_stats(&rr, n);
+    let tests = (a.len() * 3) as f64;
+    // Two-sided z for 1e-3 / tests, by bisection on the normal tail.
+    let tail = |z: f64| 0.5 * erfc(z / std::f64::consts::SQRT_2);
+    let (mut lo, mut hi) = (0.0, 20.0);
+    for _ in 0..100 {
+        let mid = 0.5 * (lo + hi);
+        if 2.0 * tail(mid) > 1e-3 / tests {
+            lo = mid;
+        } else {
+            hi = mid;
+        }
+    }
+    let z_crit = hi;
+    let (mut sum_d, mut sum_v, mut worst) = (0.0, 0.0, 0.0f64);
+    for (pa, pb) in a.iter().zip(&b) {
+        for k in 0..3 {
+            let d = pb[k].0 - pa[k].0;
+            let v = pa[k].1 + pb[k].1;
+            sum_d += d;
+            sum_v += v;
+            if v == 0.0 {
+                assert_eq!(d, 0.0, "{scene}: noiseless pixel differs");
+            } else {
+                worst = worst.max(d.abs() / v.sqrt());
+            }
+        }
+    }
+    assert!(worst < z_crit, "{scene}: a pixel differs by {worst:.2} sigma (limit {z_crit:.2})");
+    let z = sum_d / sum_v.sqrt();
+    assert!(z.abs() < 4.0, "{scene}: the image mean differs by {z:.2} sigma");
+}
+
+/// The complementary error function (Numerical Recipes' erfcc, relative error < 1.2e-7).
+fn erfc(x: f64) -> f64 {
+    let z = x.abs();
+    let t = 1.0 / (1.0 + 0.5 * z);
+    let r = t
+        * (-z * z - 1.26551223
+            + t * (1.00002368
+                + t * (0.37409196
+                    + t * (0.09678418
+                        + t * (-0.18628806
+                            + t * (0.27886807
+                                + t * (-1.13520398 + t * (1.48851587 + t * (-0.82215223 + t * 0.17087277)))))))))
+            .exp();
+    if x >= 0.0 {
+        r
+    } else {
+        2.0 - r
+    }
+}
+
+#[test]
+fn roulette_is_unbiased_on_diffuse_glass_and_metal() {
+    roulette_keeps_the_mean("ch07-diffuse", 24, 14, 512);
+    roulette_keeps_the_mean("ch09-glass", 24, 14, 512);
+}
+
+#[test]
+fn roulette_traces_fewer_rays_and_changes_the_noise() {
+    let s = settings(40, 23, 8, 3);
+    let plain = run("ch07-diffuse", s, opts(KernelKind::Simd, false, None));
+    let rr = run("ch07-diffuse", s, opts(KernelKind::Simd, true, None));
+    assert!(rr.stats.rays < plain.stats.rays, "{} vs {}", rr.stats.rays, plain.stats.rays);
+    assert_ne!(rr.image, plain.image);
+    assert!(rr.stats.russian_roulette && !plain.stats.russian_roulette);
+}
+
+#[test]
+fn roulette_scalar_and_simd_agree_bit_for_bit() {
+    for (scene, s) in [("final", settings(40, 23, 8, 5)), ("ch09-glass", settings(48, 27, 16, 6))] {
+        let a = run(scene, s, opts(KernelKind::Scalar, true, None));
+        let b = run(scene, s, opts(KernelKind::Simd, true, None));
+        assert_same(&a, &b, scene);
+    }
+}
+
+#[test]
+fn adaptive_scalar_and_simd_agree_bit_for_bit_whatever_the_tiles() {
+    let s = settings(40, 23, 128, 7);
+    let ad = Some(Adaptive::new(0.05, 16).unwrap());
+    let simd = run("final", s, opts(KernelKind::Simd, false, ad));
+    let px = 40 * 23;
+    // Some pixels stopped early and some went on: the decisions did something.
+    assert!(simd.stats.samples > px * 16 && simd.stats.samples < px * 128, "{}", simd.stats.samples);
+    let scalar = run("final", s, RenderOptions { threads: Some(1), tile: 7, ..opts(KernelKind::Scalar, false, ad) });
+    assert_same(&simd, &scalar, "adaptive");
+    let odd_tiles = run("final", s, RenderOptions { tile: 45, ..opts(KernelKind::Simd, false, ad) });
+    assert_same(&simd, &odd_tiles, "adaptive, 45-pixel tiles");
+    // With roulette as well.
+    let a = run("ch09-glass", s, opts(KernelKind::Scalar, true, ad));
+    let b = run("ch09-glass", s, opts(KernelKind::Simd, true, ad));
+    assert_same(&a, &b, "roulette + adaptive");
+}
+
+#[test]
+fn adaptive_counts_only_what_it_traced() {
+    // A threshold every pixel meets: all stop at the first decision point, so
+    // the render is the 16-spp render, rays and all, though it was allowed 128.
+    let all_stop = Some(Adaptive::new(1e9, 16).unwrap());
+    for kernel in [KernelKind::Scalar, KernelKind::Simd] {
+        let a = run("final", settings(24, 14, 128, 9), opts(kernel, false, all_stop));
+        let b = run("final", settings(24, 14, 16, 9), opts(kernel, false, None));
+        assert_same(&a, &b, kernel.name());
+        assert_eq!(a.stats.samples, 24 * 14 * 16);
+    }
+    // Below the first decision point adaptive sampling changes nothing.
+    let a = run(
+        "ch07-diffuse",
+        settings(24, 14, 12, 9),
+        opts(KernelKind::Simd, false, Some(Adaptive::new(1e-6, 16).unwrap())),
+    );
+    let b = run("ch07-diffuse", settings(24, 14, 12, 9), opts(KernelKind::Simd, false, None));
+    assert_same(&a, &b, "under min spp");
+}
+
+#[test]
+fn bad_adaptive_options_are_errors_naming_the_flag() {
+    for (t, min, flag) in [(f32::NAN, 16, "--adaptive"), (-1.0, 16, "--adaptive"), (0.1, 0, "--adaptive-min")] {
+        let o = RenderOptions { adaptive: Some(Adaptive { threshold: t, min_spp: min }), ..RenderOptions::default() };
+        let e = match render(&preset("final").unwrap(), settings(8, 8, 4, 0), o, None) {
+            Ok(_) => panic!("{t} {min} accepted"),
+            Err(e) => e.to_string(),
+        };
+        assert!(e.starts_with(&format!("{flag}:")), "{e}");
+    }
+}
