@@ -20,6 +20,7 @@ pub struct TileFilm {
     pub sum: Vec<[f32; 3]>,
     pub count: Vec<u32>,
     /// Per pixel: the sum of the samples and of their squares, per channel, in f64.
+    /// Empty unless adaptive sampling asked for them ([`TileFilm::with_moments`]).
     pub moments: Vec<[[f64; 3]; 2]>,
     pub rejected: u64,
 }
@@ -27,16 +28,13 @@ pub struct TileFilm {
 impl TileFilm {
     pub fn new(x0: u32, y0: u32, w: u32, h: u32) -> Self {
         let n = (w * h) as usize;
-        TileFilm {
-            x0,
-            y0,
-            w,
-            h,
-            sum: vec![[0.0; 3]; n],
-            count: vec![0; n],
-            moments: vec![[[0.0; 3]; 2]; n],
-            rejected: 0,
-        }
+        TileFilm { x0, y0, w, h, sum: vec![[0.0; 3]; n], count: vec![0; n], moments: Vec::new(), rejected: 0 }
+    }
+
+    /// Also keeps the per-pixel moments that adaptive sampling's error estimate needs.
+    pub fn with_moments(mut self) -> Self {
+        self.moments = vec![[[0.0; 3]; 2]; self.sum.len()];
+        self
     }
 
     /// Adds one sample to pixel `local` (row-major inside the tile).
@@ -48,11 +46,12 @@ impl TileFilm {
             s[1] += c[1];
             s[2] += c[2];
             self.count[local] += 1;
-            let m = &mut self.moments[local];
-            for k in 0..3 {
-                let v = c[k] as f64;
-                m[0][k] += v;
-                m[1][k] += v * v;
+            if let Some(m) = self.moments.get_mut(local) {
+                for k in 0..3 {
+                    let v = c[k] as f64;
+                    m[0][k] += v;
+                    m[1][k] += v * v;
+                }
             }
         } else {
             self.rejected += 1;
@@ -67,10 +66,10 @@ impl TileFilm {
     /// averaged, so stopping on it is slightly biased (see the README).
     pub fn relative_error(&self, local: usize) -> f64 {
         let n = self.count[local] as f64;
+        let Some(&[s1, s2]) = self.moments.get(local) else { return f64::INFINITY };
         if n < 2.0 {
             return f64::INFINITY;
         }
-        let [s1, s2] = self.moments[local];
         let mut var = 0.0;
         let mut mean = 0.0;
         for k in 0..3 {
@@ -249,7 +248,7 @@ mod tests {
 
     #[test]
     fn relative_error_of_known_samples() {
-        let mut t = TileFilm::new(0, 0, 2, 1);
+        let mut t = TileFilm::new(0, 0, 2, 1).with_moments();
         assert_eq!(t.relative_error(0), f64::INFINITY);
         // Pixel 0: samples 1 and 3 in every channel: mean 2, variance 2, se 1.
         t.add(0, [1.0; 3]);
@@ -260,7 +259,7 @@ mod tests {
         t.add(1, [0.5; 3]);
         t.add(1, [0.5; 3]);
         assert_eq!(t.relative_error(1), 0.0);
-        let mut d = TileFilm::new(0, 0, 1, 1);
+        let mut d = TileFilm::new(0, 0, 1, 1).with_moments();
         d.add(0, [0.0; 3]);
         d.add(0, [0.02; 3]);
         let se = (0.0002f64 / 2.0).sqrt();

@@ -97,11 +97,12 @@ pub const fn isa() -> &'static str {
     }
 }
 
-fn tiles(width: u32, height: u32, edge: u32) -> Vec<TileFilm> {
+fn tiles(width: u32, height: u32, edge: u32, moments: bool) -> Vec<TileFilm> {
     let mut v = Vec::new();
     for y0 in (0..height).step_by(edge as usize) {
         for x0 in (0..width).step_by(edge as usize) {
-            v.push(TileFilm::new(x0, y0, edge.min(width - x0), edge.min(height - y0)));
+            let t = TileFilm::new(x0, y0, edge.min(width - x0), edge.min(height - y0));
+            v.push(if moments { t.with_moments() } else { t });
         }
     }
     v
@@ -176,7 +177,7 @@ fn render_prepared(
         }
         return (image, Counters::default(), 0, None);
     }
-    let mut films = tiles(s.width, s.height, opts.tile);
+    let mut films = tiles(s.width, s.height, opts.tile, prep.estimator.adaptive.is_some());
     let total = films.len() as u64;
     let done = AtomicU64::new(0);
     let rays = AtomicU64::new(0);
