@@ -6,7 +6,8 @@ use std::path::Path;
 
 /// The accumulators of one tile. Each pixel's samples are added in sample
 /// order, so the sum does not depend on threads, tiles or kernels. Samples with
-/// a NaN or infinite component are rejected (and counted), never added.
+/// a NaN or infinite component are rejected (and counted), never added; so is a
+/// finite sample that would overflow its pixel's sum (colours are unbounded).
 #[derive(Clone, Debug)]
 pub struct TileFilm {
     pub x0: u32,
@@ -35,11 +36,10 @@ impl TileFilm {
     /// Adds one sample to pixel `local` (row-major inside the tile).
     #[inline]
     pub fn add(&mut self, local: usize, c: [f32; 3]) {
-        if c.iter().all(|v| v.is_finite()) {
-            let s = &mut self.sum[local];
-            s[0] += c[0];
-            s[1] += c[1];
-            s[2] += c[2];
+        let s = self.sum[local];
+        let next = [s[0] + c[0], s[1] + c[1], s[2] + c[2]];
+        if c.iter().chain(next.iter()).all(|v| v.is_finite()) {
+            self.sum[local] = next;
             self.count[local] += 1;
         } else {
             self.rejected += 1;
@@ -236,6 +236,17 @@ mod tests {
         let mut img = Image::new(1, 1);
         img.put_tile(&t);
         assert_eq!(img.get(0, 0), [2.0, 2.0, 2.0]);
+    }
+
+    #[test]
+    fn a_sum_that_would_overflow_is_rejected() {
+        let mut t = TileFilm::new(0, 0, 1, 1);
+        t.add(0, [f32::MAX, 1.0, 1.0]);
+        t.add(0, [f32::MAX, 1.0, 1.0]);
+        assert_eq!(t.rejected, 1);
+        let mut img = Image::new(1, 1);
+        img.put_tile(&t);
+        assert_eq!(img.get(0, 0), [f32::MAX, 1.0, 1.0]);
     }
 
     #[test]
