@@ -25,6 +25,18 @@ enum Command {
     Render(RenderArgs),
     /// List the built-in scenes.
     Scenes,
+    /// Numerical stress tests against an f64 oracle, with both kernels; exit status 1 if a bound breaks.
+    Stress {
+        /// The small version (what `cargo test` runs).
+        #[arg(long)]
+        quick: bool,
+        /// Seed of the sweeps and renders.
+        #[arg(long, default_value_t = 1)]
+        seed: u64,
+        /// Worker threads [default: one per core]
+        #[arg(long)]
+        threads: Option<usize>,
+    },
     /// Write a preset as a scene file (.json or .toml).
     Export {
         /// Preset name (see `rtow scenes`).
@@ -227,6 +239,19 @@ fn cmd_render(a: RenderArgs) -> Result<()> {
     Ok(())
 }
 
+/// Prints the stress tables; exits with status 1 when a bound is broken.
+fn cmd_stress(quick: bool, seed: u64, threads: Option<usize>) -> Result<()> {
+    use std::io::Write;
+    let cfg = rtow::stress::Config { quick, seed, threads };
+    let report = rtow::stress::run(&cfg, &mut |part| eprintln!("done: {part}"))?;
+    print!("{}", report.table());
+    let _ = std::io::stdout().flush();
+    if !report.passed() {
+        std::process::exit(1);
+    }
+    Ok(())
+}
+
 fn run(cli: Cli) -> Result<()> {
     match cli.command {
         Command::Render(a) => cmd_render(a),
@@ -236,6 +261,7 @@ fn run(cli: Cli) -> Result<()> {
             }
             Ok(())
         }
+        Command::Stress { quick, seed, threads } => cmd_stress(quick, seed, threads),
         Command::Export { preset, output } => {
             let s = scene::preset(&preset)
                 .ok_or_else(|| Error::Input(format!("unknown preset '{preset}' (see `rtow scenes`)")))?;
