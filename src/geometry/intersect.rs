@@ -165,9 +165,10 @@ const OFFSET_ULPS: f32 = 1.0 / 1_048_576.0;
 /// keeps every origin on its side with a margin of 1.9 on the radius term and
 /// 4.6 on the position term (it also keeps outgoing grazing rays clear of the
 /// rounding band of the discriminant, which needs `offset > 5.5u |r|`). A fixed
-/// epsilon fails both at r = 1e-4 and at r = 1e6. `rtow stress` measures it
-/// (zero re-hits over spheres of radius 1e-4 .. 1e4 placed 1e-4 .. 1e6 away) and
-/// scans smaller offsets (README, "Numerical stability").
+/// epsilon fails both at r = 1e-4 and at r = 1e6. `rtow stress` measures it:
+/// zero re-hits over spheres of radius 1e-4 .. 1e4 placed 1e-4 .. 1e6 away,
+/// still zero at half this offset, entering rays falling short from a quarter,
+/// and each term alone failing (README, "Numerical stability").
 ///
 /// The rule has a floor: the offset must stay below `|r|`, or a ray entering the
 /// sphere may be pushed through it. That holds while `|p|_inf < (1 / 16u - 1) |r|`,
