@@ -1492,8 +1492,24 @@ struct Traced {
 /// A camera-ray rewrite (the far camera's reference starts rays near the scene).
 type Shift<'a> = &'a dyn Fn(V3<f32>, V3<f32>) -> V3<f32>;
 
-/// The scalar kernel's loop (`kernel::scalar::trace`), instrumented.
-fn trace_scalar(prep: &Prepared, oracle: &SceneOracle, shift: Option<Shift>) -> Traced {
+/// The textbook's closest hit: every sphere's first root above `t_min`, ties to the lowest index.
+fn textbook_closest(sp: &Spheres, o: V3<f32>, d: V3<f32>) -> (u32, f32) {
+    let mut best = (MISS, f32::INFINITY);
+    for i in 0..sp.len {
+        let c = V3::new(sp.cx[i], sp.cy[i], sp.cz[i]);
+        if let Some(t) = textbook_hit(o, d, c, sp.r[i], TEXTBOOK_T_MIN) {
+            if t < best.1 {
+                best = (i as u32, t);
+            }
+        }
+    }
+    best
+}
+
+/// The scalar kernel's loop (`kernel::scalar::trace`), instrumented. With
+/// `textbook`, the book's version instead: `textbook_hit` with `t_min = 0.001`,
+/// `p = o + t d`, `n = (p - c) / r`, and the next ray starting at `p`.
+fn trace_scalar(prep: &Prepared, oracle: &SceneOracle, shift: Option<Shift>, textbook: bool) -> Traced {
     let s = prep.settings;
     let sp = &prep.spheres;
     let m = &prep.materials;
@@ -1516,7 +1532,11 @@ fn trace_scalar(prep: &Prepared, oracle: &SceneOracle, shift: Option<Shift>) -> 
             let mut colour = [0.0f32; 3];
             for _ in 0..s.max_depth {
                 rays += 1;
-                let (hit, t) = closest_hit_scalar(sp, o, d);
+                let (hit, t) = if textbook {
+                    textbook_closest(sp, o, d)
+                } else {
+                    closest_hit_scalar(sp, o, d)
+                };
                 h.v(o);
                 h.v(d);
                 h.u32(hit);
@@ -1527,7 +1547,21 @@ fn trace_scalar(prep: &Prepared, oracle: &SceneOracle, shift: Option<Shift>) -> 
                     break;
                 }
                 let i = hit as usize;
-                let srf = surface(o, d, t, V3::new(sp.cx[i], sp.cy[i], sp.cz[i]), sp.r[i]);
+                let c = V3::new(sp.cx[i], sp.cy[i], sp.cz[i]);
+                let srf = if textbook {
+                    let p = o + d * t;
+                    let out = (p - c) * (1.0 / sp.r[i]);
+                    let front = d.dot(out) < 0.0;
+                    let n = if front { out } else { -out };
+                    Surface {
+                        p,
+                        n,
+                        front,
+                        offset: 0.0,
+                    }
+                } else {
+                    surface(o, d, t, c, sp.r[i])
+                };
                 oracle.check(&mut tally, o, d, hit, t, srf.front, prev);
                 let row = sp.row[i] as usize;
                 let (dir, atten) = match sp.kind[i] {
@@ -1547,7 +1581,7 @@ fn trace_scalar(prep: &Prepared, oracle: &SceneOracle, shift: Option<Shift>) -> 
                     break;
                 }
                 prev = Some(Leaving::new(hit, srf.n, sp.r[i], srf.front));
-                o = spawn(&srf, dir);
+                o = if textbook { srf.p } else { spawn(&srf, dir) };
                 d = dir;
             }
             if !colour.iter().all(|c| c.is_finite()) {
@@ -2025,8 +2059,9 @@ pub fn run(cfg: &Config, progress: &mut dyn FnMut(&str)) -> Result<Report> {
             return Err(Error::Input(format!("{name}: stress scenes must be path traced")));
         }
         let oracle = SceneOracle::new(&prep.spheres);
-        let ts = trace_scalar(&prep, &oracle, None);
+        let ts = trace_scalar(&prep, &oracle, None, false);
         let tv = trace_x8(&prep, &oracle);
+        let tb = trace_scalar(&prep, &oracle, None, true);
         for (kernel, tr) in [(KernelKind::Scalar, &ts), (KernelKind::Simd, &tv)] {
             let r = render_with(&scene, st, kernel, cfg.threads)?;
             let mut tally = tr.tally.clone();
@@ -2048,6 +2083,16 @@ pub fn run(cfg: &Config, progress: &mut dyn FnMut(&str)) -> Result<Report> {
                 images.push((name.to_string(), r.image));
             }
         }
+        let (mb, ms) = (mean_colour(&tb.image), mean_colour(&ts.image));
+        // The textbook image's mean colour relative to the kernels' (same seed).
+        let rel = (0..3).map(|ch| mb[ch] / ms[ch] - 1.0).sum::<f64>() / 3.0;
+        rows.push(Row {
+            section: sec,
+            case: format!("{name} (mean {:+.1}%)", 100.0 * rel),
+            kernel: "textbook",
+            tally: tb.tally,
+            gate: Gate::Reference,
+        });
         checks.push(Check::at_most(
             format!("{name}: scalar and simd rays differ"),
             (ts.hash != tv.hash) as u8 as f64,
@@ -2073,7 +2118,7 @@ pub fn run(cfg: &Config, progress: &mut dyn FnMut(&str)) -> Result<Report> {
                 let (o, dh) = (v64(o), v64(d).normalize());
                 v32(o + dh * ((at - o).dot(dh) - 30.0))
             };
-            let near = trace_scalar(&prep, &oracle, Some(&shift));
+            let near = trace_scalar(&prep, &oracle, Some(&shift), false);
             let (zg, zb) = compare(&ts.image, &near.image, 8);
             checks.push(Check::at_most(
                 "stress-far-camera vs same rays started near, max z",
