@@ -1341,9 +1341,9 @@ fn self_sweep(scatter: Scatter, imp: Impl, sizes: &Sizes, seed: u64, rule: Offse
     }
 }
 
-/// Re-hits of the self-intersection sweep (scalar kernel, every scatter,
-/// resolvable hit points) with the kernels' offset multiplied by `scale`:
-/// `(rays, re-hits, leaks)`. At `scale = 1` this is the kernels' own behaviour.
+/// The self-intersection sweep (scalar kernel, every scatter, resolvable hit
+/// points) with the kernels' offset multiplied by `scale`: `(rays, re-hits,
+/// entering rays short of the far wall)`. At `scale = 1`, the kernels' behaviour.
 pub fn offset_rehits(scale: f32, hit_points: usize, seed: u64) -> (u64, u64, u64) {
     let sizes = Sizes {
         hit_points,
