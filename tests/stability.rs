@@ -9,6 +9,7 @@ use rtow::scene::{self, Kind, Material, Sphere};
 use rtow::stress::{self, check_group, Group, GroupResult};
 use rtow::vec3::V3;
 use rtow::{KernelKind, RenderOptions};
+use std::f64::consts::TAU;
 use wide::f32x8;
 
 fn v32(v: DVec3) -> V3<f32> {
@@ -80,7 +81,7 @@ fn outside_group(r: f64, dist: f64, centre: DVec3, dirs: &[(f64, f64, f64, f64, 
 }
 
 fn dirs8() -> impl Strategy<Value = [(f64, f64, f64, f64, f64); 8]> {
-    prop::array::uniform8((-1.0..1.0f64, 0.0..6.283f64, -1.0..1.0f64, 0.0..6.283f64, 0.0..1.0f64))
+    prop::array::uniform8((-1.0..1.0f64, 0.0..TAU, -1.0..1.0f64, 0.0..TAU, 0.0..1.0f64))
 }
 
 proptest! {
@@ -89,7 +90,7 @@ proptest! {
     /// Radius and distance over 1e-4 .. 1e6, ratio 1e-6 .. 1, either sign of radius.
     #[test]
     fn outside_rays_match_the_oracle(lr in -4.0..6.0f64, lq in -6.0..0.0f64, neg in any::<bool>(),
-                                     cz in -1.0..1.0f64, cphi in 0.0..6.283f64, cs in 0.0..1.0f64,
+                                     cz in -1.0..1.0f64, cphi in 0.0..TAU, cs in 0.0..1.0f64,
                                      dirs in dirs8()) {
         let r = 10f64.powf(lr);
         let dist = r / 10f64.powf(lq);
@@ -114,7 +115,7 @@ proptest! {
     #[test]
     fn origins_on_inside_and_at_the_centre_match_the_oracle(
         lr in -4.0..6.0f64, lc in -2.0..1.0f64, neg in any::<bool>(), where_ in 0..3u8,
-        pts in prop::array::uniform8((-1.0..1.0f64, 0.0..6.283f64, 0.0..1.0f64, -1.0..1.0f64, 0.0..6.283f64)),
+        pts in prop::array::uniform8((-1.0..1.0f64, 0.0..TAU, 0.0..1.0f64, -1.0..1.0f64, 0.0..TAU)),
     ) {
         let r = 10f64.powf(lr);
         let c = unit(0.3, 1.0) * r * 10f64.powf(lc);
