@@ -6,9 +6,10 @@ use std::path::Path;
 
 /// The accumulators of one tile. Each pixel's samples are added in sample
 /// order, so the sum does not depend on threads, tiles or kernels. Samples with
-/// a NaN or infinite component are rejected (and counted), never added.
+/// a NaN or infinite component are rejected (and counted), never added; so is a
+/// finite sample that would overflow its pixel's sum (colours are unbounded).
 ///
-/// Besides the f32 sums that make the image, each pixel keeps f64 first and
+/// Besides the f32 sums that make the image, each pixel can keep f64 first and
 /// second moments of its samples: the per-pixel error estimate of adaptive
 /// sampling is computed from them (see [`TileFilm::relative_error`]).
 #[derive(Clone, Debug)]
@@ -40,11 +41,10 @@ impl TileFilm {
     /// Adds one sample to pixel `local` (row-major inside the tile).
     #[inline]
     pub fn add(&mut self, local: usize, c: [f32; 3]) {
-        if c.iter().all(|v| v.is_finite()) {
-            let s = &mut self.sum[local];
-            s[0] += c[0];
-            s[1] += c[1];
-            s[2] += c[2];
+        let s = self.sum[local];
+        let next = [s[0] + c[0], s[1] + c[1], s[2] + c[2]];
+        if c.iter().chain(next.iter()).all(|v| v.is_finite()) {
+            self.sum[local] = next;
             self.count[local] += 1;
             if let Some(m) = self.moments.get_mut(local) {
                 for k in 0..3 {
@@ -264,6 +264,17 @@ mod tests {
         d.add(0, [0.02; 3]);
         let se = (0.0002f64 / 2.0).sqrt();
         assert!((d.relative_error(0) - se / crate::estimator::RELATIVE_ERROR_FLOOR).abs() < 1e-6);
+    }
+
+    #[test]
+    fn a_sum_that_would_overflow_is_rejected() {
+        let mut t = TileFilm::new(0, 0, 1, 1);
+        t.add(0, [f32::MAX, 1.0, 1.0]);
+        t.add(0, [f32::MAX, 1.0, 1.0]);
+        assert_eq!(t.rejected, 1);
+        let mut img = Image::new(1, 1);
+        img.put_tile(&t);
+        assert_eq!(img.get(0, 0), [f32::MAX, 1.0, 1.0]);
     }
 
     #[test]

@@ -25,6 +25,7 @@ pub mod real;
 pub mod render;
 pub mod sampling;
 pub mod scene;
+pub mod stress;
 pub mod vec3;
 
 pub use error::{Error, Result};

@@ -28,6 +28,18 @@ enum Command {
     /// Run time against error: measure kernels and estimator variants at several
     /// sample counts against a reference; write a CSV, a markdown table and a log-log plot.
     Converge(ConvergeArgs),
+    /// Numerical stress tests against an f64 oracle, with both kernels; exit status 1 if a bound breaks.
+    Stress {
+        /// The small version (what `cargo test` runs).
+        #[arg(long)]
+        quick: bool,
+        /// Seed of the sweeps and renders.
+        #[arg(long, default_value_t = 1)]
+        seed: u64,
+        /// Worker threads [default: one per core]
+        #[arg(long)]
+        threads: Option<usize>,
+    },
     /// Write a preset as a scene file (.json or .toml).
     Export {
         /// Preset name (see `rtow scenes`).
@@ -482,6 +494,16 @@ fn cmd_render(a: RenderArgs) -> Result<()> {
     Ok(())
 }
 
+/// Prints the stress tables; exits with status 1 when a bound is broken.
+fn cmd_stress(quick: bool, seed: u64, threads: Option<usize>) -> Result<bool> {
+    use std::io::Write;
+    let cfg = rtow::stress::Config { quick, seed, threads };
+    let report = rtow::stress::run(&cfg, &mut |part| eprintln!("done: {part}"))?;
+    print!("{}", report.table());
+    let _ = std::io::stdout().flush();
+    Ok(report.passed())
+}
+
 /// Ok(false): the command ran but its check failed (exit status 1).
 fn run(cli: Cli) -> Result<bool> {
     match cli.command {
@@ -489,11 +511,13 @@ fn run(cli: Cli) -> Result<bool> {
         Command::Bench(a) => cmd_bench(a),
         Command::Converge(a) => cmd_converge(a).map(|_| true),
         Command::Scenes => {
+            let width = scene::presets().iter().map(|p| p.name.len()).max().unwrap_or(0);
             for p in scene::presets() {
-                println!("{:<16} {}", p.name, p.description);
+                println!("{:<width$}  {}", p.name, p.description);
             }
             Ok(true)
         }
+        Command::Stress { quick, seed, threads } => cmd_stress(quick, seed, threads),
         Command::Export { preset, output } => {
             let s = scene::preset(&preset)
                 .ok_or_else(|| Error::Input(format!("unknown preset '{preset}' (see `rtow scenes`)")))?;

@@ -158,6 +158,62 @@ pub fn final_scene() -> Scene {
     scene(Mode::Path, cam, spheres, settings(400, 225, 32, 50))
 }
 
+/// `s` with every length multiplied by `k`: sphere centres and radii, the
+/// camera's position, target, focus distance and aperture. The defocus angle
+/// and the field of view are angles and stay. The image is the same up to noise.
+fn scaled(mut s: Scene, k: f32) -> Scene {
+    for sp in &mut s.spheres {
+        sp.center = sp.center.map(|x| x * k);
+        sp.radius *= k;
+    }
+    let c = &mut s.camera;
+    c.look_from = c.look_from.map(|x| x * k);
+    c.look_at = c.look_at.map(|x| x * k);
+    c.focus_dist = c.focus_dist.map(|f| f * k);
+    c.aperture = c.aperture.map(|a| a * k);
+    s
+}
+
+/// Stress: the final scene 1000 times smaller (small spheres of radius 2e-4).
+fn stress_final_small() -> Scene {
+    scaled(final_scene(), 1e-3)
+}
+
+/// Stress: the final scene 1000 times larger (a ground of radius 1e6).
+fn stress_final_large() -> Scene {
+    scaled(final_scene(), 1e3)
+}
+
+/// Stress: chapter 9's scene scaled so that its spheres have radius 1e-4.
+fn stress_tiny() -> Scene {
+    scaled(ch09(), 2e-4)
+}
+
+/// Stress: a diffuse sphere of radius 1e6 seen from 1 unit above its top
+/// (1e-6 of its radius), looking slightly down: a plane to the horizon.
+fn stress_horizon() -> Scene {
+    let ground = sphere([0.0, -1e6, 0.0], 1e6, lam([0.5, 0.5, 0.5]));
+    let cam = Camera::looking([0.0, 1.0, 0.0], [0.0, 0.0, -20.0], 30.0);
+    scene(Mode::Path, cam, vec![ground], settings(400, 225, 32, 50))
+}
+
+/// Stress: the final scene from 1e5 away along the book's line of sight, with
+/// the field of view (about 0.0027 degrees) that frames the look-at plane as
+/// the book does, the book's defocus angle and its focus plane.
+fn stress_far_camera() -> Scene {
+    let mut s = final_scene();
+    let from = glam::DVec3::new(13.0, 2.0, 3.0);
+    let book = from.length();
+    let dist = 1e5;
+    let vfov = 2.0 * (book * 10f64.to_radians().tan() / dist).atan().to_degrees();
+    let c = &mut s.camera;
+    c.look_from = (from / book * dist).to_array().map(|x| x as f32);
+    c.look_at = [0.0; 3];
+    c.vfov_deg = vfov as f32;
+    c.focus_dist = Some((dist - (book - 10.0)) as f32);
+    s
+}
+
 static PRESETS: &[Preset] = &[
     Preset {
         name: "ch01-gradient",
@@ -217,6 +273,31 @@ static PRESETS: &[Preset] = &[
         name: "final",
         description: "ch. 12: the book's random spheres (487 spheres, thin lens)",
         build: final_scene,
+    },
+    Preset {
+        name: "stress-final-small",
+        description: "stress: the final scene scaled by 1e-3 (spheres of radius 2e-4)",
+        build: stress_final_small,
+    },
+    Preset {
+        name: "stress-final-large",
+        description: "stress: the final scene scaled by 1e3 (a ground of radius 1e6)",
+        build: stress_final_large,
+    },
+    Preset {
+        name: "stress-horizon",
+        description: "stress: a sphere of radius 1e6 seen from 1 above its surface",
+        build: stress_horizon,
+    },
+    Preset {
+        name: "stress-tiny",
+        description: "stress: ch. 9's scene with spheres of radius 1e-4",
+        build: stress_tiny,
+    },
+    Preset {
+        name: "stress-far-camera",
+        description: "stress: the final scene from 1e5 away, vfov 0.0027 degrees",
+        build: stress_far_camera,
     },
 ];
 
