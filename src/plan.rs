@@ -65,7 +65,7 @@ pub enum AccelChoice {
 
 /// With at least this many spheres `auto` builds a BVH. Measured with
 /// `rtow bench` on random scenes (see README, "Skip what a scene doesn't need").
-pub const BVH_CROSSOVER: usize = 12;
+pub const BVH_CROSSOVER: usize = 16;
 
 /// The settings a render runs with, after scene defaults and flags are merged.
 #[derive(Clone, Copy, Debug, Serialize, PartialEq)]
