@@ -15,7 +15,7 @@
 //!   log RMSE, between consecutive sample counts).
 
 use crate::error::{Error, Result};
-use crate::estimator::Adaptive;
+use crate::estimator::{Adaptive, ROULETTE_AFTER_RAYS};
 use crate::film::Image;
 use crate::kernel::KernelKind;
 use crate::plan::Settings;
@@ -37,19 +37,20 @@ pub const DEFAULT_ADAPTIVE_THRESHOLD: f32 = 0.02;
 /// An estimator variant: plain, Russian roulette, adaptive sampling, or both.
 #[derive(Clone, Copy, Debug, PartialEq)]
 pub struct Variant {
-    pub rr: bool,
+    /// Russian roulette from this many rays on.
+    pub rr: Option<u32>,
     /// Relative error threshold of adaptive sampling.
     pub adaptive: Option<f32>,
 }
 
 impl Variant {
     pub const PLAIN: Variant = Variant {
-        rr: false,
+        rr: None,
         adaptive: None,
     };
 
-    /// Parses `plain`, `rr`, `adaptive`, `adaptive:T` or a `+`-joined
-    /// combination such as `rr+adaptive:0.05`.
+    /// Parses `plain`, `rr`, `rr:N`, `adaptive`, `adaptive:T` or a
+    /// `+`-joined combination such as `rr+adaptive:0.05`.
     pub fn parse(text: &str) -> Result<Variant> {
         let bad = |m: String| Error::invalid("--variants", m);
         let mut v = Variant::PLAIN;
@@ -59,36 +60,58 @@ impl Variant {
         }
         for part in text.split('+') {
             let part = part.trim();
-            if part == "rr" && !v.rr {
-                v.rr = true;
-            } else if (part == "adaptive" || part.starts_with("adaptive:")) && v.adaptive.is_none() {
-                let t = match part.strip_prefix("adaptive:") {
-                    None => DEFAULT_ADAPTIVE_THRESHOLD,
-                    Some(t) => t
-                        .parse::<f32>()
-                        .map_err(|_| bad(format!("'{text}': '{t}' is not a number (adaptive:THRESHOLD)")))?,
-                };
-                if !(t.is_finite() && t > 0.0) {
-                    return Err(bad(format!(
-                        "'{text}': the adaptive threshold must be a positive number"
-                    )));
+            let (name, value) = match part.split_once(':') {
+                Some((n, x)) => (n, Some(x)),
+                None => (part, None),
+            };
+            match name {
+                "rr" if v.rr.is_none() => {
+                    let n = match value {
+                        None => ROULETTE_AFTER_RAYS,
+                        Some(x) => match x.parse::<u32>() {
+                            Ok(n) if n >= 1 => n,
+                            _ => {
+                                return Err(bad(format!(
+                                    "'{text}': '{x}' is not a number of rays of at least 1 (rr:N)"
+                                )))
+                            }
+                        },
+                    };
+                    v.rr = Some(n);
                 }
-                v.adaptive = Some(t);
-            } else {
-                return Err(bad(format!(
-                    "unknown or repeated variant '{part}' in '{text}' (use plain, rr, adaptive, adaptive:THRESHOLD, or e.g. rr+adaptive:0.05)"
-                )));
+                "adaptive" if v.adaptive.is_none() => {
+                    let t = match value {
+                        None => DEFAULT_ADAPTIVE_THRESHOLD,
+                        Some(x) => x.parse::<f32>().unwrap_or(f32::NAN),
+                    };
+                    if !(t.is_finite() && t > 0.0) {
+                        return Err(bad(format!(
+                            "'{text}': the adaptive threshold must be a positive number (adaptive:THRESHOLD)"
+                        )));
+                    }
+                    v.adaptive = Some(t);
+                }
+                _ => {
+                    return Err(bad(format!(
+                        "unknown or repeated variant '{part}' in '{text}' (use plain, rr, rr:N, adaptive, adaptive:THRESHOLD, or e.g. rr+adaptive:0.05)"
+                    )))
+                }
             }
         }
         Ok(v)
     }
 
     pub fn name(&self) -> String {
-        match (self.rr, self.adaptive) {
-            (false, None) => "plain".into(),
-            (true, None) => "rr".into(),
-            (false, Some(t)) => format!("adaptive:{t}"),
-            (true, Some(t)) => format!("rr+adaptive:{t}"),
+        let rr = match self.rr {
+            Some(n) if n == ROULETTE_AFTER_RAYS => "rr".to_string(),
+            Some(n) => format!("rr:{n}"),
+            None => String::new(),
+        };
+        match (rr.as_str(), self.adaptive) {
+            ("", None) => "plain".into(),
+            (rr, None) => rr.into(),
+            ("", Some(t)) => format!("adaptive:{t}"),
+            (rr, Some(t)) => format!("{rr}+adaptive:{t}"),
         }
     }
 }
@@ -273,8 +296,7 @@ pub fn run(scene: &Scene, name: &str, cfg: &Config, mut on: impl FnMut(Event)) -
         kernel: KernelKind::Simd,
         threads: cfg.threads,
         tile: cfg.tile,
-        rr: false,
-        adaptive: None,
+        ..RenderOptions::default()
     };
     let (reference, ref_text, rendered) = match &cfg.reference {
         Reference::File(path) => {
@@ -323,7 +345,8 @@ pub fn run(scene: &Scene, name: &str, cfg: &Config, mut on: impl FnMut(Event)) -
                 };
                 let opts = RenderOptions {
                     kernel,
-                    rr: variant.rr,
+                    rr: variant.rr.is_some(),
+                    rr_after: variant.rr.unwrap_or(ROULETTE_AFTER_RAYS),
                     adaptive,
                     ..base
                 };
@@ -751,7 +774,11 @@ mod tests {
             Some(DEFAULT_ADAPTIVE_THRESHOLD)
         );
         let v = Variant::parse("rr+adaptive:0.05").unwrap();
-        assert_eq!((v.rr, v.adaptive), (true, Some(0.05)));
+        assert_eq!((v.rr, v.adaptive), (Some(ROULETTE_AFTER_RAYS), Some(0.05)));
+        assert_eq!(Variant::parse(&v.name()).unwrap(), v);
+        let v = Variant::parse("adaptive:0.1+rr:3").unwrap();
+        assert_eq!((v.rr, v.adaptive), (Some(3), Some(0.1)));
+        assert_eq!(v.name(), "rr:3+adaptive:0.1");
         assert_eq!(Variant::parse(&v.name()).unwrap(), v);
         for bad in [
             "",
@@ -763,6 +790,11 @@ mod tests {
             "adaptive:nan",
             "adaptive:inf",
             "plain+rr",
+            "rr:0",
+            "rr:x",
+            "rr:-2",
+            "adaptive:",
+            "rr+adaptive+adaptive",
         ] {
             let e = Variant::parse(bad).unwrap_err().to_string();
             assert!(e.starts_with("--variants:"), "{bad}: {e}");

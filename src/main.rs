@@ -105,6 +105,9 @@ struct EstimatorArgs {
     /// min(1, max throughput component) and is reweighted (unbiased; changes the noise).
     #[arg(long)]
     rr: bool,
+    /// With --rr: the roulette starts once a path has traced N rays.
+    #[arg(long, value_name = "N", default_value_t = rtow::estimator::ROULETTE_AFTER_RAYS)]
+    rr_after: u32,
     /// Adaptive sampling: a pixel stops taking samples once the relative
     /// standard error of its mean is at most THRESHOLD (e.g. 0.02); --spp is the maximum.
     #[arg(long, value_name = "THRESHOLD")]
@@ -129,8 +132,9 @@ struct ConvergeArgs {
     /// Kernels to measure, comma separated.
     #[arg(long, value_enum, value_delimiter = ',', default_value = "simd")]
     kernels: Vec<KernelKind>,
-    /// Estimator variants, comma separated: plain, rr, adaptive (threshold 0.02),
-    /// adaptive:THRESHOLD, rr+adaptive:THRESHOLD. The first kernel's first variant is the baseline.
+    /// Estimator variants, comma separated: plain, rr (roulette after the default number of rays),
+    /// rr:N (after N rays), adaptive (threshold 0.02), adaptive:THRESHOLD, or combinations such as
+    /// rr+adaptive:0.05. The first kernel's first variant is the baseline.
     #[arg(long, value_delimiter = ',', default_value = "plain,rr,adaptive")]
     variants: Vec<String>,
     /// Samples per pixel to measure, increasing (the maximum, for adaptive variants).
@@ -379,6 +383,7 @@ fn cmd_render(a: RenderArgs) -> Result<()> {
         threads: a.image.threads,
         tile: a.image.tile,
         rr: a.estimator.rr,
+        rr_after: a.estimator.rr_after,
         adaptive: a.estimator.adaptive()?,
     };
     if a.explain {

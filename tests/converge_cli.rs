@@ -147,6 +147,7 @@ fn bad_flags_are_clear_errors() {
         (conv(&["--spp-list", "4,2"]), "--spp-list"),
         (conv(&["--spp-list", "0,2"]), "--spp-list"),
         (conv(&["--variants", "fast"]), "--variants"),
+        (conv(&["--variants", "rr:0"]), "--variants"),
         (conv(&["--variants", "adaptive:-1"]), "--variants"),
         (conv(&["--variants", "plain,plain"]), "--variants"),
         (conv(&["--kernels", "gpu"]), "--kernels"),
@@ -198,6 +199,7 @@ fn bad_flags_are_clear_errors() {
         (vec!["--adaptive", "0"], "--adaptive"),
         (vec!["--adaptive", "0.1", "--adaptive-min", "1"], "--adaptive-min"),
         (vec!["--adaptive", "lots"], "--adaptive"),
+        (vec!["--rr", "--rr-after", "0"], "--rr-after"),
     ] {
         let mut a = vec!["render", "ch07-diffuse", "-o", p, "--width", "8", "--height", "4", "-q"];
         a.extend(extra);
@@ -227,15 +229,19 @@ fn render_flags_report_the_estimator() {
         "--spp",
         "64",
         "--rr",
+        "--rr-after",
+        "4",
         "--adaptive",
         "0.2",
+        "--adaptive-min",
+        "16",
         "-q",
         "--stats-json",
         json.to_str().unwrap(),
     ]);
     assert!(o.status.success(), "{}", text(&o.stderr));
     let v: serde_json::Value = serde_json::from_str(&std::fs::read_to_string(&json).unwrap()).unwrap();
-    assert_eq!(v["russian_roulette"], true);
+    assert_eq!(v["russian_roulette"], 4);
     assert_eq!(v["adaptive"]["min_spp"], 16);
     let samples = v["samples"].as_u64().unwrap();
     assert!(samples >= 16 * 9 * 16 && samples < 16 * 9 * 64, "{samples}");

@@ -29,6 +29,8 @@ fn opts(kernel: KernelKind, rr: bool, adaptive: Option<Adaptive>) -> RenderOptio
         threads: Some(2),
         tile: 16,
         rr,
+        // Early, so that the roulette decides much of the image.
+        rr_after: 2,
         adaptive,
     }
 }
@@ -80,11 +82,11 @@ fn pixel_stats(prep: &Prepared, n: u32) -> Vec<[(f64, f64); 3]> {
 /// renders with independent seeds are compared pixel by pixel (a z-test per
 /// pixel and channel, Bonferroni-corrected to a 1e-3 family-wise level) and
 /// as a whole (the mean difference over all pixels, |z| < 4).
-fn roulette_keeps_the_mean(scene: &str, w: u32, h: u32, n: u32) {
+fn roulette_keeps_the_mean(scene: &str, w: u32, h: u32, n: u32, after: u32) {
     let sc = preset(scene).unwrap();
     let plain = Prepared::new(&sc, settings(w, h, n, 11)).unwrap();
     let mut rr = Prepared::new(&sc, settings(w, h, n, 12)).unwrap();
-    rr.estimator.russian_roulette = true;
+    rr.estimator.russian_roulette = Some(after);
     let a = pixel_stats(&plain, n);
     let b = pixel_stats(&rr, n);
     let tests = (a.len() * 3) as f64;
@@ -144,8 +146,11 @@ fn erfc(x: f64) -> f64 {
 
 #[test]
 fn roulette_is_unbiased_on_diffuse_glass_and_metal() {
-    roulette_keeps_the_mean("ch07-diffuse", 24, 14, 512);
-    roulette_keeps_the_mean("ch09-glass", 24, 14, 512);
+    // Early roulette (after the camera ray and after 2 rays) makes the test
+    // sensitive: most of the image goes through the roulette. And the default.
+    roulette_keeps_the_mean("ch07-diffuse", 24, 14, 512, 1);
+    roulette_keeps_the_mean("ch09-glass", 24, 14, 512, 2);
+    roulette_keeps_the_mean("ch09-glass", 24, 14, 256, rtow::estimator::ROULETTE_AFTER_RAYS);
 }
 
 #[test]
@@ -160,7 +165,8 @@ fn roulette_traces_fewer_rays_and_changes_the_noise() {
         plain.stats.rays
     );
     assert_ne!(rr.image, plain.image);
-    assert!(rr.stats.russian_roulette && !plain.stats.russian_roulette);
+    assert_eq!(rr.stats.russian_roulette, Some(2));
+    assert_eq!(plain.stats.russian_roulette, None);
 }
 
 #[test]
@@ -173,6 +179,15 @@ fn roulette_scalar_and_simd_agree_bit_for_bit() {
         let b = run(scene, s, opts(KernelKind::Simd, true, None));
         assert_same(&a, &b, scene);
     }
+    // The default start.
+    let s = settings(40, 23, 8, 5);
+    let dflt = |kernel| RenderOptions {
+        rr_after: rtow::estimator::ROULETTE_AFTER_RAYS,
+        ..opts(kernel, true, None)
+    };
+    let a = run("ch09-glass", s, dflt(KernelKind::Scalar));
+    let b = run("ch09-glass", s, dflt(KernelKind::Simd));
+    assert_same(&a, &b, "default roulette start");
 }
 
 #[test]
