@@ -275,6 +275,9 @@ pub struct Report {
     pub seed: u64,
     /// How the reference was made (for the outputs).
     pub reference: String,
+    /// Renders per measurement (the fastest counts) and worker threads.
+    pub repeat: u32,
+    pub threads: usize,
     /// The reference, when this run rendered it (written out for reuse with `--reference`).
     pub rendered_reference: Option<Image>,
     pub rows: Vec<Row>,
@@ -333,6 +336,7 @@ pub fn run(scene: &Scene, name: &str, cfg: &Config, mut on: impl FnMut(Event)) -
         }
     };
     let mut rows = Vec::new();
+    let mut threads = 0;
     for &kernel in &cfg.kernels {
         for &variant in &cfg.variants {
             for &spp in &cfg.spp_list {
@@ -362,6 +366,7 @@ pub fn run(scene: &Scene, name: &str, cfg: &Config, mut on: impl FnMut(Event)) -
                     best = Some(r);
                 }
                 let r = best.expect("repeat is at least 1");
+                threads = r.stats.threads;
                 let m = error_metrics(&r.image, &reference);
                 let row = Row {
                     kernel,
@@ -387,6 +392,8 @@ pub fn run(scene: &Scene, name: &str, cfg: &Config, mut on: impl FnMut(Event)) -
         max_depth: s.max_depth,
         seed: s.seed,
         reference: ref_text,
+        repeat: cfg.repeat,
+        threads,
         rendered_reference: rendered.then_some(reference),
         rows,
     })
@@ -452,6 +459,15 @@ impl Curve {
     }
 }
 
+/// What a curve's horizontal axis measures. Seconds are what a user waits,
+/// but on a shared machine they are noisy; rays are exact and repeatable (and
+/// ignore differences in the cost of a ray, e.g. between kernels).
+#[derive(Clone, Copy, Debug, PartialEq, Eq)]
+pub enum Cost {
+    Seconds,
+    Rays,
+}
+
 /// How `other` compares to `base`.
 #[derive(Clone, Debug, PartialEq)]
 pub struct Comparison {
@@ -497,14 +513,23 @@ pub fn compare(base: &Curve, other: &Curve) -> Comparison {
 impl Report {
     /// One curve per (kernel, variant), in the order measured.
     pub fn curves(&self) -> Vec<Curve> {
+        self.curves_by(Cost::Seconds)
+    }
+
+    /// One curve per (kernel, variant) with `cost` on the horizontal axis.
+    pub fn curves_by(&self, cost: Cost) -> Vec<Curve> {
         let mut out: Vec<Curve> = Vec::new();
         for r in &self.rows {
             let label = r.label();
+            let x = match cost {
+                Cost::Seconds => r.seconds,
+                Cost::Rays => r.rays as f64,
+            };
             match out.iter_mut().find(|c| c.label == label) {
-                Some(c) => c.points.push((r.seconds, r.rmse)),
+                Some(c) => c.points.push((x, r.rmse)),
                 None => out.push(Curve {
                     label,
-                    points: vec![(r.seconds, r.rmse)],
+                    points: vec![(x, r.rmse)],
                 }),
             }
         }
@@ -514,7 +539,12 @@ impl Report {
     /// Every configuration against the first one, and, for every other kernel,
     /// its variants against its own first variant.
     pub fn comparisons(&self) -> Vec<Comparison> {
-        let curves = self.curves();
+        self.comparisons_by(Cost::Seconds)
+    }
+
+    /// [`Report::comparisons`] with `cost` in place of seconds.
+    pub fn comparisons_by(&self, cost: Cost) -> Vec<Comparison> {
+        let curves = self.curves_by(cost);
         let mut out = Vec::new();
         let Some(first) = curves.first() else {
             return out;
@@ -568,18 +598,24 @@ impl Report {
 
     /// Lines describing the comparisons, for the terminal and the markdown file.
     pub fn comparison_lines(&self) -> Vec<String> {
+        let by_rays = self.comparisons_by(Cost::Rays);
         self.comparisons()
             .iter()
-            .map(|c| {
+            .zip(&by_rays)
+            .map(|(c, r)| {
                 let ee = match c.equal_error {
-                    Some((e, x)) => format!("equal error (RMSE {e:.4}): {x:.2}x"),
-                    None => "equal error: curves do not overlap".into(),
+                    Some((e, x)) => format!("equal error (RMSE {e:.4}): {x:.2}x in time"),
+                    None => "equal error: curves do not overlap in time".into(),
+                };
+                let er = match r.equal_error {
+                    Some((e, x)) => format!("{x:.2}x in rays (RMSE {e:.4})"),
+                    None => "curves do not overlap in rays".into(),
                 };
                 let et = match c.equal_time {
                     Some((t, x)) => format!("equal time ({t:.3} s): MSE ratio {x:.2}x"),
                     None => "equal time: time ranges do not overlap".into(),
                 };
-                format!("{} vs {}: {ee}; {et}", c.other, c.base)
+                format!("{} vs {}: {ee}, {er}; {et}", c.other, c.base)
             })
             .collect()
     }
@@ -606,8 +642,10 @@ impl Report {
 
     pub fn markdown(&self) -> String {
         let mut s = format!(
-            "# Run time against error: {} ({}x{}, depth {}, seed {})\n\nReference: {}.\n\n",
-            self.scene, self.width, self.height, self.max_depth, self.seed, self.reference
+            "# Run time against error: {} ({}x{}, depth {}, seed {})\n\nReference: {}. Seconds: wall time of the render \
+             (scene preparation apart), the fastest of {} run(s), {} thread(s). Error against the reference: RMSE and relMSE \
+             of the linear image; mean signed rel. error = mean of (x - r) / (r + 0.01), zero in expectation without bias.\n\n",
+            self.scene, self.width, self.height, self.max_depth, self.seed, self.reference, self.repeat, self.threads
         );
         s += "| kernel | variant | spp | seconds | Mrays/s | samples/px | RMSE | relMSE | mean signed rel. error | efficiency 1/(MSE s) |\n";
         s += "|---|---|---:|---:|---:|---:|---:|---:|---:|---:|\n";
@@ -630,7 +668,9 @@ impl Report {
         }
         let lines = self.comparison_lines();
         if !lines.is_empty() {
-            s += "\nSpeedups (log-log interpolation between measured sample counts):\n\n";
+            s +=
+                "\nSpeedups (log-log interpolation between measured sample counts; in rays: the same with rays traced \
+                  in place of seconds):\n\n";
             for l in lines {
                 let _ = writeln!(s, "- {l}");
             }
@@ -819,6 +859,55 @@ mod tests {
         // Disjoint time ranges: no equal-time comparison.
         let later = curve("later", 1e-3, &[10.0, 20.0]);
         assert_eq!(compare(&slow, &later).equal_time, None);
+    }
+
+    #[test]
+    fn report_compares_in_seconds_and_in_rays() {
+        // `simd/rr` traces half the rays for the same errors but takes as long.
+        let row = |variant: Variant, spp: u32, rays: u64, rmse: f64| Row {
+            kernel: KernelKind::Simd,
+            variant,
+            spp,
+            seconds: spp as f64,
+            rays,
+            samples: 0,
+            rmse,
+            relmse: 0.0,
+            mean_rel_error: 0.0,
+            image_hash: String::new(),
+        };
+        let rr = Variant::parse("rr").unwrap();
+        let rows = vec![
+            row(Variant::PLAIN, 4, 400, 0.5),
+            row(Variant::PLAIN, 16, 1600, 0.25),
+            row(rr, 4, 200, 0.5),
+            row(rr, 16, 800, 0.25),
+        ];
+        let report = Report {
+            scene: "s".into(),
+            width: 1,
+            height: 1,
+            max_depth: 1,
+            seed: 0,
+            reference: String::new(),
+            repeat: 1,
+            threads: 1,
+            rendered_reference: None,
+            rows,
+        };
+        let t = report.comparisons_by(Cost::Seconds);
+        let r = report.comparisons_by(Cost::Rays);
+        assert_eq!((t.len(), r.len()), (1, 1));
+        assert_eq!((t[0].base.as_str(), t[0].other.as_str()), ("simd/plain", "simd/rr"));
+        assert!((t[0].equal_error.unwrap().1 - 1.0).abs() < 1e-12);
+        assert!((r[0].equal_error.unwrap().1 - 2.0).abs() < 1e-12);
+        let line = &report.comparison_lines()[0];
+        assert!(
+            line.contains("1.00x in time") && line.contains("2.00x in rays"),
+            "{line}"
+        );
+        assert!(report.svg().unwrap().contains("simd/rr"));
+        assert_eq!(report.csv().lines().count(), 5);
     }
 
     #[test]
