@@ -136,7 +136,7 @@ pub struct Config {
     pub reference: Reference,
     pub threads: Option<usize>,
     pub tile: u32,
-    /// Renders per measurement; the fastest counts (the image is the same every time).
+    /// Passes over every measurement; the fastest time counts (the image is the same every time).
     pub repeat: u32,
     /// First adaptive decision point.
     pub adaptive_min: u32,
@@ -335,8 +335,11 @@ pub fn run(scene: &Scene, name: &str, cfg: &Config, mut on: impl FnMut(Event)) -
             (r.image, format!("{n} spp, seed {seed} (simd kernel, plain)"), true)
         }
     };
-    let mut rows = Vec::new();
-    let mut threads = 0;
+    // Every measurement once per pass, `repeat` passes: a change of load on
+    // the machine then falls on every configuration alike instead of on
+    // whichever ran at the time. The fastest time counts; the image (and so
+    // the error) is the same in every pass.
+    let mut plan = Vec::new();
     for &kernel in &cfg.kernels {
         for &variant in &cfg.variants {
             for &spp in &cfg.spp_list {
@@ -354,21 +357,19 @@ pub fn run(scene: &Scene, name: &str, cfg: &Config, mut on: impl FnMut(Event)) -
                     adaptive,
                     ..base
                 };
-                let mut best: Option<crate::render::Rendered> = None;
-                for _ in 0..cfg.repeat {
-                    let r = render(scene, Settings { spp, ..s }, opts, None)?;
-                    if let Some(b) = &best {
-                        debug_assert_eq!(b.stats.image_hash, r.stats.image_hash);
-                        if b.stats.seconds <= r.stats.seconds {
-                            continue;
-                        }
-                    }
-                    best = Some(r);
-                }
-                let r = best.expect("repeat is at least 1");
-                threads = r.stats.threads;
+                plan.push((kernel, variant, spp, opts));
+            }
+        }
+    }
+    let mut rows: Vec<Row> = Vec::with_capacity(plan.len());
+    let mut threads = 0;
+    for pass in 0..cfg.repeat {
+        for (i, &(kernel, variant, spp, opts)) in plan.iter().enumerate() {
+            let r = render(scene, Settings { spp, ..s }, opts, None)?;
+            threads = r.stats.threads;
+            if pass == 0 {
                 let m = error_metrics(&r.image, &reference);
-                let row = Row {
+                rows.push(Row {
                     kernel,
                     variant,
                     spp,
@@ -379,9 +380,20 @@ pub fn run(scene: &Scene, name: &str, cfg: &Config, mut on: impl FnMut(Event)) -
                     relmse: m.relmse,
                     mean_rel_error: m.mean_rel_error,
                     image_hash: r.stats.image_hash,
-                };
-                on(Event::Measured(&row));
-                rows.push(row);
+                });
+            } else {
+                let row = &mut rows[i];
+                if row.image_hash != r.stats.image_hash {
+                    return Err(Error::Input(format!(
+                        "{} at {spp} spp rendered a different image on pass {}: renders must be deterministic",
+                        row.label(),
+                        pass + 1
+                    )));
+                }
+                row.seconds = row.seconds.min(r.stats.seconds);
+            }
+            if pass + 1 == cfg.repeat {
+                on(Event::Measured(&rows[i]));
             }
         }
     }

@@ -168,7 +168,8 @@ struct ConvergeArgs {
     /// Tile edge in pixels
     #[arg(long, default_value_t = 16)]
     tile: u32,
-    /// Render each measurement N times and keep the fastest (the image is the same).
+    /// Render every measurement N times, in N passes over all of them, and keep the fastest
+    /// time (the image is the same).
     #[arg(long, value_name = "N", default_value_t = 1)]
     repeat: u32,
     /// Adaptive variants decide after N, 2N, 4N, ... samples.

@@ -103,6 +103,8 @@ fn converge_writes_table_plot_and_reference_and_reuses_the_reference() {
         "1,4,16",
         "--reference",
         reference.to_str().unwrap(),
+        "--repeat",
+        "2",
         "--out",
         again.to_str().unwrap(),
     ];
