@@ -140,6 +140,9 @@ pub struct Config {
     pub repeat: u32,
     /// First adaptive decision point.
     pub adaptive_min: u32,
+    /// Also compare every configuration at the error the baseline reaches at
+    /// this sample count (one of `spp_list`).
+    pub at_spp: Option<u32>,
 }
 
 impl Config {
@@ -168,6 +171,11 @@ impl Config {
         }
         if self.spp_list.windows(2).any(|w| w[0] >= w[1]) {
             return Err(Error::invalid("--spp-list", "sample counts must increase strictly"));
+        }
+        if let Some(n) = self.at_spp {
+            if !self.spp_list.contains(&n) {
+                return Err(Error::invalid("--at-spp", format!("{n} is not one of --spp-list")));
+            }
         }
         if self.repeat == 0 {
             return Err(Error::invalid("--repeat", "must be at least 1"));
@@ -278,6 +286,8 @@ pub struct Report {
     /// Renders per measurement (the fastest counts) and worker threads.
     pub repeat: u32,
     pub threads: usize,
+    /// See [`Config::at_spp`].
+    pub at_spp: Option<u32>,
     /// The reference, when this run rendered it (written out for reuse with `--reference`).
     pub rendered_reference: Option<Image>,
     pub rows: Vec<Row>,
@@ -406,6 +416,7 @@ pub fn run(scene: &Scene, name: &str, cfg: &Config, mut on: impl FnMut(Event)) -
         reference: ref_text,
         repeat: cfg.repeat,
         threads,
+        at_spp: cfg.at_spp,
         rendered_reference: rendered.then_some(reference),
         rows,
     })
@@ -632,6 +643,41 @@ impl Report {
             .collect()
     }
 
+    /// With `at_spp` set: what every other configuration needs to reach the
+    /// RMSE that the baseline (the first configuration) measured at `at_spp`.
+    pub fn reach_lines(&self) -> Vec<String> {
+        let Some(n) = self.at_spp else {
+            return vec![];
+        };
+        let (by_time, by_rays) = (self.curves(), self.curves_by(Cost::Rays));
+        let Some(base) = by_time.first() else {
+            return vec![];
+        };
+        let Some(b) = self.rows.iter().find(|r| r.label() == base.label && r.spp == n) else {
+            return vec![];
+        };
+        let mut out = vec![format!(
+            "to reach the RMSE of {} at {n} spp ({:.5}, {:.3} s, {:.2}M rays):",
+            b.label(),
+            b.rmse,
+            b.seconds,
+            b.rays as f64 / 1e6
+        )];
+        for (ct, cr) in by_time.iter().zip(&by_rays).skip(1) {
+            out.push(match (ct.time_at(b.rmse), cr.time_at(b.rmse)) {
+                (Some(t), Some(r)) => format!(
+                    "  {}: {t:.3} s ({:.2}x the time), {:.2}M rays ({:.2}x the rays)",
+                    ct.label,
+                    t / b.seconds,
+                    r / 1e6,
+                    r / b.rays as f64
+                ),
+                _ => format!("  {}: does not reach it at the measured sample counts", ct.label),
+            });
+        }
+        out
+    }
+
     /// Kernels that rendered the same variant and spp to different images
     /// (they must not: both kernels are one estimator).
     pub fn kernel_mismatches(&self) -> Vec<String> {
@@ -677,6 +723,13 @@ impl Report {
                 r.mean_rel_error,
                 r.efficiency()
             );
+        }
+        let reach = self.reach_lines();
+        if let Some((head, rest)) = reach.split_first() {
+            let _ = writeln!(s, "\n{}\n", head.replace("to reach", "To reach"));
+            for l in rest {
+                let _ = writeln!(s, "- {}", l.trim_start());
+            }
         }
         let lines = self.comparison_lines();
         if !lines.is_empty() {
@@ -904,6 +957,7 @@ mod tests {
             reference: String::new(),
             repeat: 1,
             threads: 1,
+            at_spp: Some(16),
             rendered_reference: None,
             rows,
         };
@@ -917,6 +971,18 @@ mod tests {
         assert!(
             line.contains("1.00x in time") && line.contains("2.00x in rays"),
             "{line}"
+        );
+        // At the baseline's 16-spp error, rr takes the same time and half the rays.
+        let reach = report.reach_lines();
+        assert!(reach[0].contains("simd/plain at 16 spp (0.25000"), "{reach:?}");
+        assert!(
+            reach[1].contains("1.00x the time") && reach[1].contains("0.50x the rays"),
+            "{reach:?}"
+        );
+        assert!(
+            report.markdown().contains("- simd/rr: 16.000 s"),
+            "{}",
+            report.markdown()
         );
         assert!(report.svg().unwrap().contains("simd/rr"));
         assert_eq!(report.csv().lines().count(), 5);
@@ -990,6 +1056,7 @@ mod tests {
             tile: 16,
             repeat: 1,
             adaptive_min: 16,
+            at_spp: None,
         };
         good.validate().unwrap();
         let cases: Vec<(&str, Box<dyn Fn(&mut Config)>)> = vec![
@@ -1008,6 +1075,7 @@ mod tests {
             ("--spp-list", Box::new(|c| c.spp_list = vec![4, 2])),
             ("--reference-spp", Box::new(|c| c.reference = Reference::Spp(0))),
             ("--repeat", Box::new(|c| c.repeat = 0)),
+            ("--at-spp", Box::new(|c| c.at_spp = Some(3))),
             (
                 "--adaptive-min",
                 Box::new(|c| {

@@ -175,6 +175,10 @@ struct ConvergeArgs {
     /// Adaptive variants decide after N, 2N, 4N, ... samples.
     #[arg(long, value_name = "N", default_value_t = rtow::estimator::ADAPTIVE_MIN_SPP)]
     adaptive_min: u32,
+    /// Also report what every configuration needs to reach the error of the baseline at N spp
+    /// (N from --spp-list).
+    #[arg(long, value_name = "N")]
+    at_spp: Option<u32>,
 }
 
 /// `println!` that ignores a closed stdout (e.g. piped into `head`): the
@@ -222,6 +226,7 @@ fn cmd_converge(a: ConvergeArgs) -> Result<()> {
         tile: a.tile,
         repeat: a.repeat,
         adaptive_min: a.adaptive_min,
+        at_spp: a.at_spp,
     };
     cfg.validate()?;
     if a.out.exists() && !a.out.is_dir() {
@@ -273,7 +278,7 @@ fn cmd_converge(a: ConvergeArgs) -> Result<()> {
             )
         }
     })?;
-    for l in report.comparison_lines() {
+    for l in report.comparison_lines().iter().chain(&report.reach_lines()) {
         say!("{l}");
     }
     for p in report.write(&a.out)? {
