@@ -422,6 +422,38 @@ pub fn run(scene: &Scene, name: &str, cfg: &Config, mut on: impl FnMut(Event)) -
     })
 }
 
+/// Axis ticks of a log scale: 1, 2 and 5 times the powers of ten in `lo..=hi`.
+fn ticks(lo: f64, hi: f64) -> Vec<f64> {
+    let mut out = Vec::new();
+    if !(lo > 0.0 && hi >= lo && hi.is_finite()) {
+        return out;
+    }
+    let mut d = lo.log10().floor() as i32;
+    while d <= hi.log10().ceil() as i32 {
+        for m in [1.0, 2.0, 5.0] {
+            let v = m * 10f64.powi(d);
+            if v >= lo && v <= hi {
+                out.push(v);
+            }
+        }
+        d += 1;
+    }
+    if out.len() < 2 {
+        out = vec![lo, hi];
+    }
+    out
+}
+
+/// A tick value with as many decimals as it needs (0.005, 0.02, 1, 20).
+fn tick_label(v: f64) -> String {
+    let decimals = if v > 0.0 {
+        (-v.log10().floor()).max(0.0) as usize
+    } else {
+        0
+    };
+    format!("{v:.decimals$}")
+}
+
 /// A configuration's measurements as (seconds, RMSE) points, in sample-count order.
 #[derive(Clone, Debug)]
 pub struct Curve {
@@ -777,16 +809,17 @@ impl Report {
                 .margin(12)
                 .x_label_area_size(44)
                 .y_label_area_size(70)
-                .build_cartesian_2d((t0..t1).log_scale(), (e0..e1).log_scale())
+                .build_cartesian_2d(
+                    (t0..t1).log_scale().with_key_points(ticks(t0, t1)),
+                    (e0..e1).log_scale().with_key_points(ticks(e0, e1)),
+                )
                 .map_err(|e| plot_err(&e))?;
             chart
                 .configure_mesh()
-                .x_labels(12)
-                .y_labels(12)
                 .x_desc("render time (s)")
                 .y_desc("RMSE vs reference")
-                .x_label_formatter(&|v| format!("{v:.3}"))
-                .y_label_formatter(&|v| format!("{v:.4}"))
+                .x_label_formatter(&|v| tick_label(*v))
+                .y_label_formatter(&|v| tick_label(*v))
                 .draw()
                 .map_err(|e| plot_err(&e))?;
             let palette = [
@@ -1029,6 +1062,16 @@ mod tests {
         assert!((m.mean_rel_error - want_signed).abs() < 1e-5);
         let zero = error_metrics(&r, &r);
         assert_eq!((zero.rmse, zero.relmse, zero.mean_rel_error), (0.0, 0.0, 0.0));
+    }
+
+    #[test]
+    fn log_ticks() {
+        assert_eq!(ticks(0.003, 0.06), vec![0.005, 0.01, 0.02, 0.05]);
+        assert_eq!(ticks(0.9, 25.0), vec![1.0, 2.0, 5.0, 10.0, 20.0]);
+        assert!(ticks(0.0, 1.0).is_empty());
+        assert_eq!(ticks(0.003, 0.0045), vec![0.003, 0.0045]);
+        let labels: Vec<String> = [0.005, 0.02, 1.0, 20.0].iter().map(|&v| tick_label(v)).collect();
+        assert_eq!(labels, ["0.005", "0.02", "1", "20"]);
     }
 
     #[test]
