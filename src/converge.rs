@@ -779,11 +779,12 @@ impl Report {
     pub fn svg(&self) -> Result<String> {
         use plotters::prelude::*;
         let curves = self.curves();
-        let pts: Vec<(f64, f64)> = curves.iter().flat_map(|c| c.usable()).collect();
-        if pts.is_empty() {
-            return Err(Error::Input(
-                "nothing to plot: no measurement has a positive time and error".into(),
-            ));
+        let mut pts: Vec<(f64, f64)> = curves.iter().flat_map(|c| c.usable()).collect();
+        let empty = pts.is_empty();
+        if empty {
+            // Nothing to draw (e.g. a scene without noise: every error is 0);
+            // still write a plot that says so rather than fail after measuring.
+            pts = vec![(1e-3, 1e-3), (1.0, 1.0)];
         }
         let bound = |f: fn(&(f64, f64)) -> f64, lo: bool| {
             let v = pts.iter().map(f);
@@ -801,8 +802,15 @@ impl Report {
             let plot_err = |e: &dyn std::fmt::Display| Error::Input(format!("plot: {e}"));
             root.fill(&WHITE).map_err(|e| plot_err(&e))?;
             let title = format!(
-                "{} {}x{}: RMSE against render time (log-log)",
-                self.scene, self.width, self.height
+                "{} {}x{}: RMSE against render time (log-log){}",
+                self.scene,
+                self.width,
+                self.height,
+                if empty {
+                    ": no measurement has a positive error"
+                } else {
+                    ""
+                }
             );
             let mut chart = ChartBuilder::on(&root)
                 .caption(title, ("sans-serif", 20))

@@ -102,7 +102,7 @@ impl Adaptive {
     /// before it: the kernels render samples `done..round_end(done)` and then
     /// (if more remain) ask [`Adaptive::converged`].
     pub fn round_end(&self, done: u32, spp: u32) -> u32 {
-        let mut c = self.min_spp as u64;
+        let mut c = self.min_spp.max(1) as u64;
         while c <= done as u64 {
             c *= 2;
         }

@@ -174,6 +174,15 @@ fn bad_flags_are_clear_errors() {
     rtow::Image::new(3, 2).save(&r, 1.0).unwrap();
     fails_naming(&to_refs(&conv(&["--reference", r.to_str().unwrap()])), "--reference", 2);
 
+    // A float image whose header claims more pixels than fit anywhere.
+    let huge = dir.path().join("huge.pfm");
+    std::fs::write(&huge, b"PF\n100000 100000\n-1.0\n\0\0\0\0").unwrap();
+    fails_naming(
+        &to_refs(&conv(&["--reference", huge.to_str().unwrap()])),
+        "--reference",
+        2,
+    );
+
     // --out that is a file.
     let f = dir.path().join("file");
     std::fs::write(&f, b"x").unwrap();
@@ -247,4 +256,29 @@ fn render_flags_report_the_estimator() {
     assert_eq!(v["adaptive"]["min_spp"], 16);
     let samples = v["samples"].as_u64().unwrap();
     assert!(samples >= 16 * 9 * 16 && samples < 16 * 9 * 64, "{samples}");
+}
+
+#[test]
+fn a_scene_without_noise_still_gets_its_outputs() {
+    // Chapter 1's gradient traces no rays: every error is exactly 0.
+    let dir = tempfile::tempdir().unwrap();
+    let out = dir.path().join("g");
+    let o = rtow(&[
+        "converge",
+        "ch01-gradient",
+        "--width",
+        "8",
+        "--height",
+        "4",
+        "--spp-list",
+        "1,2",
+        "--reference-spp",
+        "4",
+        "--out",
+        out.to_str().unwrap(),
+    ]);
+    assert!(o.status.success(), "{}", text(&o.stderr));
+    let svg = std::fs::read_to_string(out.join("ch01-gradient.svg")).unwrap();
+    assert!(svg.contains("no measurement has a positive error"));
+    assert!(out.join("ch01-gradient.csv").exists());
 }
