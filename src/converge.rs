@@ -1110,7 +1110,8 @@ mod tests {
             at_spp: None,
         };
         good.validate().unwrap();
-        let cases: Vec<(&str, Box<dyn Fn(&mut Config)>)> = vec![
+        type Break = Box<dyn Fn(&mut Config)>;
+        let cases: Vec<(&str, Break)> = vec![
             ("--kernels", Box::new(|c| c.kernels.clear())),
             (
                 "--kernels",

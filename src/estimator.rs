@@ -195,8 +195,8 @@ mod tests {
                     assert_eq!(s.x.to_bits(), w.x.to_array()[k].to_bits());
                     assert_eq!(s.y.to_bits(), w.y.to_array()[k].to_bits());
                     assert_eq!(s.z.to_bits(), w.z.to_array()[k].to_bits());
-                    for c in 0..3 {
-                        mean[k][c] += s.to_array()[c] as f64 / n as f64;
+                    for (m, v) in mean[k].iter_mut().zip(s.to_array()) {
+                        *m += v as f64 / n as f64;
                     }
                 }
             }

@@ -255,7 +255,7 @@ fn render_flags_report_the_estimator() {
     assert_eq!(v["russian_roulette"], 4);
     assert_eq!(v["adaptive"]["min_spp"], 16);
     let samples = v["samples"].as_u64().unwrap();
-    assert!(samples >= 16 * 9 * 16 && samples < 16 * 9 * 64, "{samples}");
+    assert!((16 * 9 * 16..16 * 9 * 64).contains(&samples), "{samples}");
 }
 
 #[test]
