@@ -19,7 +19,7 @@
 
 use rtow::estimator::RELATIVE_ERROR_FLOOR;
 use rtow::kernel::{scalar, Counters};
-use rtow::plan::Prepared;
+use rtow::plan::{AccelChoice, Prepared};
 use rtow::sampling::ScalarStream;
 use rtow::scene::preset;
 use rtow::Settings;
@@ -40,12 +40,7 @@ fn main() {
             std::process::exit(2)
         })
     };
-    let (w, h, spp, seed) = (
-        num(1, "200") as u32,
-        num(2, "113") as u32,
-        num(3, "128") as u32,
-        num(4, "77"),
-    );
+    let (w, h, spp, seed) = (num(1, "200") as u32, num(2, "113") as u32, num(3, "128") as u32, num(4, "77"));
     let Some(scene) = preset(&name) else {
         eprintln!("error: unknown preset '{name}'");
         std::process::exit(2)
@@ -54,14 +49,8 @@ fn main() {
         eprintln!("error: SPP must be at least 2 (a variance needs two samples)");
         std::process::exit(2)
     }
-    let settings = Settings {
-        width: w,
-        height: h,
-        spp,
-        max_depth: 50,
-        seed,
-    };
-    let prep = match Prepared::new(&scene, settings) {
+    let settings = Settings { width: w, height: h, spp, max_depth: 50, seed };
+    let prep = match Prepared::new(&scene, settings, AccelChoice::Auto) {
         Ok(p) => p,
         Err(e) => {
             eprintln!("error: {e}");
@@ -83,17 +72,9 @@ fn main() {
                 }
             }
             let n = spp as f64;
-            let var = m
-                .iter()
-                .map(|[s1, s2]| ((s2 - s1 * s1 / n) / (n - 1.0)).max(0.0))
-                .sum::<f64>()
-                / 3.0;
+            let var = m.iter().map(|[s1, s2]| ((s2 - s1 * s1 / n) / (n - 1.0)).max(0.0)).sum::<f64>() / 3.0;
             let mean = m.iter().map(|[s1, _]| s1 / n).sum::<f64>() / 3.0;
-            pixels.push(Pixel {
-                var,
-                mean,
-                cost: c.rays as f64 / n,
-            });
+            pixels.push(Pixel { var, mean, cost: c.rays as f64 / n });
         }
     }
     let p = pixels.len() as f64;
@@ -111,10 +92,7 @@ fn main() {
     vars.sort_by(f64::total_cmp);
     let total: f64 = vars.iter().sum();
     let top = |f: f64| vars[vars.len() - (f * p) as usize..].iter().sum::<f64>() / total;
-    println!(
-        "{name} {w}x{h}, {spp} paths per pixel, seed {seed}: mean rays per path {:.3}",
-        e(&|q| q.cost)
-    );
+    println!("{name} {w}x{h}, {spp} paths per pixel, seed {seed}: mean rays per path {:.3}", e(&|q| q.cost));
     println!(
         "share of the summed per-pixel variance in the noisiest 1% / 10% / 50% of pixels: {:.1}% / {:.1}% / {:.1}%",
         100.0 * top(0.01),
@@ -123,12 +101,6 @@ fn main() {
     );
     println!("rays for the same MSE, relative to uniform sampling (ideal allocations, exact variances):");
     println!("  MSE-optimal (n ~ sigma / sqrt(cost)):      {:.3}", optimal / uniform);
-    println!(
-        "  equal absolute error (n ~ sigma^2):        {:.3}",
-        equal_abs / uniform
-    );
-    println!(
-        "  equal relative error (n ~ sigma^2 / m^2):  {:.3}",
-        equal_rel / uniform
-    );
+    println!("  equal absolute error (n ~ sigma^2):        {:.3}", equal_abs / uniform);
+    println!("  equal relative error (n ~ sigma^2 / m^2):  {:.3}", equal_rel / uniform);
 }

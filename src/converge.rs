@@ -44,10 +44,7 @@ pub struct Variant {
 }
 
 impl Variant {
-    pub const PLAIN: Variant = Variant {
-        rr: None,
-        adaptive: None,
-    };
+    pub const PLAIN: Variant = Variant { rr: None, adaptive: None };
 
     /// Parses `plain`, `rr`, `rr:N`, `adaptive`, `adaptive:T` or a
     /// `+`-joined combination such as `rr+adaptive:0.05`.
@@ -238,11 +235,7 @@ pub fn error_metrics(image: &Image, reference: &Image) -> Metrics {
         }
     }
     let n = n.max(1) as f64;
-    Metrics {
-        rmse: (se / n).sqrt(),
-        relmse: rel / n,
-        mean_rel_error: signed / n,
-    }
+    Metrics { rmse: (se / n).sqrt(), relmse: rel / n, mean_rel_error: signed / n }
 }
 
 /// One measured render.
@@ -305,12 +298,8 @@ pub enum Event<'a> {
 pub fn run(scene: &Scene, name: &str, cfg: &Config, mut on: impl FnMut(Event)) -> Result<Report> {
     cfg.validate()?;
     let s = cfg.settings;
-    let base = RenderOptions {
-        kernel: KernelKind::Simd,
-        threads: cfg.threads,
-        tile: cfg.tile,
-        ..RenderOptions::default()
-    };
+    let base =
+        RenderOptions { kernel: KernelKind::Simd, threads: cfg.threads, tile: cfg.tile, ..RenderOptions::default() };
     let (reference, ref_text, rendered) = match &cfg.reference {
         Reference::File(path) => {
             let img = Image::load_float(path).map_err(|e| Error::invalid("--reference", e.to_string()))?;
@@ -328,10 +317,7 @@ pub fn run(scene: &Scene, name: &str, cfg: &Config, mut on: impl FnMut(Event)) -
                 ));
             }
             if img.data.iter().flatten().any(|v| !v.is_finite()) {
-                return Err(Error::invalid(
-                    "--reference",
-                    format!("{} has NaN or infinite values", path.display()),
-                ));
+                return Err(Error::invalid("--reference", format!("{} has NaN or infinite values", path.display())));
             }
             (img, format!("{}", path.display()), false)
         }
@@ -339,9 +325,7 @@ pub fn run(scene: &Scene, name: &str, cfg: &Config, mut on: impl FnMut(Event)) -
             on(Event::ReferenceStart(*n));
             let seed = reference_seed(s.seed);
             let r = render(scene, Settings { spp: *n, seed, ..s }, base, None)?;
-            on(Event::ReferenceDone {
-                seconds: r.stats.seconds,
-            });
+            on(Event::ReferenceDone { seconds: r.stats.seconds });
             (r.image, format!("{n} spp, seed {seed} (simd kernel, plain)"), true)
         }
     };
@@ -446,11 +430,7 @@ fn ticks(lo: f64, hi: f64) -> Vec<f64> {
 
 /// A tick value with as many decimals as it needs (0.005, 0.02, 1, 20).
 fn tick_label(v: f64) -> String {
-    let decimals = if v > 0.0 {
-        (-v.log10().floor()).max(0.0) as usize
-    } else {
-        0
-    };
+    let decimals = if v > 0.0 { (-v.log10().floor()).max(0.0) as usize } else { 0 };
     format!("{v:.decimals$}")
 }
 
@@ -472,11 +452,7 @@ fn lerp_log(x: f64, (x0, y0): (f64, f64), (x1, y1): (f64, f64)) -> f64 {
 
 impl Curve {
     fn usable(&self) -> Vec<(f64, f64)> {
-        self.points
-            .iter()
-            .copied()
-            .filter(|&(t, e)| t > 0.0 && e > 0.0 && t.is_finite() && e.is_finite())
-            .collect()
+        self.points.iter().copied().filter(|&(t, e)| t > 0.0 && e > 0.0 && t.is_finite() && e.is_finite()).collect()
     }
 
     /// RMSE at `t` seconds, interpolated in log-log between the two measured
@@ -557,12 +533,7 @@ pub fn compare(base: &Curve, other: &Curve) -> Comparison {
         }
         _ => None,
     };
-    Comparison {
-        base: base.label.clone(),
-        other: other.label.clone(),
-        equal_error,
-        equal_time,
-    }
+    Comparison { base: base.label.clone(), other: other.label.clone(), equal_error, equal_time }
 }
 
 impl Report {
@@ -582,10 +553,7 @@ impl Report {
             };
             match out.iter_mut().find(|c| c.label == label) {
                 Some(c) => c.points.push((x, r.rmse)),
-                None => out.push(Curve {
-                    label,
-                    points: vec![(x, r.rmse)],
-                }),
+                None => out.push(Curve { label, points: vec![(x, r.rmse)] }),
             }
         }
         out
@@ -717,13 +685,7 @@ impl Report {
         for (i, a) in self.rows.iter().enumerate() {
             for b in &self.rows[i + 1..] {
                 if a.kernel != b.kernel && a.variant == b.variant && a.spp == b.spp && a.image_hash != b.image_hash {
-                    out.push(format!(
-                        "{} and {} differ at {} spp ({})",
-                        a.label(),
-                        b.label(),
-                        a.spp,
-                        a.variant.name()
-                    ));
+                    out.push(format!("{} and {} differ at {} spp ({})", a.label(), b.label(), a.spp, a.variant.name()));
                 }
             }
         }
@@ -806,11 +768,7 @@ impl Report {
                 self.scene,
                 self.width,
                 self.height,
-                if empty {
-                    ": no measurement has a positive error"
-                } else {
-                    ""
-                }
+                if empty { ": no measurement has a positive error" } else { "" }
             );
             let mut chart = ChartBuilder::on(&root)
                 .caption(title, ("sans-serif", 20))
@@ -848,9 +806,7 @@ impl Report {
                     .map_err(|e| plot_err(&e))?
                     .label(c.label.clone())
                     .legend(move |(x, y)| PathElement::new(vec![(x, y), (x + 20, y)], col.stroke_width(2)));
-                chart
-                    .draw_series(p.iter().map(|&q| Circle::new(q, 3, col.filled())))
-                    .map_err(|e| plot_err(&e))?;
+                chart.draw_series(p.iter().map(|&q| Circle::new(q, 3, col.filled()))).map_err(|e| plot_err(&e))?;
             }
             chart
                 .configure_series_labels()
@@ -868,20 +824,12 @@ impl Report {
     /// if missing), and `<scene>-reference.exr` if the run rendered its
     /// reference; returns their paths.
     pub fn write(&self, dir: &Path) -> Result<Vec<PathBuf>> {
-        std::fs::create_dir_all(dir).map_err(|e| Error::Output {
-            path: dir.to_path_buf(),
-            message: format!("--out: {e}"),
-        })?;
+        std::fs::create_dir_all(dir)
+            .map_err(|e| Error::Output { path: dir.to_path_buf(), message: format!("--out: {e}") })?;
         let stem: String = self
             .scene
             .chars()
-            .map(|c| {
-                if c.is_ascii_alphanumeric() || c == '-' || c == '_' {
-                    c
-                } else {
-                    '_'
-                }
-            })
+            .map(|c| if c.is_ascii_alphanumeric() || c == '-' || c == '_' { c } else { '_' })
             .collect();
         let svg = self.svg()?;
         let mut paths = Vec::new();
@@ -905,20 +853,14 @@ mod tests {
 
     fn curve(label: &str, c: f64, times: &[f64]) -> Curve {
         // An unbiased estimator: MSE = c / t.
-        Curve {
-            label: label.into(),
-            points: times.iter().map(|&t| (t, (c / t).sqrt())).collect(),
-        }
+        Curve { label: label.into(), points: times.iter().map(|&t| (t, (c / t).sqrt())).collect() }
     }
 
     #[test]
     fn variants_parse_and_name() {
         assert_eq!(Variant::parse("plain").unwrap(), Variant::PLAIN);
         assert_eq!(Variant::parse("rr").unwrap().name(), "rr");
-        assert_eq!(
-            Variant::parse("adaptive").unwrap().adaptive,
-            Some(DEFAULT_ADAPTIVE_THRESHOLD)
-        );
+        assert_eq!(Variant::parse("adaptive").unwrap().adaptive, Some(DEFAULT_ADAPTIVE_THRESHOLD));
         let v = Variant::parse("rr+adaptive:0.05").unwrap();
         assert_eq!((v.rr, v.adaptive), (Some(ROULETTE_AFTER_RAYS), Some(0.05)));
         assert_eq!(Variant::parse(&v.name()).unwrap(), v);
@@ -1009,58 +951,34 @@ mod tests {
         assert!((t[0].equal_error.unwrap().1 - 1.0).abs() < 1e-12);
         assert!((r[0].equal_error.unwrap().1 - 2.0).abs() < 1e-12);
         let line = &report.comparison_lines()[0];
-        assert!(
-            line.contains("1.00x in time") && line.contains("2.00x in rays"),
-            "{line}"
-        );
+        assert!(line.contains("1.00x in time") && line.contains("2.00x in rays"), "{line}");
         // At the baseline's 16-spp error, rr takes the same time and half the rays.
         let reach = report.reach_lines();
         assert!(reach[0].contains("simd/plain at 16 spp (0.25000"), "{reach:?}");
-        assert!(
-            reach[1].contains("1.00x the time") && reach[1].contains("0.50x the rays"),
-            "{reach:?}"
-        );
-        assert!(
-            report.markdown().contains("- simd/rr: 16.000 s"),
-            "{}",
-            report.markdown()
-        );
+        assert!(reach[1].contains("1.00x the time") && reach[1].contains("0.50x the rays"), "{reach:?}");
+        assert!(report.markdown().contains("- simd/rr: 16.000 s"), "{}", report.markdown());
         assert!(report.svg().unwrap().contains("simd/rr"));
         assert_eq!(report.csv().lines().count(), 5);
     }
 
     #[test]
     fn interpolation_is_log_log() {
-        let c = Curve {
-            label: "c".into(),
-            points: vec![(1.0, 1.0), (100.0, 0.01)],
-        };
+        let c = Curve { label: "c".into(), points: vec![(1.0, 1.0), (100.0, 0.01)] };
         assert!((c.error_at(10.0).unwrap() - 0.1).abs() < 1e-12);
         assert!((c.time_at(0.1).unwrap() - 10.0).abs() < 1e-9);
         assert_eq!(c.error_at(1000.0), None);
         assert_eq!(c.time_at(0.001), None);
         // A curve that flattens (adaptive sampling at its threshold) is read
         // at its first crossing.
-        let flat = Curve {
-            label: "f".into(),
-            points: vec![(1.0, 1.0), (2.0, 0.5), (4.0, 0.6), (8.0, 0.4)],
-        };
+        let flat = Curve { label: "f".into(), points: vec![(1.0, 1.0), (2.0, 0.5), (4.0, 0.6), (8.0, 0.4)] };
         assert_eq!(flat.time_at(0.5), Some(2.0));
         assert!(flat.time_at(0.55).unwrap() < 2.0);
     }
 
     #[test]
     fn metrics_of_known_images() {
-        let r = Image {
-            width: 2,
-            height: 1,
-            data: vec![[0.0, 0.0, 0.0], [1.0, 1.0, 1.0]],
-        };
-        let x = Image {
-            width: 2,
-            height: 1,
-            data: vec![[0.1, 0.1, 0.1], [1.0, 1.0, 1.3]],
-        };
+        let r = Image { width: 2, height: 1, data: vec![[0.0, 0.0, 0.0], [1.0, 1.0, 1.0]] };
+        let x = Image { width: 2, height: 1, data: vec![[0.1, 0.1, 0.1], [1.0, 1.0, 1.3]] };
         let m = error_metrics(&x, &r);
         let want = ((3.0 * 0.01 + 0.09) / 6.0f64).sqrt();
         assert!((m.rmse - want).abs() < 1e-6);
@@ -1092,13 +1010,7 @@ mod tests {
     #[test]
     fn bad_configs_name_their_flag() {
         let good = Config {
-            settings: Settings {
-                width: 8,
-                height: 4,
-                spp: 1,
-                max_depth: 5,
-                seed: 0,
-            },
+            settings: Settings { width: 8, height: 4, spp: 1, max_depth: 5, seed: 0 },
             kernels: vec![KernelKind::Simd],
             variants: vec![Variant::PLAIN],
             spp_list: vec![1, 2],
@@ -1113,15 +1025,9 @@ mod tests {
         type Break = Box<dyn Fn(&mut Config)>;
         let cases: Vec<(&str, Break)> = vec![
             ("--kernels", Box::new(|c| c.kernels.clear())),
-            (
-                "--kernels",
-                Box::new(|c| c.kernels = vec![KernelKind::Simd, KernelKind::Simd]),
-            ),
+            ("--kernels", Box::new(|c| c.kernels = vec![KernelKind::Simd, KernelKind::Simd])),
             ("--variants", Box::new(|c| c.variants.clear())),
-            (
-                "--variants",
-                Box::new(|c| c.variants = vec![Variant::PLAIN, Variant::PLAIN]),
-            ),
+            ("--variants", Box::new(|c| c.variants = vec![Variant::PLAIN, Variant::PLAIN])),
             ("--spp-list", Box::new(|c| c.spp_list.clear())),
             ("--spp-list", Box::new(|c| c.spp_list = vec![0, 1])),
             ("--spp-list", Box::new(|c| c.spp_list = vec![4, 2])),

@@ -178,11 +178,7 @@ mod tests {
             s: std::array::from_fn(|w| u32x8::new(std::array::from_fn(|k| path_state(3, k as u64, 0)[w]))),
         };
         let mut sc: Vec<ScalarStream> = (0..8).map(|k| ScalarStream::for_path(3, k, 0)).collect();
-        let t8 = V3::new(
-            f32x8::new(thr.map(|t| t[0])),
-            f32x8::new(thr.map(|t| t[1])),
-            f32x8::new(thr.map(|t| t[2])),
-        );
+        let t8 = V3::new(f32x8::new(thr.map(|t| t[0])), f32x8::new(thr.map(|t| t[1])), f32x8::new(thr.map(|t| t[2])));
         let mut mean = [[0.0f64; 3]; 8];
         let n = 20_000;
         for _ in 0..n {
@@ -207,16 +203,8 @@ mod tests {
                 // mean is thr, with standard error thr sqrt((1 - p) / (p n)).
                 let t = thr[k][c] as f64;
                 let p = thr[k].iter().fold(0.0f32, |a, &b| a.max(b)).min(1.0) as f64;
-                let se = if p > 0.0 {
-                    t * ((1.0 - p) / (p * n as f64)).sqrt()
-                } else {
-                    0.0
-                };
-                assert!(
-                    (mean[k][c] - t).abs() <= 5.0 * se + 1e-9 * t,
-                    "lane {k} channel {c}: {} vs {t}",
-                    mean[k][c]
-                );
+                let se = if p > 0.0 { t * ((1.0 - p) / (p * n as f64)).sqrt() } else { 0.0 };
+                assert!((mean[k][c] - t).abs() <= 5.0 * se + 1e-9 * t, "lane {k} channel {c}: {} vs {t}", mean[k][c]);
             }
         }
     }

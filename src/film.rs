@@ -6,9 +6,10 @@ use std::path::Path;
 
 /// The accumulators of one tile. Each pixel's samples are added in sample
 /// order, so the sum does not depend on threads, tiles or kernels. Samples with
-/// a NaN or infinite component are rejected (and counted), never added.
+/// a NaN or infinite component are rejected (and counted), never added; so is a
+/// finite sample that would overflow its pixel's sum (colours are unbounded).
 ///
-/// Besides the f32 sums that make the image, each pixel keeps f64 first and
+/// Besides the f32 sums that make the image, each pixel can keep f64 first and
 /// second moments of its samples: the per-pixel error estimate of adaptive
 /// sampling is computed from them (see [`TileFilm::relative_error`]).
 #[derive(Clone, Debug)]
@@ -20,6 +21,7 @@ pub struct TileFilm {
     pub sum: Vec<[f32; 3]>,
     pub count: Vec<u32>,
     /// Per pixel: the sum of the samples and of their squares, per channel, in f64.
+    /// Empty unless adaptive sampling asked for them ([`TileFilm::with_moments`]).
     pub moments: Vec<[[f64; 3]; 2]>,
     pub rejected: u64,
 }
@@ -27,32 +29,29 @@ pub struct TileFilm {
 impl TileFilm {
     pub fn new(x0: u32, y0: u32, w: u32, h: u32) -> Self {
         let n = (w * h) as usize;
-        TileFilm {
-            x0,
-            y0,
-            w,
-            h,
-            sum: vec![[0.0; 3]; n],
-            count: vec![0; n],
-            moments: vec![[[0.0; 3]; 2]; n],
-            rejected: 0,
-        }
+        TileFilm { x0, y0, w, h, sum: vec![[0.0; 3]; n], count: vec![0; n], moments: Vec::new(), rejected: 0 }
+    }
+
+    /// Also keeps the per-pixel moments that adaptive sampling's error estimate needs.
+    pub fn with_moments(mut self) -> Self {
+        self.moments = vec![[[0.0; 3]; 2]; self.sum.len()];
+        self
     }
 
     /// Adds one sample to pixel `local` (row-major inside the tile).
     #[inline]
     pub fn add(&mut self, local: usize, c: [f32; 3]) {
-        if c.iter().all(|v| v.is_finite()) {
-            let s = &mut self.sum[local];
-            s[0] += c[0];
-            s[1] += c[1];
-            s[2] += c[2];
+        let s = self.sum[local];
+        let next = [s[0] + c[0], s[1] + c[1], s[2] + c[2]];
+        if c.iter().chain(next.iter()).all(|v| v.is_finite()) {
+            self.sum[local] = next;
             self.count[local] += 1;
-            let m = &mut self.moments[local];
-            for k in 0..3 {
-                let v = c[k] as f64;
-                m[0][k] += v;
-                m[1][k] += v * v;
+            if let Some(m) = self.moments.get_mut(local) {
+                for k in 0..3 {
+                    let v = c[k] as f64;
+                    m[0][k] += v;
+                    m[1][k] += v * v;
+                }
             }
         } else {
             self.rejected += 1;
@@ -67,10 +66,10 @@ impl TileFilm {
     /// averaged, so stopping on it is slightly biased (see the README).
     pub fn relative_error(&self, local: usize) -> f64 {
         let n = self.count[local] as f64;
+        let Some(&[s1, s2]) = self.moments.get(local) else { return f64::INFINITY };
         if n < 2.0 {
             return f64::INFINITY;
         }
-        let [s1, s2] = self.moments[local];
         let mut var = 0.0;
         let mut mean = 0.0;
         for k in 0..3 {
@@ -97,11 +96,7 @@ pub struct Image {
 
 impl Image {
     pub fn new(width: u32, height: u32) -> Self {
-        Image {
-            width,
-            height,
-            data: vec![[0.0; 3]; (width * height) as usize],
-        }
+        Image { width, height, data: vec![[0.0; 3]; (width * height) as usize] }
     }
 
     pub fn get(&self, x: u32, y: u32) -> [f32; 3] {
@@ -113,11 +108,7 @@ impl Image {
         for local in 0..t.sum.len() {
             let (x, y) = t.pixel_of(local);
             let n = t.count[local];
-            let v = if n == 0 {
-                [0.0; 3]
-            } else {
-                t.sum[local].map(|s| s / n as f32)
-            };
+            let v = if n == 0 { [0.0; 3] } else { t.sum[local].map(|s| s / n as f32) };
             self.data[(y * self.width + x) as usize] = v;
         }
     }
@@ -151,8 +142,7 @@ impl Image {
     pub fn png_bytes(&self, gamma: f32) -> Vec<u8> {
         let mut out = Vec::new();
         let img = image::RgbImage::from_raw(self.width, self.height, self.to_rgb8(gamma)).expect("size matches");
-        img.write_to(&mut Cursor::new(&mut out), image::ImageFormat::Png)
-            .expect("PNG encodes in memory");
+        img.write_to(&mut Cursor::new(&mut out), image::ImageFormat::Png).expect("PNG encodes in memory");
         out
     }
 
@@ -181,10 +171,7 @@ impl Image {
 
     /// Writes the image atomically: PNG (8-bit, `gamma`), PFM or EXR (linear), by extension.
     pub fn save(&self, path: &Path, gamma: f32) -> Result<()> {
-        let ext = path
-            .extension()
-            .and_then(|e| e.to_str())
-            .map(|e| e.to_ascii_lowercase());
+        let ext = path.extension().and_then(|e| e.to_str()).map(|e| e.to_ascii_lowercase());
         let bytes = match ext.as_deref() {
             Some("png") => self.png_bytes(gamma),
             Some("pfm") => self.pfm_bytes(),
@@ -207,11 +194,7 @@ impl Image {
             let text_end = nth_newline(&bytes, 3).ok_or_else(|| bad("truncated PFM header".into()))?;
             let header = std::str::from_utf8(&bytes[..text_end]).map_err(|e| bad(e.to_string()))?;
             let mut it = header.split_whitespace().skip(1);
-            let mut num = || {
-                it.next()
-                    .and_then(|s| s.parse::<f64>().ok())
-                    .ok_or_else(|| bad("bad PFM header".into()))
-            };
+            let mut num = || it.next().and_then(|s| s.parse::<f64>().ok()).ok_or_else(|| bad("bad PFM header".into()));
             let (w, h, scale) = (num()? as u32, num()? as u32, num()?);
             let body = &bytes[text_end + 1..];
             if body.len() as u64 != w as u64 * h as u64 * 12 {
@@ -234,26 +217,16 @@ impl Image {
             }
             Ok(img)
         } else {
-            let img = image::load_from_memory(&bytes)
-                .map_err(|e| bad(e.to_string()))?
-                .into_rgb32f();
+            let img = image::load_from_memory(&bytes).map_err(|e| bad(e.to_string()))?.into_rgb32f();
             let (w, h) = img.dimensions();
             let data = img.into_raw().chunks_exact(3).map(|c| [c[0], c[1], c[2]]).collect();
-            Ok(Image {
-                width: w,
-                height: h,
-                data,
-            })
+            Ok(Image { width: w, height: h, data })
         }
     }
 }
 
 fn nth_newline(b: &[u8], n: usize) -> Option<usize> {
-    b.iter()
-        .enumerate()
-        .filter(|(_, &c)| c == b'\n')
-        .nth(n - 1)
-        .map(|(i, _)| i)
+    b.iter().enumerate().filter(|(_, &c)| c == b'\n').nth(n - 1).map(|(i, _)| i)
 }
 
 #[cfg(test)]
@@ -275,7 +248,7 @@ mod tests {
 
     #[test]
     fn relative_error_of_known_samples() {
-        let mut t = TileFilm::new(0, 0, 2, 1);
+        let mut t = TileFilm::new(0, 0, 2, 1).with_moments();
         assert_eq!(t.relative_error(0), f64::INFINITY);
         // Pixel 0: samples 1 and 3 in every channel: mean 2, variance 2, se 1.
         t.add(0, [1.0; 3]);
@@ -286,11 +259,22 @@ mod tests {
         t.add(1, [0.5; 3]);
         t.add(1, [0.5; 3]);
         assert_eq!(t.relative_error(1), 0.0);
-        let mut d = TileFilm::new(0, 0, 1, 1);
+        let mut d = TileFilm::new(0, 0, 1, 1).with_moments();
         d.add(0, [0.0; 3]);
         d.add(0, [0.02; 3]);
         let se = (0.0002f64 / 2.0).sqrt();
         assert!((d.relative_error(0) - se / crate::estimator::RELATIVE_ERROR_FLOOR).abs() < 1e-6);
+    }
+
+    #[test]
+    fn a_sum_that_would_overflow_is_rejected() {
+        let mut t = TileFilm::new(0, 0, 1, 1);
+        t.add(0, [f32::MAX, 1.0, 1.0]);
+        t.add(0, [f32::MAX, 1.0, 1.0]);
+        assert_eq!(t.rejected, 1);
+        let mut img = Image::new(1, 1);
+        img.put_tile(&t);
+        assert_eq!(img.get(0, 0), [f32::MAX, 1.0, 1.0]);
     }
 
     #[test]
@@ -310,11 +294,7 @@ mod tests {
 
     #[test]
     fn book_encoding() {
-        let img = Image {
-            width: 2,
-            height: 1,
-            data: vec![[0.25, 1.0, 2.0], [0.0, -1.0, 0.5]],
-        };
+        let img = Image { width: 2, height: 1, data: vec![[0.25, 1.0, 2.0], [0.0, -1.0, 0.5]] };
         assert_eq!(img.to_rgb8(2.0), vec![128, 255, 255, 0, 0, 181]);
     }
 }

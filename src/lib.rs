@@ -10,6 +10,7 @@
 //! [`real::Real`] and instantiated for `f32` and `wide::f32x8`, so for the same
 //! seed they produce bit-identical images.
 
+pub mod bench;
 pub mod camera;
 pub mod converge;
 pub mod error;
@@ -24,6 +25,7 @@ pub mod real;
 pub mod render;
 pub mod sampling;
 pub mod scene;
+pub mod stress;
 pub mod vec3;
 
 pub use error::{Error, Result};

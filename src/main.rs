@@ -2,6 +2,7 @@
 
 use clap::{Args, CommandFactory, FromArgMatches, Parser, Subcommand};
 use indicatif::{ProgressBar, ProgressStyle};
+use rtow::plan::AccelChoice;
 use rtow::scene::{self, Scene};
 use rtow::{Error, KernelKind, RenderOptions, Result, Settings};
 use std::io::IsTerminal;
@@ -10,10 +11,7 @@ use std::process::ExitCode;
 use std::time::Instant;
 
 #[derive(Parser)]
-#[command(
-    name = "rtow",
-    about = "A data-oriented SIMD path tracer for Ray Tracing in One Weekend"
-)]
+#[command(name = "rtow", about = "A data-oriented SIMD path tracer for Ray Tracing in One Weekend")]
 struct Cli {
     #[command(subcommand)]
     command: Command,
@@ -25,9 +23,23 @@ enum Command {
     Render(RenderArgs),
     /// List the built-in scenes.
     Scenes,
+    /// Measure rays/s of each kernel on a scene; compare with a saved baseline.
+    Bench(BenchArgs),
     /// Run time against error: measure kernels and estimator variants at several
     /// sample counts against a reference; write a CSV, a markdown table and a log-log plot.
     Converge(ConvergeArgs),
+    /// Numerical stress tests against an f64 oracle, with both kernels; exit status 1 if a bound breaks.
+    Stress {
+        /// The small version (what `cargo test` runs).
+        #[arg(long)]
+        quick: bool,
+        /// Seed of the sweeps and renders.
+        #[arg(long, default_value_t = 1)]
+        seed: u64,
+        /// Worker threads [default: one per core]
+        #[arg(long)]
+        threads: Option<usize>,
+    },
     /// Write a preset as a scene file (.json or .toml).
     Export {
         /// Preset name (see `rtow scenes`).
@@ -65,6 +77,9 @@ struct ImageArgs {
     /// Tile edge in pixels
     #[arg(long, default_value_t = 16)]
     tile: u32,
+    /// Closest-hit search: auto (by the plan), brute force, or BVH
+    #[arg(long, value_enum, default_value_t = AccelChoice::Auto)]
+    accel: AccelChoice,
 }
 
 #[derive(Args)]
@@ -86,7 +101,7 @@ struct RenderArgs {
     #[arg(long, value_name = "FILE")]
     stats_json: Option<PathBuf>,
     /// PNG gamma [default: 2 for path traced scenes, 1 for the debug chapters, as in the book]
-    #[arg(long)]
+    #[arg(long, value_parser = positive_f32)]
     gamma: Option<f32>,
     /// Print the render plan (what the scene needs) before rendering.
     #[arg(long)]
@@ -96,6 +111,88 @@ struct RenderArgs {
     /// No progress bar and no summary line.
     #[arg(short, long)]
     quiet: bool,
+}
+
+#[derive(Args)]
+struct BenchArgs {
+    /// A preset name or a scene file.
+    #[arg(default_value = "final")]
+    scene: String,
+    /// Kernels to measure, in order.
+    #[arg(long, value_delimiter = ',', default_value = "scalar,simd")]
+    kernels: Vec<KernelKind>,
+    #[command(flatten)]
+    image: ImageArgs,
+    /// Renders per kernel; the median-time one is reported.
+    #[arg(long, default_value_t = 3)]
+    repeat: usize,
+    /// Write the report as JSON.
+    #[arg(long, value_name = "FILE")]
+    json: Option<PathBuf>,
+    /// Save the report as a baseline for later runs.
+    #[arg(long, value_name = "FILE")]
+    save: Option<PathBuf>,
+    /// Compare with a saved baseline: exit status 1 if throughput fell by more
+    /// than the tolerance or the image changed.
+    #[arg(long, value_name = "FILE")]
+    baseline: Option<PathBuf>,
+    /// Allowed throughput drop against the baseline, in percent.
+    #[arg(long, default_value_t = 5.0)]
+    tolerance: f64,
+}
+
+fn cmd_bench(a: BenchArgs) -> Result<bool> {
+    let (scene, name) = load(&a.scene)?;
+    let s = settings(&scene, &a.image);
+    if a.image.tile != 16 {
+        return Err(Error::invalid("--tile", "rtow bench uses the default tile size"));
+    }
+    if !(a.tolerance >= 0.0) {
+        return Err(Error::invalid("--tolerance", "must be a percentage >= 0"));
+    }
+    let baseline = a.baseline.as_deref().map(rtow::bench::Baseline::load).transpose()?;
+    eprintln!(
+        "bench {name}: {}x{} {} spp depth {} seed {}, {} repetition(s) per kernel, built for {}",
+        s.width,
+        s.height,
+        s.spp,
+        s.max_depth,
+        s.seed,
+        a.repeat,
+        rtow::isa()
+    );
+    let report =
+        rtow::bench::run(&scene, &name, s, &a.kernels, a.image.threads, a.image.accel, a.repeat, |k, i, st| {
+            eprintln!("  {} run {}: {:.3} s, {:.2} Mrays/s", k.name(), i + 1, st.seconds, st.mrays_per_s)
+        })?;
+    print!("{}", report.table());
+    for path in [&a.json, &a.save].into_iter().flatten() {
+        rtow::output::write_atomic(path, report.to_json().as_bytes())?;
+    }
+    let mut ok = true;
+    if let Some(b) = &baseline {
+        for c in rtow::bench::compare(&report, b, a.tolerance)? {
+            println!(
+                "{:<7} baseline {:.2} Mrays/s -> {:.2} Mrays/s ({:+.1}%), image {}: {}",
+                c.kernel,
+                c.baseline_mrays,
+                c.mrays,
+                c.change_percent,
+                if c.image_same { "identical" } else { "CHANGED" },
+                if c.regressed { "REGRESSION" } else { "ok" }
+            );
+            ok &= !c.regressed;
+        }
+    }
+    Ok(ok)
+}
+
+fn positive_f32(s: &str) -> std::result::Result<f32, String> {
+    match s.parse::<f32>() {
+        Ok(v) if v.is_finite() && v > 0.0 => Ok(v),
+        Ok(v) => Err(format!("must be a finite number > 0, got {v}")),
+        Err(e) => Err(e.to_string()),
+    }
 }
 
 /// Russian roulette and adaptive sampling (both off by default).
@@ -119,9 +216,7 @@ struct EstimatorArgs {
 
 impl EstimatorArgs {
     fn adaptive(&self) -> Result<Option<rtow::estimator::Adaptive>> {
-        self.adaptive
-            .map(|t| rtow::estimator::Adaptive::new(t, self.adaptive_min))
-            .transpose()
+        self.adaptive.map(|t| rtow::estimator::Adaptive::new(t, self.adaptive_min)).transpose()
     }
 }
 
@@ -198,21 +293,14 @@ fn cmd_converge(a: ConvergeArgs) -> Result<()> {
     s.height = a.height.unwrap_or(s.height);
     s.max_depth = a.depth.unwrap_or(s.max_depth);
     s.seed = a.seed.unwrap_or(s.seed);
-    let variants = a
-        .variants
-        .iter()
-        .map(|v| Variant::parse(v))
-        .collect::<Result<Vec<_>>>()?;
+    let variants = a.variants.iter().map(|v| Variant::parse(v)).collect::<Result<Vec<_>>>()?;
     let reference = match (&a.reference, a.reference_spp) {
         (Some(p), _) => Reference::File(p.clone()),
         (None, Some(n)) => Reference::Spp(n),
         (None, None) => {
             let max = a.spp_list.iter().copied().max().unwrap_or(1);
             Reference::Spp(max.checked_mul(8).ok_or_else(|| {
-                Error::invalid(
-                    "--spp-list",
-                    format!("{max} is too large for the default --reference-spp (8x)"),
-                )
+                Error::invalid("--spp-list", format!("{max} is too large for the default --reference-spp (8x)"))
             })?)
         }
     };
@@ -230,18 +318,9 @@ fn cmd_converge(a: ConvergeArgs) -> Result<()> {
     };
     cfg.validate()?;
     if a.out.exists() && !a.out.is_dir() {
-        return Err(Error::Output {
-            path: a.out.clone(),
-            message: "--out must be a folder".into(),
-        });
+        return Err(Error::Output { path: a.out.clone(), message: "--out must be a folder".into() });
     }
-    say!(
-        "{name}: {}x{}, depth {}, seed {}",
-        s.width,
-        s.height,
-        s.max_depth,
-        s.seed
-    );
+    say!("{name}: {}x{}, depth {}, seed {}", s.width, s.height, s.max_depth, s.seed);
     let px = s.width as f64 * s.height as f64;
     let mut header = false;
     let report = converge::run(&scene, &name, &cfg, |e| match e {
@@ -286,10 +365,7 @@ fn cmd_converge(a: ConvergeArgs) -> Result<()> {
     }
     let mismatches = report.kernel_mismatches();
     if !mismatches.is_empty() {
-        return Err(Error::Input(format!(
-            "the kernels must agree bit for bit, but {}",
-            mismatches.join("; ")
-        )));
+        return Err(Error::Input(format!("the kernels must agree bit for bit, but {}", mismatches.join("; "))));
     }
     Ok(())
 }
@@ -302,15 +378,10 @@ fn load(spec: &str) -> Result<(Scene, String)> {
     let path = Path::new(spec);
     if path.extension().is_some() || path.exists() {
         let s = scene::load_scene(path)?;
-        let name = path
-            .file_stem()
-            .map(|s| s.to_string_lossy().into_owned())
-            .unwrap_or_else(|| "scene".into());
+        let name = path.file_stem().map(|s| s.to_string_lossy().into_owned()).unwrap_or_else(|| "scene".into());
         return Ok((s, name));
     }
-    Err(Error::Input(format!(
-        "unknown scene '{spec}': not a preset (see `rtow scenes`) and not a .json/.toml file"
-    )))
+    Err(Error::Input(format!("unknown scene '{spec}': not a preset (see `rtow scenes`) and not a .json/.toml file")))
 }
 
 fn settings(scene: &Scene, a: &ImageArgs) -> Settings {
@@ -330,11 +401,7 @@ fn settings(scene: &Scene, a: &ImageArgs) -> Settings {
 }
 
 fn check_writable_ext(path: &Path, allowed: &[&str], what: &str) -> Result<()> {
-    let ext = path
-        .extension()
-        .and_then(|e| e.to_str())
-        .map(|e| e.to_ascii_lowercase())
-        .unwrap_or_default();
+    let ext = path.extension().and_then(|e| e.to_str()).map(|e| e.to_ascii_lowercase()).unwrap_or_default();
     if allowed.contains(&ext.as_str()) {
         Ok(())
     } else {
@@ -384,16 +451,23 @@ fn cmd_render(a: RenderArgs) -> Result<()> {
     if let Some(f) = &a.float {
         check_writable_ext(f, &["pfm", "exr"], "--float")?;
     }
+    // Bad input first (exit 2), then every output path, before the render:
+    // a failure after it would waste the render and leave some outputs written.
+    s.validate()?;
+    for p in std::iter::once(&out).chain(&a.float).chain(&a.stats_json) {
+        rtow::output::check_writable(p)?;
+    }
     let opts = RenderOptions {
         kernel: a.kernel,
         threads: a.image.threads,
         tile: a.image.tile,
+        accel: a.image.accel,
         rr: a.estimator.rr,
         rr_after: a.estimator.rr_after,
         adaptive: a.estimator.adaptive()?,
     };
     if a.explain {
-        let prep = rtow::plan::Prepared::new(&scene, s)?;
+        let prep = rtow::plan::Prepared::new(&scene, s, a.image.accel)?;
         println!("{}", prep.plan.explain());
     }
     let r = render_with_progress(&scene, s, opts, a.quiet)?;
@@ -431,34 +505,74 @@ fn cmd_render(a: RenderArgs) -> Result<()> {
     Ok(())
 }
 
-fn run(cli: Cli) -> Result<()> {
+/// Prints the stress tables; exits with status 1 when a bound is broken.
+fn cmd_stress(quick: bool, seed: u64, threads: Option<usize>) -> Result<bool> {
+    use std::io::Write;
+    let cfg = rtow::stress::Config { quick, seed, threads };
+    let report = rtow::stress::run(&cfg, &mut |part| eprintln!("done: {part}"))?;
+    print!("{}", report.table());
+    let _ = std::io::stdout().flush();
+    Ok(report.passed())
+}
+
+/// Ok(false): the command ran but its check failed (exit status 1).
+fn run(cli: Cli) -> Result<bool> {
     match cli.command {
-        Command::Render(a) => cmd_render(a),
-        Command::Converge(a) => cmd_converge(a),
+        Command::Render(a) => cmd_render(a).map(|_| true),
+        Command::Bench(a) => cmd_bench(a),
+        Command::Converge(a) => cmd_converge(a).map(|_| true),
         Command::Scenes => {
+            let width = scene::presets().iter().map(|p| p.name.len()).max().unwrap_or(0);
             for p in scene::presets() {
-                println!("{:<16} {}", p.name, p.description);
+                println!("{:<width$}  {}", p.name, p.description);
             }
-            Ok(())
+            Ok(true)
         }
+        Command::Stress { quick, seed, threads } => cmd_stress(quick, seed, threads),
         Command::Export { preset, output } => {
             let s = scene::preset(&preset)
                 .ok_or_else(|| Error::Input(format!("unknown preset '{preset}' (see `rtow scenes`)")))?;
-            scene::save_scene(&s, &output)
+            scene::save_scene(&s, &output).map(|_| true)
         }
     }
+}
+
+/// Help and version print as clap prints them; usage errors print as one
+/// `error: ...` line (exit status 2), like every other error of rtow.
+fn clap_exit(e: clap::Error) -> ! {
+    use clap::error::ErrorKind;
+    if matches!(
+        e.kind(),
+        ErrorKind::DisplayHelp | ErrorKind::DisplayVersion | ErrorKind::DisplayHelpOnMissingArgumentOrSubcommand
+    ) {
+        e.exit()
+    }
+    let text = e.to_string();
+    let mut line = String::new();
+    for part in text.lines().map(str::trim).filter(|l| !l.is_empty()) {
+        if part.starts_with("For more information") {
+            continue;
+        }
+        let part = part.strip_prefix("error: ").unwrap_or(part);
+        if !line.is_empty() {
+            line.push_str(if line.ends_with(':') { " " } else { "; " });
+        }
+        line.push_str(part);
+    }
+    eprintln!("error: {line}");
+    std::process::exit(2)
 }
 
 fn main() -> ExitCode {
     let version = format!("{} (SIMD: {})", env!("CARGO_PKG_VERSION"), rtow::isa());
     let version: &'static str = Box::leak(version.into_boxed_str());
-    let matches = Cli::command().version(version).get_matches();
-    let cli = match Cli::from_arg_matches(&matches) {
+    let cli = match Cli::command().version(version).try_get_matches().and_then(|m| Cli::from_arg_matches(&m)) {
         Ok(c) => c,
-        Err(e) => e.exit(),
+        Err(e) => clap_exit(e),
     };
     match run(cli) {
-        Ok(()) => ExitCode::SUCCESS,
+        Ok(true) => ExitCode::SUCCESS,
+        Ok(false) => ExitCode::from(1),
         Err(e) => {
             eprintln!("error: {e}");
             ExitCode::from(e.exit_code() as u8)

@@ -4,7 +4,7 @@ use crate::error::Result;
 use crate::estimator::{Adaptive, Estimator};
 use crate::film::{Image, TileFilm};
 use crate::kernel::{gradient, scalar, wavefront, Counters, KernelKind};
-use crate::plan::{Plan, Prepared, Settings};
+use crate::plan::{AccelChoice, Plan, Prepared, Settings};
 use crate::scene::{Mode, Scene};
 use rayon::prelude::*;
 use serde::Serialize;
@@ -19,6 +19,8 @@ pub struct RenderOptions {
     pub threads: Option<usize>,
     /// Tile edge in pixels (tiles are the unit of parallel work).
     pub tile: u32,
+    /// Closest-hit search: brute force, BVH, or chosen by the plan.
+    pub accel: AccelChoice,
     /// Russian roulette on the path throughput (unbiased; changes the noise).
     pub rr: bool,
     /// Roulette starts once a path has traced this many rays.
@@ -33,6 +35,7 @@ impl Default for RenderOptions {
             kernel: KernelKind::Simd,
             threads: None,
             tile: 16,
+            accel: AccelChoice::Auto,
             rr: false,
             rr_after: crate::estimator::ROULETTE_AFTER_RAYS,
             adaptive: None,
@@ -70,9 +73,9 @@ pub struct Stats {
     pub adaptive: Option<Adaptive>,
     /// Samples with a NaN or infinite component, kept out of the image.
     pub rejected_samples: u64,
-    /// Active lanes / issued lanes in intersection and scatter (SIMD kernel; 1 for scalar).
-    pub isect_occupancy: f64,
-    pub scatter_occupancy: f64,
+    /// Active lanes / issued lanes in intersection and scatter (SIMD kernel; none for scalar).
+    pub isect_occupancy: Option<f64>,
+    pub scatter_occupancy: Option<f64>,
     pub image_hash: String,
     pub plan: Plan,
 }
@@ -98,11 +101,12 @@ pub const fn isa() -> &'static str {
     }
 }
 
-fn tiles(width: u32, height: u32, edge: u32) -> Vec<TileFilm> {
+fn tiles(width: u32, height: u32, edge: u32, moments: bool) -> Vec<TileFilm> {
     let mut v = Vec::new();
     for y0 in (0..height).step_by(edge as usize) {
         for x0 in (0..width).step_by(edge as usize) {
-            v.push(TileFilm::new(x0, y0, edge.min(width - x0), edge.min(height - y0)));
+            let t = TileFilm::new(x0, y0, edge.min(width - x0), edge.min(height - y0));
+            v.push(if moments { t.with_moments() } else { t });
         }
     }
     v
@@ -116,7 +120,7 @@ pub fn render(
     progress: Option<&(dyn Fn(Progress) + Sync)>,
 ) -> Result<Rendered> {
     let t0 = Instant::now();
-    let mut prep = Prepared::new(scene, settings)?;
+    let mut prep = Prepared::new(scene, settings, opts.accel)?;
     if !(1..=45).contains(&opts.tile) {
         return Err(crate::error::Error::invalid("tile", "must be between 1 and 45 pixels"));
     }
@@ -127,10 +131,7 @@ pub fn render(
         crate::estimator::check_roulette_after(opts.rr_after)?;
     }
     let russian_roulette = opts.rr.then_some(opts.rr_after);
-    prep.estimator = Estimator {
-        russian_roulette,
-        adaptive: opts.adaptive,
-    };
+    prep.estimator = Estimator { russian_roulette, adaptive: opts.adaptive };
     let prepare_seconds = t0.elapsed().as_secs_f64();
     let pool = rayon::ThreadPoolBuilder::new()
         .num_threads(opts.threads.unwrap_or(0))
@@ -141,7 +142,7 @@ pub fn render(
     let (image, counters, rejected, traced) = pool.install(|| render_prepared(&prep, opts, progress));
     let seconds = t1.elapsed().as_secs_f64();
     let (w, h) = (settings.width, settings.height);
-    let occ = |a: u64, l: u64| if l == 0 { 1.0 } else { a as f64 / l as f64 };
+    let occ = |a: u64, l: u64| (l > 0).then(|| a as f64 / l as f64);
     let stats = Stats {
         rays: counters.rays,
         samples: traced.unwrap_or(w as u64 * h as u64 * settings.spp as u64),
@@ -184,7 +185,7 @@ fn render_prepared(
         }
         return (image, Counters::default(), 0, None);
     }
-    let mut films = tiles(s.width, s.height, opts.tile);
+    let mut films = tiles(s.width, s.height, opts.tile, prep.estimator.adaptive.is_some());
     let total = films.len() as u64;
     let done = AtomicU64::new(0);
     let rays = AtomicU64::new(0);
@@ -192,11 +193,7 @@ fn render_prepared(
         let d = done.fetch_add(1, Ordering::Relaxed) + 1;
         let r = rays.fetch_add(c.rays, Ordering::Relaxed) + c.rays;
         if let Some(p) = progress {
-            p(Progress {
-                tiles_done: d,
-                tiles_total: total,
-                rays: r,
-            });
+            p(Progress { tiles_done: d, tiles_total: total, rays: r });
         }
     };
     let counters: Counters = match opts.kernel {

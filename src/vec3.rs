@@ -38,11 +38,7 @@ impl<R: Real> V3<R> {
     }
     #[inline(always)]
     pub fn cross(self, o: Self) -> Self {
-        V3::new(
-            self.y * o.z - self.z * o.y,
-            self.z * o.x - self.x * o.z,
-            self.x * o.y - self.y * o.x,
-        )
+        V3::new(self.y * o.z - self.z * o.y, self.z * o.x - self.x * o.z, self.x * o.y - self.y * o.x)
     }
     #[inline(always)]
     pub fn mul_elem(self, o: Self) -> Self {

@@ -46,47 +46,28 @@ fn converge_writes_table_plot_and_reference_and_reuses_the_reference() {
     let rows: Vec<Vec<&str>> = csv.lines().skip(1).map(|l| l.split(',').collect()).collect();
     assert_eq!(rows.len(), 2 * 3 * 3, "{csv}");
     let col = |name: &str| csv.lines().next().unwrap().split(',').position(|c| c == name).unwrap();
-    let (kernel, variant, spp, rmse, samples, hash) = (
-        col("kernel"),
-        col("variant"),
-        col("spp"),
-        col("rmse"),
-        col("samples"),
-        col("image_hash"),
-    );
+    let (kernel, variant, spp, rmse, samples, hash) =
+        (col("kernel"), col("variant"), col("spp"), col("rmse"), col("samples"), col("image_hash"));
     for r in &rows {
         // The kernels render the same image for the same variant and spp.
-        let twin = rows
-            .iter()
-            .find(|q| q[kernel] != r[kernel] && q[variant] == r[variant] && q[spp] == r[spp])
-            .unwrap();
+        let twin =
+            rows.iter().find(|q| q[kernel] != r[kernel] && q[variant] == r[variant] && q[spp] == r[spp]).unwrap();
         assert_eq!(twin[hash], r[hash]);
         let e: f64 = r[rmse].parse().unwrap();
         assert!(e > 0.0 && e.is_finite());
     }
     // More samples, less error (1 vs 16 spp is far beyond the noise of the error itself).
     let err = |v: &str, s: &str| -> f64 {
-        rows.iter()
-            .find(|r| r[kernel] == "simd" && r[variant] == v && r[spp] == s)
-            .unwrap()[rmse]
-            .parse()
-            .unwrap()
+        rows.iter().find(|r| r[kernel] == "simd" && r[variant] == v && r[spp] == s).unwrap()[rmse].parse().unwrap()
     };
     assert!(err("plain", "16") < 0.5 * err("plain", "1"));
     // The adaptive variant stopped some pixels before 16 samples.
-    let ad16: u64 = rows
-        .iter()
-        .find(|r| r[variant] == "adaptive:0.3" && r[spp] == "16")
-        .unwrap()[samples]
-        .parse()
-        .unwrap();
+    let ad16: u64 =
+        rows.iter().find(|r| r[variant] == "adaptive:0.3" && r[spp] == "16").unwrap()[samples].parse().unwrap();
     assert!(ad16 < 16 * 9 * 16, "{ad16}");
 
     let md = std::fs::read_to_string(out.join("ch07-diffuse.md")).unwrap();
-    assert!(
-        md.contains("| kernel | variant | spp |") && md.contains("equal time"),
-        "{md}"
-    );
+    assert!(md.contains("| kernel | variant | spp |") && md.contains("equal time"), "{md}");
     let svg = std::fs::read_to_string(out.join("ch07-diffuse.svg")).unwrap();
     assert!(svg.starts_with("<svg") && svg.contains("scalar/plain") && svg.contains("polyline"));
     let reference = out.join("ch07-diffuse-reference.exr");
@@ -115,10 +96,7 @@ fn converge_writes_table_plot_and_reference_and_reuses_the_reference() {
     let csv2 = std::fs::read_to_string(again.join("ch07-diffuse.csv")).unwrap();
     for line in csv2.lines().skip(1) {
         let r: Vec<&str> = line.split(',').collect();
-        let before = rows
-            .iter()
-            .find(|q| q[kernel] == "simd" && q[variant] == "plain" && q[spp] == r[spp])
-            .unwrap();
+        let before = rows.iter().find(|q| q[kernel] == "simd" && q[variant] == "plain" && q[spp] == r[spp]).unwrap();
         assert_eq!(before[rmse], r[rmse]);
     }
     assert!(!again.join("ch07-diffuse-reference.exr").exists());
@@ -155,10 +133,7 @@ fn bad_flags_are_clear_errors() {
         (conv(&["--kernels", "gpu"]), "--kernels"),
         (conv(&["--reference-spp", "0"]), "--reference-spp"),
         (conv(&["--repeat", "0"]), "--repeat"),
-        (
-            conv(&["--variants", "adaptive", "--adaptive-min", "1"]),
-            "--adaptive-min",
-        ),
+        (conv(&["--variants", "adaptive", "--adaptive-min", "1"]), "--adaptive-min"),
         (conv(&["--reference", "missing.exr"]), "--reference"),
         (conv(&["--reference", "a.exr", "--reference-spp", "4"]), "--reference"),
         (conv(&["--width", "0"]), "width"),
@@ -177,11 +152,7 @@ fn bad_flags_are_clear_errors() {
     // A float image whose header claims more pixels than fit anywhere.
     let huge = dir.path().join("huge.pfm");
     std::fs::write(&huge, b"PF\n100000 100000\n-1.0\n\0\0\0\0").unwrap();
-    fails_naming(
-        &to_refs(&conv(&["--reference", huge.to_str().unwrap()])),
-        "--reference",
-        2,
-    );
+    fails_naming(&to_refs(&conv(&["--reference", huge.to_str().unwrap()])), "--reference", 2);
 
     // --out that is a file.
     let f = dir.path().join("file");

@@ -4,19 +4,13 @@
 
 use rtow::estimator::Adaptive;
 use rtow::kernel::{scalar, Counters};
-use rtow::plan::Prepared;
+use rtow::plan::{AccelChoice, Prepared};
 use rtow::sampling::ScalarStream;
 use rtow::scene::preset;
 use rtow::{render, KernelKind, RenderOptions, Rendered, Settings};
 
 fn settings(w: u32, h: u32, spp: u32, seed: u64) -> Settings {
-    Settings {
-        width: w,
-        height: h,
-        spp,
-        max_depth: 50,
-        seed,
-    }
+    Settings { width: w, height: h, spp, max_depth: 50, seed }
 }
 
 fn run(scene: &str, s: Settings, opts: RenderOptions) -> Rendered {
@@ -24,15 +18,8 @@ fn run(scene: &str, s: Settings, opts: RenderOptions) -> Rendered {
 }
 
 fn opts(kernel: KernelKind, rr: bool, adaptive: Option<Adaptive>) -> RenderOptions {
-    RenderOptions {
-        kernel,
-        threads: Some(2),
-        tile: 16,
-        rr,
-        // Early, so that the roulette decides much of the image.
-        rr_after: 2,
-        adaptive,
-    }
+    // Roulette early, so that it decides much of the image.
+    RenderOptions { kernel, threads: Some(2), tile: 16, rr, rr_after: 2, adaptive, ..Default::default() }
 }
 
 fn assert_same(a: &Rendered, b: &Rendered, what: &str) {
@@ -40,11 +27,7 @@ fn assert_same(a: &Rendered, b: &Rendered, what: &str) {
     assert_eq!(a.stats.samples, b.stats.samples, "{what}: samples");
     for (i, (p, q)) in a.image.data.iter().zip(&b.image.data).enumerate() {
         for k in 0..3 {
-            assert_eq!(
-                p[k].to_bits(),
-                q[k].to_bits(),
-                "{what}: pixel {i} channel {k}: {p:?} vs {q:?}"
-            );
+            assert_eq!(p[k].to_bits(), q[k].to_bits(), "{what}: pixel {i} channel {k}: {p:?} vs {q:?}");
         }
     }
 }
@@ -84,8 +67,8 @@ fn pixel_stats(prep: &Prepared, n: u32) -> Vec<[(f64, f64); 3]> {
 /// as a whole (the mean difference over all pixels, |z| < 4).
 fn roulette_keeps_the_mean(scene: &str, w: u32, h: u32, n: u32, after: u32) {
     let sc = preset(scene).unwrap();
-    let plain = Prepared::new(&sc, settings(w, h, n, 11)).unwrap();
-    let mut rr = Prepared::new(&sc, settings(w, h, n, 12)).unwrap();
+    let plain = Prepared::new(&sc, settings(w, h, n, 11), AccelChoice::Auto).unwrap();
+    let mut rr = Prepared::new(&sc, settings(w, h, n, 12), AccelChoice::Auto).unwrap();
     rr.estimator.russian_roulette = Some(after);
     let a = pixel_stats(&plain, n);
     let b = pixel_stats(&rr, n);
@@ -116,10 +99,7 @@ fn roulette_keeps_the_mean(scene: &str, w: u32, h: u32, n: u32, after: u32) {
             }
         }
     }
-    assert!(
-        worst < z_crit,
-        "{scene}: a pixel differs by {worst:.2} sigma (limit {z_crit:.2})"
-    );
+    assert!(worst < z_crit, "{scene}: a pixel differs by {worst:.2} sigma (limit {z_crit:.2})");
     let z = sum_d / sum_v.sqrt();
     assert!(z.abs() < 4.0, "{scene}: the image mean differs by {z:.2} sigma");
 }
@@ -158,12 +138,7 @@ fn roulette_traces_fewer_rays_and_changes_the_noise() {
     let s = settings(40, 23, 8, 3);
     let plain = run("ch07-diffuse", s, opts(KernelKind::Simd, false, None));
     let rr = run("ch07-diffuse", s, opts(KernelKind::Simd, true, None));
-    assert!(
-        rr.stats.rays < plain.stats.rays,
-        "{} vs {}",
-        rr.stats.rays,
-        plain.stats.rays
-    );
+    assert!(rr.stats.rays < plain.stats.rays, "{} vs {}", rr.stats.rays, plain.stats.rays);
     assert_ne!(rr.image, plain.image);
     assert_eq!(rr.stats.russian_roulette, Some(2));
     assert_eq!(plain.stats.russian_roulette, None);
@@ -171,20 +146,14 @@ fn roulette_traces_fewer_rays_and_changes_the_noise() {
 
 #[test]
 fn roulette_scalar_and_simd_agree_bit_for_bit() {
-    for (scene, s) in [
-        ("final", settings(40, 23, 8, 5)),
-        ("ch09-glass", settings(48, 27, 16, 6)),
-    ] {
+    for (scene, s) in [("final", settings(40, 23, 8, 5)), ("ch09-glass", settings(48, 27, 16, 6))] {
         let a = run(scene, s, opts(KernelKind::Scalar, true, None));
         let b = run(scene, s, opts(KernelKind::Simd, true, None));
         assert_same(&a, &b, scene);
     }
     // The default start.
     let s = settings(40, 23, 8, 5);
-    let dflt = |kernel| RenderOptions {
-        rr_after: rtow::estimator::ROULETTE_AFTER_RAYS,
-        ..opts(kernel, true, None)
-    };
+    let dflt = |kernel| RenderOptions { rr_after: rtow::estimator::ROULETTE_AFTER_RAYS, ..opts(kernel, true, None) };
     let a = run("ch09-glass", s, dflt(KernelKind::Scalar));
     let b = run("ch09-glass", s, dflt(KernelKind::Simd));
     assert_same(&a, &b, "default roulette start");
@@ -197,29 +166,10 @@ fn adaptive_scalar_and_simd_agree_bit_for_bit_whatever_the_tiles() {
     let simd = run("final", s, opts(KernelKind::Simd, false, ad));
     let px = 40 * 23;
     // Some pixels stopped early and some went on: the decisions did something.
-    assert!(
-        simd.stats.samples > px * 16 && simd.stats.samples < px * 128,
-        "{}",
-        simd.stats.samples
-    );
-    let scalar = run(
-        "final",
-        s,
-        RenderOptions {
-            threads: Some(1),
-            tile: 7,
-            ..opts(KernelKind::Scalar, false, ad)
-        },
-    );
+    assert!(simd.stats.samples > px * 16 && simd.stats.samples < px * 128, "{}", simd.stats.samples);
+    let scalar = run("final", s, RenderOptions { threads: Some(1), tile: 7, ..opts(KernelKind::Scalar, false, ad) });
     assert_same(&simd, &scalar, "adaptive");
-    let odd_tiles = run(
-        "final",
-        s,
-        RenderOptions {
-            tile: 45,
-            ..opts(KernelKind::Simd, false, ad)
-        },
-    );
+    let odd_tiles = run("final", s, RenderOptions { tile: 45, ..opts(KernelKind::Simd, false, ad) });
     assert_same(&simd, &odd_tiles, "adaptive, 45-pixel tiles");
     // With roulette as well.
     let a = run("ch09-glass", s, opts(KernelKind::Scalar, true, ad));
@@ -244,28 +194,14 @@ fn adaptive_counts_only_what_it_traced() {
         settings(24, 14, 12, 9),
         opts(KernelKind::Simd, false, Some(Adaptive::new(1e-6, 16).unwrap())),
     );
-    let b = run(
-        "ch07-diffuse",
-        settings(24, 14, 12, 9),
-        opts(KernelKind::Simd, false, None),
-    );
+    let b = run("ch07-diffuse", settings(24, 14, 12, 9), opts(KernelKind::Simd, false, None));
     assert_same(&a, &b, "under min spp");
 }
 
 #[test]
 fn bad_adaptive_options_are_errors_naming_the_flag() {
-    for (t, min, flag) in [
-        (f32::NAN, 16, "--adaptive"),
-        (-1.0, 16, "--adaptive"),
-        (0.1, 0, "--adaptive-min"),
-    ] {
-        let o = RenderOptions {
-            adaptive: Some(Adaptive {
-                threshold: t,
-                min_spp: min,
-            }),
-            ..RenderOptions::default()
-        };
+    for (t, min, flag) in [(f32::NAN, 16, "--adaptive"), (-1.0, 16, "--adaptive"), (0.1, 0, "--adaptive-min")] {
+        let o = RenderOptions { adaptive: Some(Adaptive { threshold: t, min_spp: min }), ..RenderOptions::default() };
         let e = match render(&preset("final").unwrap(), settings(8, 8, 4, 0), o, None) {
             Ok(_) => panic!("{t} {min} accepted"),
             Err(e) => e.to_string(),

@@ -12,6 +12,42 @@
 //!
 //! Self-intersection is prevented by where a new ray starts, not by a magic
 //! `t_min`: see [`surface`] and [`spawn`]. Hits must have `t > 0`.
+//!
+//! # Error bounds
+//!
+//! `u = 2^-24` (f32 unit roundoff). For one ray and one sphere let `h` be the
+//! distance of the centre from the ray's line, `disc = r^2 - h^2`, and
+//! `eta = ||d| - 1|` (a few `u` for directions from `normalize`). First-order
+//! bounds, term by term (their f64 implementations are `stress::Truth`, which
+//! `rtow stress` checks on every ray it traces):
+//!
+//! * **Discriminant.** The computed `l = f - (f.d) d` is within
+//!   `D = (5u + 2 eta)|f| + u h` of the exact perpendicular `f - (f.d^) d^`: `u|f|`
+//!   from rounding `f`, `u|f| + u|l|` from the product and the difference, and
+//!   `3u|f| + 2 eta |f|` from the dot and from `|d| != 1`; those last two lie
+//!   along `d`, orthogonal to `l`, and enter `|l|^2` only squared. Hence
+//!   `|disc~ - disc| <= u r^2 + 3u (h + D)^2 + 4u h |f| + 2u h^2 + D^2 + u |disc|`,
+//!   which near tangency is about `u (6 r^2 + 4 r |f|) + (5u |f|)^2`. A ray whose
+//!   exact `|disc|` exceeds this bound gets the right hit/miss answer; the rays
+//!   inside it pass within about `2u |f| + 3u r` (plus the squared term) of
+//!   tangency, the rounding band. (The textbook `b^2 - 4ac` errs by ~`8u |f|^2`.)
+//! * **Inside or outside.** `c'` is computed within `5u |f|^2 + u r^2 + u |c'|`:
+//!   only an origin closer than about `2.5u (|f| + r)` to the surface can be
+//!   taken for the wrong side (then the root at `t ~ 0` may be kept or skipped).
+//! * **Hit point.** Writing the computed root as an exact root for perturbed
+//!   inputs, the point `o + t d` lies within
+//!   `(9u + 4 eta)|f| + (7u + 2 eta) r` of the sphere, plus the rounding of `t`
+//!   itself: `u (|f| + 2r)` for the root returned as `q`, and
+//!   `E / |q| + 3u t` for the root returned as `c' / q`, where
+//!   `E = (9u + 6 eta)|f|^2 + 2u r^2 + u|c'| + 2u h |f| + 5u h^2 + u |disc|` is the
+//!   inconsistency between `c'` and `b^2 - disc`. For an origin far outside
+//!   this is about `21u |f|`: relative to the radius, `21u (|f| / r)`. (A sphere
+//!   1e6 radii away is measured hit to 0.22 r; rounding `t` alone costs 0.06 r.)
+//!   The bound grows without limit when `|q| -> 0`, i.e. for an origin on the
+//!   surface and a tangent direction, where both roots meet at `t = 0` and the
+//!   returned `t` is meaningless (`rtow stress` measures such hits up to a few
+//!   radii away). Rendering never asks that question: [`spawn`] moves every new
+//!   origin off the surface by more than the bound on `c'`.
 
 use super::spheres::{Spheres, MISS};
 use crate::real::{Mask, Real};
@@ -108,16 +144,44 @@ const OFFSET_ULPS: f32 = 1.0 / 1_048_576.0;
 ///
 /// The hit point is re-projected onto the sphere, `p = c + |r| n` with
 /// `n = normalize(o + t d - c)`, so its distance from the surface is bounded by
-/// the rounding of that expression alone, whatever the error of `t`:
-/// `| |p - c| - |r| | <= ~4u |r| + u |p|_inf` per component (u = 2^-24), and the
-/// next ray's origin, `f = o - c` and `f.f - r^2` add at most a few more `u` of
-/// `|r|` and `|p|_inf`. Offsetting new rays by `16 u (|r| + |p|_inf)` along the
-/// normal therefore puts them on the intended side of the sphere for any scale
-/// (a fixed epsilon fails both at r = 1e-4 and at r = 1e6). `rtow stress` measures it.
+/// the rounding of that expression alone, whatever the error of `t`: `|n|` is
+/// `1 +- 4.5u` (dot `3u`, halved by the square root, plus the root, the division
+/// and the product), the product by `|r|` adds `u`, and the sum with `c` adds
+/// `u |p_i|` per component, so `| |p - c| - |r| | <= 5.5u |r| + u |p|_2`.
+/// (If `o + t d` rounds onto `c` itself, which happens when the sphere is smaller
+/// than the f32 spacing of its coordinates, `n = -d`: the point facing the ray.)
+///
+/// # The offset
+///
+/// A new ray starts at `p +- offset n` (see [`spawn`]). Its origin must be on
+/// the intended side of the sphere *as the next intersection test sees it*:
+/// the test's inside/outside decision (the sign of `c' = |f|^2 - r^2`) errs by
+/// at most `5u |f|^2 + u r^2`, i.e. `3u |r|` in distance at `|f| ~ |r|`; the
+/// re-projected `p` is off by `5.5u |r| + u |p|_2`; the rounding of `p +- offset n`
+/// adds `u |p|_2`. The total is below `8.5u |r| + 2 sqrt(3) u |p|_inf`, so
+///
+/// `offset = 16u (|r| + |p|_inf)`
+///
+/// keeps every origin on its side with a margin of 1.9 on the radius term and
+/// 4.6 on the position term (it also keeps outgoing grazing rays clear of the
+/// rounding band of the discriminant, which needs `offset > 5.5u |r|`). A fixed
+/// epsilon fails both at r = 1e-4 and at r = 1e6. `rtow stress` measures it:
+/// zero re-hits over spheres of radius 1e-4 .. 1e4 placed 1e-4 .. 1e6 away,
+/// still zero at half this offset, entering rays falling short from a quarter,
+/// and each term alone failing (README, "Numerical stability").
+///
+/// The rule has a floor: the offset must stay below `|r|`, or a ray entering the
+/// sphere may be pushed through it. That holds while `|p|_inf < (1 / 16u - 1) |r|`,
+/// about `1e6 |r|`; beyond, the sphere spans fewer than 16 f32 spacings of its own
+/// coordinates and no offset can both prevent re-hits (`> 3.5u |p|_inf`) and keep
+/// entering rays inside (`< 2|r|`) much longer.
 #[inline(always)]
 pub fn surface<R: Real>(o: V3<R>, d: V3<R>, t: R, c: V3<R>, r: R) -> Surface<R> {
     let p_ray = o + d * t;
-    let out = (p_ray - c).normalize();
+    let v = p_ray - c;
+    // `normalize`, with the degenerate case (v rounded to zero) answered by -d.
+    let len2 = v.length_squared();
+    let out = V3::select(len2.gt(R::splat(0.0)), v * (R::splat(1.0) / len2.sqrt()), -d);
     let p = c + out * r.abs();
     let n_signed = out * R::splat(1.0).copysign(r);
     let front = d.dot(n_signed).lt(R::splat(0.0));

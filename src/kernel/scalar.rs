@@ -4,7 +4,7 @@
 use super::{normal_colour, sky, Counters};
 use crate::estimator::{roulette, roulette_applies};
 use crate::film::TileFilm;
-use crate::geometry::{closest_hit_scalar, spawn, surface, MISS};
+use crate::geometry::{spawn, surface, MISS};
 use crate::material::{dielectric, lambertian, metal};
 use crate::plan::Prepared;
 use crate::sampling::ScalarStream;
@@ -43,7 +43,7 @@ pub fn trace(prep: &Prepared, x: u32, y: u32, rng: &mut ScalarStream, counters: 
     let mut thr = V3::new(1.0f32, 1.0, 1.0);
     for depth in 0..prep.settings.max_depth {
         counters.rays += 1;
-        let (hit, t) = closest_hit_scalar(sp, o, d);
+        let (hit, t) = prep.closest_hit(o, d);
         if hit == MISS {
             return thr.mul_elem(sky(&prep.sky, d)).to_array();
         }

@@ -22,7 +22,7 @@
 use super::{normal_colour, sky, Counters};
 use crate::estimator::{roulette, roulette_applies};
 use crate::film::TileFilm;
-use crate::geometry::{closest_hit_x8, spawn, surface, Surface, MISS};
+use crate::geometry::{spawn, surface, Surface, MISS};
 use crate::material::{dielectric, lambertian, metal};
 use crate::plan::Prepared;
 use crate::real::Real;
@@ -63,20 +63,49 @@ impl Paths {
         }
     }
 
+    /// Appends the lanes of `alive` (a bitmask) of 8 paths: SIMD stream
+    /// compaction, the live lanes permuted to the front and stored as whole
+    /// vectors (the arrays' 8 lanes of slack take the rest).
     #[inline(always)]
-    fn push(&mut self, o: [f32; 3], d: [f32; 3], thr: [f32; 3], rng: [u32; 4], slot: u32) {
-        let i = self.len;
-        for a in 0..3 {
-            self.o[a][i] = o[a];
-            self.d[a][i] = d[a];
-            self.thr[a][i] = thr[a];
+    fn append(&mut self, alive: u32, o: V3<f32x8>, d: V3<f32x8>, thr: V3<f32x8>, rng: &Xoshiro128PlusX8, slot: u32x8) {
+        let perm = u32x8::new(COMPRESS[alive as usize]);
+        let at = self.len;
+        let put = |v: &mut Vec<f32>, x: f32x8| {
+            let packed: u32x8 = bytemuck::cast::<f32x8, u32x8>(x).shuffle(perm);
+            v[at..at + 8].copy_from_slice(&bytemuck::cast::<u32x8, [f32; 8]>(packed));
+        };
+        for (a, (ov, dv, tv)) in [(o.x, d.x, thr.x), (o.y, d.y, thr.y), (o.z, d.z, thr.z)].into_iter().enumerate() {
+            put(&mut self.o[a], ov);
+            put(&mut self.d[a], dv);
+            put(&mut self.thr[a], tv);
         }
+        let put_u = |v: &mut Vec<u32>, x: u32x8| v[at..at + 8].copy_from_slice(&x.shuffle(perm).to_array());
         for w in 0..4 {
-            self.rng[w][i] = rng[w];
+            put_u(&mut self.rng[w], rng.s[w]);
         }
-        self.slot[i] = slot;
-        self.len = i + 1;
+        put_u(&mut self.slot, slot);
+        self.len = at + alive.count_ones() as usize;
     }
+}
+
+/// For each 8-bit lane mask, the indices of its set lanes first (stream compaction).
+static COMPRESS: [[u32; 8]; 256] = compress_table();
+
+const fn compress_table() -> [[u32; 8]; 256] {
+    let mut t = [[0u32; 8]; 256];
+    let mut m = 0;
+    while m < 256 {
+        let (mut k, mut n) = (0, 0);
+        while k < 8 {
+            if m & (1 << k) != 0 {
+                t[m][n] = k as u32;
+                n += 1;
+            }
+            k += 1;
+        }
+        m += 1;
+    }
+    t
 }
 
 #[inline(always)]
@@ -111,11 +140,6 @@ fn all_lanes() -> f32x8 {
 }
 
 #[inline(always)]
-fn v3_load(v: &[Vec<f32>; 3], i: usize) -> V3<f32x8> {
-    V3::new(load(&v[0], i), load(&v[1], i), load(&v[2], i))
-}
-
-#[inline(always)]
 fn v3_gather(v: &[Vec<f32>; 3], idx: &[u32; 8]) -> V3<f32x8> {
     V3::new(gather(&v[0], idx), gather(&v[1], idx), gather(&v[2], idx))
 }
@@ -131,7 +155,8 @@ pub struct Workspace {
     next: Paths,
     hit: Vec<u32>,
     t: Vec<f32>,
-    /// Indices into `cur`, one queue per material kind (by `Kind as usize`) and one for misses.
+    /// Indices into `cur`, one queue per material kind (by `Kind as usize`) and one for
+    /// misses, each `MAX_PATHS` long (filled from the front each bounce).
     queue: [Vec<u32>; 4],
     result: Vec<[f32; 3]>,
     /// The tile's pixels (row-major local indices) that still take samples.
@@ -145,7 +170,7 @@ impl Default for Workspace {
             next: Paths::with_capacity(MAX_PATHS),
             hit: vec![0; MAX_PATHS + 8],
             t: vec![0.0; MAX_PATHS + 8],
-            queue: std::array::from_fn(|_| Vec::with_capacity(MAX_PATHS)),
+            queue: std::array::from_fn(|_| vec![0; MAX_PATHS]),
             result: vec![[0.0; 3]; MAX_PATHS],
             active: Vec::with_capacity(MAX_PATHS),
         }
@@ -161,10 +186,7 @@ impl Default for Workspace {
 /// batch and the packets stay full.
 pub fn render_tile(prep: &Prepared, ws: &mut Workspace, tile: &mut TileFilm, counters: &mut Counters) {
     let px = tile.sum.len();
-    assert!(
-        px <= MAX_PATHS,
-        "tile of {px} pixels exceeds the wavefront's {MAX_PATHS} paths"
-    );
+    assert!(px <= MAX_PATHS, "tile of {px} pixels exceeds the wavefront's {MAX_PATHS} paths");
     let spp = prep.settings.spp;
     let est = &prep.estimator;
     ws.active.clear();
@@ -223,9 +245,7 @@ fn generate(prep: &Prepared, p: &mut Paths, active: &[u32], tile: &TileFilm, s0:
         p.slot[slot] = slot as u32;
     }
     for i in (0..n).step_by(8) {
-        let mut rng = Xoshiro128PlusX8 {
-            s: std::array::from_fn(|w| load_u(&p.rng[w], i)),
-        };
+        let mut rng = Xoshiro128PlusX8 { s: std::array::from_fn(|w| load_u(&p.rng[w], i)) };
         let (o, d) = prep.camera.ray(load(&p.thr[0], i), load(&p.thr[1], i), &mut rng);
         for a in 0..3 {
             let (oa, da) = [(o.x, d.x), (o.y, d.y), (o.z, d.z)][a];
@@ -247,27 +267,24 @@ fn bounce(prep: &Prepared, ws: &mut Workspace, depth: u32, counters: &mut Counte
     counters.rays += n as u64;
     let cur = &ws.cur;
     for i in (0..n).step_by(8) {
-        let (hit, t) = closest_hit_x8(&prep.spheres, v3_load(&cur.o, i), v3_load(&cur.d, i));
-        ws.hit[i..i + 8].copy_from_slice(&hit.to_array());
-        store(&mut ws.t, i, t);
-        counters.isect_active += (n - i).min(8) as u64;
+        let live = (n - i).min(8);
+        let o = [&cur.o[0][..], &cur.o[1][..], &cur.o[2][..]];
+        let d = [&cur.d[0][..], &cur.d[1][..], &cur.d[2][..]];
+        let (hit, t) = prep.closest_hits8(o, d, i, live);
+        ws.hit[i..i + 8].copy_from_slice(&hit);
+        ws.t[i..i + 8].copy_from_slice(&t);
+        counters.isect_active += live as u64;
         counters.isect_lanes += 8;
     }
-    for q in ws.queue.iter_mut() {
-        q.clear();
-    }
-    for i in 0..n {
-        let h = ws.hit[i];
-        let q = if h == MISS {
-            MISS_QUEUE
-        } else {
-            prep.spheres.kind[h as usize] as usize
-        };
-        ws.queue[q].push(i as u32);
+    let mut len = [0usize; 4];
+    for (i, &h) in ws.hit[..n].iter().enumerate() {
+        let q = if h == MISS { MISS_QUEUE } else { prep.spheres.kind[h as usize] as usize };
+        ws.queue[q][len[q]] = i as u32;
+        len[q] += 1;
     }
     let queues = std::mem::take(&mut ws.queue);
     ws.next.len = 0;
-    for_packets(&queues[MISS_QUEUE], counters, |idx, active| {
+    for_packets(&queues[MISS_QUEUE][..len[MISS_QUEUE]], counters, |idx, active| {
         let c = v3_gather(&ws.cur.thr, idx).mul_elem(sky(&prep.sky, v3_gather(&ws.cur.d, idx)));
         write_results(ws, idx, active, c);
     });
@@ -275,15 +292,14 @@ fn bounce(prep: &Prepared, ws: &mut Workspace, depth: u32, counters: &mut Counte
         Mode::Path => {
             for kind in Kind::ALL {
                 if prep.plan.uses(kind) {
-                    for_packets(&queues[kind as usize], counters, |idx, active| {
-                        scatter(prep, ws, kind, depth, idx, active)
-                    });
+                    let q = &queues[kind as usize][..len[kind as usize]];
+                    for_packets(q, counters, |idx, active| scatter(prep, ws, kind, depth, idx, active));
                 }
             }
         }
         mode => {
-            for q in &queues[..MISS_QUEUE] {
-                for_packets(q, counters, |idx, active| debug_shade(prep, ws, mode, idx, active));
+            for (q, &l) in queues[..MISS_QUEUE].iter().zip(&len) {
+                for_packets(&q[..l], counters, |idx, active| debug_shade(prep, ws, mode, idx, active));
             }
         }
     }
@@ -329,15 +345,9 @@ fn debug_shade(prep: &Prepared, ws: &mut Workspace, mode: Mode, idx: &[u32; 8], 
         Mode::Normals => normal_colour(srf.n),
         _ => {
             let sp = &prep.spheres;
-            let cols: [[f32; 3]; 8] = std::array::from_fn(|k| {
-                prep.materials
-                    .flat_colour(sp.kind[sph[k] as usize], sp.row[sph[k] as usize])
-            });
-            V3::new(
-                f32x8::new(cols.map(|c| c[0])),
-                f32x8::new(cols.map(|c| c[1])),
-                f32x8::new(cols.map(|c| c[2])),
-            )
+            let cols: [[f32; 3]; 8] =
+                std::array::from_fn(|k| prep.materials.flat_colour(sp.kind[sph[k] as usize], sp.row[sph[k] as usize]));
+            V3::new(f32x8::new(cols.map(|c| c[0])), f32x8::new(cols.map(|c| c[1])), f32x8::new(cols.map(|c| c[2])))
         }
     };
     write_results(ws, idx, active, c);
@@ -348,9 +358,7 @@ fn debug_shade(prep: &Prepared, ws: &mut Workspace, mode: Mode, idx: &[u32; 8], 
 fn scatter(prep: &Prepared, ws: &mut Workspace, kind: Kind, depth: u32, idx: &[u32; 8], active: usize) {
     let (d, srf, sph) = surfaces(prep, ws, idx);
     let cur = &ws.cur;
-    let mut rng = Xoshiro128PlusX8 {
-        s: std::array::from_fn(|w| gather_u(&cur.rng[w], idx)),
-    };
+    let mut rng = Xoshiro128PlusX8 { s: std::array::from_fn(|w| gather_u(&cur.rng[w], idx)) };
     let rows: [usize; 8] = std::array::from_fn(|k| prep.spheres.row[sph[k] as usize] as usize);
     let m = &prep.materials;
     let thr = v3_gather(&cur.thr, idx);
@@ -377,11 +385,7 @@ fn scatter(prep: &Prepared, ws: &mut Workspace, kind: Kind, depth: u32, idx: &[u
         Kind::Dielectric => {
             let ior = f32x8::new(rows.map(|r| m.dielectric[r]));
             let one = V3::splat3([1.0; 3]);
-            (
-                dielectric(d, srf.n, srf.front, ior, &mut rng),
-                thr.mul_elem(one),
-                all_lanes(),
-            )
+            (dielectric(d, srf.n, srf.front, ior, &mut rng), thr.mul_elem(one), all_lanes())
         }
     };
     let zero = f32x8::splat(0.0);
@@ -395,20 +399,7 @@ fn scatter(prep: &Prepared, ws: &mut Workspace, kind: Kind, depth: u32, idx: &[u
         thr = t;
         alive &= survives;
     }
-    let alive = alive.to_bitmask();
-    let o = lanes(spawn(&srf, dir));
-    let (dl, tl) = (lanes(dir), lanes(thr));
-    let rl: [[u32; 8]; 4] = rng.s.map(|w| w.to_array());
-    for k in 0..active {
-        if alive & (1 << k) != 0 {
-            let slot = ws.cur.slot[idx[k] as usize];
-            ws.next.push(
-                [o[0][k], o[1][k], o[2][k]],
-                [dl[0][k], dl[1][k], dl[2][k]],
-                [tl[0][k], tl[1][k], tl[2][k]],
-                [rl[0][k], rl[1][k], rl[2][k], rl[3][k]],
-                slot,
-            );
-        }
-    }
+    let alive = alive.to_bitmask() & ((1u32 << active) - 1);
+    let slot = gather_u(&cur.slot, idx);
+    ws.next.append(alive, spawn(&srf, dir), dir, thr, &rng, slot);
 }

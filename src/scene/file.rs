@@ -12,18 +12,10 @@ pub enum Format {
 
 impl Format {
     pub fn from_path(path: &Path) -> Result<Format> {
-        match path
-            .extension()
-            .and_then(|e| e.to_str())
-            .map(|e| e.to_ascii_lowercase())
-            .as_deref()
-        {
+        match path.extension().and_then(|e| e.to_str()).map(|e| e.to_ascii_lowercase()).as_deref() {
             Some("json") => Ok(Format::Json),
             Some("toml") => Ok(Format::Toml),
-            _ => Err(Error::Input(format!(
-                "{}: unknown scene file type (use .json or .toml)",
-                path.display()
-            ))),
+            _ => Err(Error::Input(format!("{}: unknown scene file type (use .json or .toml)", path.display()))),
         }
     }
 }
@@ -37,8 +29,12 @@ fn line_col(text: &str, offset: usize) -> (usize, usize) {
 }
 
 fn field_prefix(path: &serde_path_to_error::Path) -> String {
-    let p = path.to_string();
-    if p == "." || p.is_empty() {
+    let mut p = path.to_string();
+    // A syntax error inside an object ends the path in `?` (the key it could not read).
+    while let Some(rest) = p.strip_suffix(".?") {
+        p.truncate(rest.len());
+    }
+    if p == "." || p == "?" || p.is_empty() {
         String::new()
     } else {
         format!("{p}: ")
@@ -47,10 +43,7 @@ fn field_prefix(path: &serde_path_to_error::Path) -> String {
 
 /// Parses and validates a scene; `origin` names the source in errors.
 pub fn scene_from_str(text: &str, format: Format, origin: &Path) -> Result<Scene> {
-    let parse_err = |message: String| Error::Parse {
-        path: origin.to_path_buf(),
-        message,
-    };
+    let parse_err = |message: String| Error::Parse { path: origin.to_path_buf(), message };
     let scene: Scene = match format {
         Format::Json => {
             let mut de = serde_json::Deserializer::from_str(text);
@@ -64,7 +57,9 @@ pub fn scene_from_str(text: &str, format: Format, origin: &Path) -> Result<Scene
                     inner.column()
                 ))
             })?;
-            de.end().map_err(|e| parse_err(format!("{e}")))?;
+            de.end().map_err(|e| {
+                parse_err(format!("{} (line {}, column {})", strip_position(&e.to_string()), e.line(), e.column()))
+            })?;
             scene
         }
         Format::Toml => {
@@ -112,8 +107,10 @@ pub fn scene_to_string(scene: &Scene, format: Format) -> String {
 }
 
 /// Writes a scene file, atomically, in the format its extension names.
+/// A path without .json / .toml is an output error, like any other unwritable path.
 pub fn save_scene(scene: &Scene, path: &Path) -> Result<()> {
-    let format = Format::from_path(path)?;
+    let out_err = |message: String| Error::Output { path: path.to_path_buf(), message };
+    let format = Format::from_path(path).map_err(|_| out_err("unknown scene file type (use .json or .toml)".into()))?;
     crate::output::write_atomic(path, scene_to_string(scene, format).as_bytes())
 }
 

@@ -37,12 +37,53 @@ impl Mode {
     }
 }
 
+/// Written as `{"type": "<kind>", ...fields}`. Read through [`MaterialFields`]:
+/// serde reads an internally tagged enum through a buffer, and errors inside it
+/// (`"ior": "abc"`) would name neither the field nor its position.
 #[derive(Serialize, Deserialize, Clone, Copy, Debug, PartialEq)]
-#[serde(tag = "type", rename_all = "lowercase", deny_unknown_fields)]
+#[serde(tag = "type", rename_all = "lowercase", try_from = "MaterialFields")]
 pub enum Material {
     Lambertian { albedo: [f32; 3] },
     Metal { albedo: [f32; 3], fuzz: f32 },
     Dielectric { ior: f32 },
+}
+
+/// A material as a file writes it: every field of every kind, checked against
+/// its `type` afterwards.
+#[derive(Deserialize)]
+#[serde(deny_unknown_fields)]
+struct MaterialFields {
+    #[serde(rename = "type")]
+    kind: Kind,
+    albedo: Option<[f32; 3]>,
+    fuzz: Option<f32>,
+    ior: Option<f32>,
+}
+
+impl TryFrom<MaterialFields> for Material {
+    type Error = String;
+    fn try_from(m: MaterialFields) -> std::result::Result<Self, String> {
+        let name = m.kind.name();
+        fn need<T>(v: Option<T>, field: &str, name: &str) -> std::result::Result<T, String> {
+            v.ok_or_else(|| format!("missing field `{field}` for a {name} material"))
+        }
+        let present = [("albedo", m.albedo.is_some()), ("fuzz", m.fuzz.is_some()), ("ior", m.ior.is_some())];
+        let (material, fields) = match m.kind {
+            Kind::Lambertian => (Material::Lambertian { albedo: need(m.albedo, "albedo", name)? }, &["albedo"][..]),
+            Kind::Metal => (
+                Material::Metal { albedo: need(m.albedo, "albedo", name)?, fuzz: need(m.fuzz, "fuzz", name)? },
+                &["albedo", "fuzz"][..],
+            ),
+            Kind::Dielectric => (Material::Dielectric { ior: need(m.ior, "ior", name)? }, &["ior"][..]),
+        };
+        match present.iter().find(|(f, p)| *p && !fields.contains(f)) {
+            Some((f, _)) => Err(format!(
+                "unknown field `{f}` for a {name} material, expected {}",
+                fields.iter().map(|f| format!("`{f}`")).collect::<Vec<_>>().join(" and ")
+            )),
+            None => Ok(material),
+        }
+    }
 }
 
 /// Material kinds, one wavefront queue each.
@@ -62,6 +103,15 @@ impl Kind {
             Kind::Metal => "metal",
             Kind::Dielectric => "dielectric",
         }
+    }
+}
+
+/// A material's `type`: a string naming the kind.
+impl<'de> Deserialize<'de> for Kind {
+    fn deserialize<D: serde::Deserializer<'de>>(d: D) -> std::result::Result<Self, D::Error> {
+        const NAMES: &[&str] = &["lambertian", "metal", "dielectric"];
+        let s = String::deserialize(d)?;
+        Kind::ALL.into_iter().find(|k| k.name() == s).ok_or_else(|| serde::de::Error::unknown_variant(&s, NAMES))
     }
 }
 
@@ -154,10 +204,7 @@ pub struct Sky {
 
 impl Default for Sky {
     fn default() -> Self {
-        Sky {
-            horizon: [1.0, 1.0, 1.0],
-            zenith: [0.5, 0.7, 1.0],
-        }
+        Sky { horizon: [1.0, 1.0, 1.0], zenith: [0.5, 0.7, 1.0] }
     }
 }
 
@@ -181,6 +228,33 @@ pub struct RenderDefaults {
     pub max_depth: Option<u32>,
     #[serde(default, skip_serializing_if = "Option::is_none")]
     pub seed: Option<u64>,
+}
+
+impl RenderDefaults {
+    /// The same limits as `plan::Settings::validate`, naming the scene's fields
+    /// (a CLI flag may override a value, but a file that asks for 0 is wrong).
+    pub fn validate(&self) -> Result<()> {
+        for (name, v) in [
+            ("render.width", self.width),
+            ("render.height", self.height),
+            ("render.samples_per_pixel", self.samples_per_pixel),
+            ("render.max_depth", self.max_depth),
+        ] {
+            if v == Some(0) {
+                return Err(Error::invalid(name, "must be at least 1"));
+            }
+        }
+        if let (Some(w), Some(h)) = (self.width, self.height) {
+            let px = w as u64 * h as u64;
+            if px > crate::plan::MAX_PIXELS {
+                return Err(Error::invalid(
+                    "render.width x render.height",
+                    format!("{w}x{h} = {px} pixels; at most {} fit in memory", crate::plan::MAX_PIXELS),
+                ));
+            }
+        }
+        Ok(())
+    }
 }
 
 fn is_default<T: Default + PartialEq>(v: &T) -> bool {
@@ -223,10 +297,7 @@ fn finite(field: &str, v: f32) -> Result<()> {
 fn colour(field: &str, v: [f32; 3]) -> Result<()> {
     finite3(field, v)?;
     if v.iter().any(|&x| x < 0.0) {
-        return Err(Error::invalid(
-            field,
-            format!("colour components must be >= 0, got {v:?}"),
-        ));
+        return Err(Error::invalid(field, format!("colour components must be >= 0, got {v:?}")));
     }
     Ok(())
 }
@@ -251,31 +322,19 @@ impl Scene {
             }
             let sin = up.cross(wv).length() / (up.length() * wv.length());
             if !(sin > 1e-6) {
-                return Err(Error::invalid(
-                    "camera.vup",
-                    "must not be parallel to the view direction",
-                ));
+                return Err(Error::invalid("camera.vup", "must not be parallel to the view direction"));
             }
         }
         if !(c.vfov_deg > 0.0 && c.vfov_deg < 180.0) {
-            return Err(Error::invalid(
-                "camera.vfov_deg",
-                format!("must be in (0, 180), got {}", c.vfov_deg),
-            ));
+            return Err(Error::invalid("camera.vfov_deg", format!("must be in (0, 180), got {}", c.vfov_deg)));
         }
         if c.defocus_angle_deg.is_some() && c.aperture.is_some() {
-            return Err(Error::invalid(
-                "camera.aperture",
-                "give either aperture or defocus_angle_deg, not both",
-            ));
+            return Err(Error::invalid("camera.aperture", "give either aperture or defocus_angle_deg, not both"));
         }
         if let Some(a) = c.defocus_angle_deg {
             finite("camera.defocus_angle_deg", a)?;
             if !(0.0..180.0).contains(&a) {
-                return Err(Error::invalid(
-                    "camera.defocus_angle_deg",
-                    format!("must be in [0, 180), got {a}"),
-                ));
+                return Err(Error::invalid("camera.defocus_angle_deg", format!("must be in [0, 180), got {a}")));
             }
         }
         if let Some(a) = c.aperture {
@@ -290,6 +349,7 @@ impl Scene {
                 return Err(Error::invalid("camera.focus_dist", format!("must be > 0, got {f}")));
             }
         }
+        self.render.validate()?;
         colour("sky.horizon", self.sky.horizon)?;
         colour("sky.zenith", self.sky.zenith)?;
         if self.spheres.len() > MAX_SPHERES {
@@ -311,10 +371,7 @@ impl Scene {
                     colour(&f("material.albedo"), albedo)?;
                     finite(&f("material.fuzz"), fuzz)?;
                     if !(0.0..=1.0).contains(&fuzz) {
-                        return Err(Error::invalid(
-                            f("material.fuzz"),
-                            format!("must be in [0, 1], got {fuzz}"),
-                        ));
+                        return Err(Error::invalid(f("material.fuzz"), format!("must be in [0, 1], got {fuzz}")));
                     }
                 }
                 Material::Dielectric { ior } => {

@@ -21,11 +21,7 @@ const fn glass(ior: f32) -> Material {
     Material::Dielectric { ior }
 }
 const fn sphere(center: [f32; 3], radius: f32, material: Material) -> Sphere {
-    Sphere {
-        center,
-        radius,
-        material,
-    }
+    Sphere { center, radius, material }
 }
 
 fn settings(width: u32, height: u32, spp: u32, depth: u32) -> RenderDefaults {
@@ -45,13 +41,7 @@ fn origin_camera() -> Camera {
 }
 
 fn scene(mode: Mode, camera: Camera, spheres: Vec<Sphere>, render: RenderDefaults) -> Scene {
-    Scene {
-        mode,
-        camera,
-        spheres,
-        sky: Sky::default(),
-        render,
-    }
+    Scene { mode, camera, spheres, sky: Sky::default(), render }
 }
 
 const SMALL: fn() -> RenderDefaults = || settings(400, 225, 1, 1);
@@ -78,19 +68,11 @@ fn ch05_ground() -> Scene {
     scene(Mode::Normals, origin_camera(), vec![red_ball(), ground_100()], SMALL())
 }
 fn ch06() -> Scene {
-    scene(
-        Mode::Normals,
-        origin_camera(),
-        vec![red_ball(), ground_100()],
-        settings(400, 225, 100, 1),
-    )
+    scene(Mode::Normals, origin_camera(), vec![red_ball(), ground_100()], settings(400, 225, 100, 1))
 }
 fn ch07() -> Scene {
     let grey = lam([0.5, 0.5, 0.5]);
-    let spheres = vec![
-        sphere([0.0, 0.0, -1.0], 0.5, grey),
-        sphere([0.0, -100.5, -1.0], 100.0, grey),
-    ];
+    let spheres = vec![sphere([0.0, 0.0, -1.0], 0.5, grey), sphere([0.0, -100.5, -1.0], 100.0, grey)];
     scene(Mode::Path, origin_camera(), spheres, settings(400, 225, 100, 50))
 }
 fn metals(center: [f32; 3], fuzz_left: f32, fuzz_right: f32) -> Vec<Sphere> {
@@ -102,20 +84,10 @@ fn metals(center: [f32; 3], fuzz_left: f32, fuzz_right: f32) -> Vec<Sphere> {
     ]
 }
 fn ch08_metal() -> Scene {
-    scene(
-        Mode::Path,
-        origin_camera(),
-        metals([0.8, 0.3, 0.3], 0.0, 0.0),
-        settings(400, 225, 100, 50),
-    )
+    scene(Mode::Path, origin_camera(), metals([0.8, 0.3, 0.3], 0.0, 0.0), settings(400, 225, 100, 50))
 }
 fn ch08_fuzz() -> Scene {
-    scene(
-        Mode::Path,
-        origin_camera(),
-        metals([0.8, 0.3, 0.3], 0.3, 1.0),
-        settings(400, 225, 100, 50),
-    )
+    scene(Mode::Path, origin_camera(), metals([0.8, 0.3, 0.3], 0.3, 1.0), settings(400, 225, 100, 50))
 }
 /// Chapter 9's scene: a hollow glass ball on the left (a negative-radius sphere inside).
 fn glass_scene() -> Vec<Sphere> {
@@ -132,10 +104,8 @@ fn ch09() -> Scene {
 }
 fn ch10_wide() -> Scene {
     let r = std::f32::consts::FRAC_PI_4.cos();
-    let spheres = vec![
-        sphere([-r, 0.0, -1.0], r, lam([0.0, 0.0, 1.0])),
-        sphere([r, 0.0, -1.0], r, lam([1.0, 0.0, 0.0])),
-    ];
+    let spheres =
+        vec![sphere([-r, 0.0, -1.0], r, lam([0.0, 0.0, 1.0])), sphere([r, 0.0, -1.0], r, lam([1.0, 0.0, 0.0]))];
     scene(Mode::Path, origin_camera(), spheres, settings(400, 225, 100, 50))
 }
 fn ch10_look(vfov: f32) -> Scene {
@@ -188,27 +158,71 @@ pub fn final_scene() -> Scene {
     scene(Mode::Path, cam, spheres, settings(400, 225, 32, 50))
 }
 
+/// `s` with every length multiplied by `k`: sphere centres and radii, the
+/// camera's position, target, focus distance and aperture. The defocus angle
+/// and the field of view are angles and stay. The image is the same up to noise.
+fn scaled(mut s: Scene, k: f32) -> Scene {
+    for sp in &mut s.spheres {
+        sp.center = sp.center.map(|x| x * k);
+        sp.radius *= k;
+    }
+    let c = &mut s.camera;
+    c.look_from = c.look_from.map(|x| x * k);
+    c.look_at = c.look_at.map(|x| x * k);
+    c.focus_dist = c.focus_dist.map(|f| f * k);
+    c.aperture = c.aperture.map(|a| a * k);
+    s
+}
+
+/// Stress: the final scene 1000 times smaller (small spheres of radius 2e-4).
+fn stress_final_small() -> Scene {
+    scaled(final_scene(), 1e-3)
+}
+
+/// Stress: the final scene 1000 times larger (a ground of radius 1e6).
+fn stress_final_large() -> Scene {
+    scaled(final_scene(), 1e3)
+}
+
+/// Stress: chapter 9's scene scaled so that its spheres have radius 1e-4.
+fn stress_tiny() -> Scene {
+    scaled(ch09(), 2e-4)
+}
+
+/// Stress: a diffuse sphere of radius 1e6 seen from 1 unit above its top
+/// (1e-6 of its radius), looking slightly down: a plane to the horizon.
+fn stress_horizon() -> Scene {
+    let ground = sphere([0.0, -1e6, 0.0], 1e6, lam([0.5, 0.5, 0.5]));
+    let cam = Camera::looking([0.0, 1.0, 0.0], [0.0, 0.0, -20.0], 30.0);
+    scene(Mode::Path, cam, vec![ground], settings(400, 225, 32, 50))
+}
+
+/// Stress: the final scene from 1e5 away along the book's line of sight, with
+/// the field of view (about 0.0027 degrees) that frames the look-at plane as
+/// the book does, the book's defocus angle and its focus plane.
+fn stress_far_camera() -> Scene {
+    let mut s = final_scene();
+    let from = glam::DVec3::new(13.0, 2.0, 3.0);
+    let book = from.length();
+    let dist = 1e5;
+    let vfov = 2.0 * (book * 10f64.to_radians().tan() / dist).atan().to_degrees();
+    let c = &mut s.camera;
+    c.look_from = (from / book * dist).to_array().map(|x| x as f32);
+    c.look_at = [0.0; 3];
+    c.vfov_deg = vfov as f32;
+    c.focus_dist = Some((dist - (book - 10.0)) as f32);
+    s
+}
+
 static PRESETS: &[Preset] = &[
     Preset {
         name: "ch01-gradient",
         description: "ch. 1: the first image, a red/green gradient (no rays)",
         build: ch01,
     },
-    Preset {
-        name: "ch03-sky",
-        description: "ch. 3: camera rays and the white-to-blue sky",
-        build: ch03,
-    },
-    Preset {
-        name: "ch04-sphere",
-        description: "ch. 4: a sphere hit test, drawn flat red over the sky",
-        build: ch04,
-    },
-    Preset {
-        name: "ch05-normals",
-        description: "ch. 5: the sphere shaded by its surface normal",
-        build: ch05_normals,
-    },
+    Preset { name: "ch03-sky", description: "ch. 3: camera rays and the white-to-blue sky", build: ch03 },
+    Preset { name: "ch04-sphere", description: "ch. 4: a sphere hit test, drawn flat red over the sky", build: ch04 },
+    Preset { name: "ch05-normals", description: "ch. 5: the sphere shaded by its surface normal", build: ch05_normals },
     Preset {
         name: "ch05-ground",
         description: "ch. 5: normal shading of a list of hitables (sphere + ground)",
@@ -254,15 +268,36 @@ static PRESETS: &[Preset] = &[
         description: "ch. 10: the glass scene from (-2,2,1) with vfov 20",
         build: || ch10_look(20.0),
     },
-    Preset {
-        name: "ch11-defocus",
-        description: "ch. 11: defocus blur, aperture 2.0 from (3,3,2)",
-        build: ch11,
-    },
+    Preset { name: "ch11-defocus", description: "ch. 11: defocus blur, aperture 2.0 from (3,3,2)", build: ch11 },
     Preset {
         name: "final",
         description: "ch. 12: the book's random spheres (487 spheres, thin lens)",
         build: final_scene,
+    },
+    Preset {
+        name: "stress-final-small",
+        description: "stress: the final scene scaled by 1e-3 (spheres of radius 2e-4)",
+        build: stress_final_small,
+    },
+    Preset {
+        name: "stress-final-large",
+        description: "stress: the final scene scaled by 1e3 (a ground of radius 1e6)",
+        build: stress_final_large,
+    },
+    Preset {
+        name: "stress-horizon",
+        description: "stress: a sphere of radius 1e6 seen from 1 above its surface",
+        build: stress_horizon,
+    },
+    Preset {
+        name: "stress-tiny",
+        description: "stress: ch. 9's scene with spheres of radius 1e-4",
+        build: stress_tiny,
+    },
+    Preset {
+        name: "stress-far-camera",
+        description: "stress: the final scene from 1e5 away, vfov 0.0027 degrees",
+        build: stress_far_camera,
     },
 ];
 
@@ -290,11 +325,7 @@ mod tests {
     #[test]
     fn final_scene_has_the_book_shape() {
         let s = final_scene();
-        assert!(
-            s.spheres.len() > 400 && s.spheres.len() <= 1 + 22 * 22 + 3,
-            "{}",
-            s.spheres.len()
-        );
+        assert!(s.spheres.len() > 400 && s.spheres.len() <= 1 + 22 * 22 + 3, "{}", s.spheres.len());
         assert_eq!(s.spheres[0].radius, 1000.0);
         let kinds = |k| s.spheres.iter().filter(|sp| sp.material.kind() == k).count();
         use crate::scene::Kind;

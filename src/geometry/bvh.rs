@@ -1,0 +1,515 @@
+//! A bounding volume hierarchy over spheres: built with the surface area
+//! heuristic (binned, binary), then collapsed to 8-wide nodes so one ray tests
+//! 8 child boxes at once (`f32x8`), and leaves of up to 8 spheres that one ray
+//! tests at once. The scalar kernel walks the same tree one box at a time.
+//!
+//! # Same closest hit as brute force, bit for bit
+//!
+//! Leaves use the very sphere test of brute force (`sphere_disc`/`sphere_t`),
+//! so each sphere's `t` has the same bits; the tree only decides which spheres
+//! are tested. The closest hit is the same as long as no box is pruned that
+//! holds a sphere whose computed `t` is at most the best so far, and ties go to
+//! the lowest sphere index (`t < best || t == best && i < best_i`). Pruning is
+//! made conservative with two bounds:
+//!
+//! * The sphere test decides on rounded values: `f = o - c` is off by up to
+//!   `u |f|` per component (u = 2^-24) and the computed hit point `o + t d` lies
+//!   within about `8 u (|f| + |r|)` of the true sphere. Every box is therefore
+//!   padded by `PAD * D`, where `D` bounds `|f| + |r|` for every ray of the
+//!   scene (spheres' extent plus the camera's), `PAD = 2^-19 = 32 u`.
+//! * The slab test's own rounding: entry and exit distances carry at most
+//!   `3 u` relative error, so exits are scaled by `1 + 2 gamma_3` (Ize 2013,
+//!   "Robust BVH ray traversal") and a box is pruned only when its entry
+//!   exceeds `best * (1 + 2^-20)`.
+
+use super::intersect::{sphere_disc, sphere_t};
+use super::spheres::{Spheres, MISS};
+use crate::real::Real;
+use crate::vec3::V3;
+use std::mem::MaybeUninit;
+use wide::{f32x8, i32x8, u32x8};
+
+const PAD: f32 = 1.0 / 524_288.0; // 2^-19
+/// 1 + 2 gamma_3 with gamma_3 = 3u / (1 - 3u), rounded up.
+const EXIT_SCALE: f32 = 1.0 + 2.0 * (3.0 / 16_777_216.0) * 1.000_001;
+/// Prune a box only when its entry is beyond `best * PRUNE_SCALE`.
+const PRUNE_SCALE: f32 = 1.0 + 1.0 / 1_048_576.0;
+/// Directions components smaller than this are replaced by it (with their
+/// sign) in the slab test, so that `0 * inf` never makes a NaN.
+const TINY_DIR: f32 = 1e-30;
+/// Binary build depth beyond which splits are forced to the median, so the
+/// tree stays shallow whatever the scene (and the traversal stack bounded).
+const MAX_SAH_DEPTH: usize = 32;
+/// Traversal stack: each 8-wide level pushes at most 7 more entries than it
+/// pops, and the tree has at most MAX_SAH_DEPTH + 24 levels (2^24 spheres).
+const STACK: usize = 7 * (MAX_SAH_DEPTH + 24) + 1;
+
+#[derive(Clone, Copy, Debug)]
+struct Aabb {
+    min: [f32; 3],
+    max: [f32; 3],
+}
+
+impl Aabb {
+    const EMPTY: Aabb = Aabb { min: [f32::INFINITY; 3], max: [f32::NEG_INFINITY; 3] };
+    fn grow(&mut self, o: &Aabb) {
+        for a in 0..3 {
+            self.min[a] = self.min[a].min(o.min[a]);
+            self.max[a] = self.max[a].max(o.max[a]);
+        }
+    }
+    fn area(&self) -> f32 {
+        let e: [f32; 3] = std::array::from_fn(|a| (self.max[a] - self.min[a]).max(0.0));
+        2.0 * (e[0] * e[1] + e[1] * e[2] + e[2] * e[0])
+    }
+}
+
+/// A node of the 8-wide tree: 8 child boxes in SoA, each an inner node, a
+/// leaf (a run of up to 8 spheres in leaf order) or empty.
+#[derive(Clone, Copy, Debug)]
+#[repr(C, align(32))]
+pub struct Node8 {
+    min: [[f32; 8]; 3],
+    max: [[f32; 8]; 3],
+    /// Inner: node index. Leaf: first sphere in leaf order.
+    child: [u32; 8],
+    /// 0: inner node; 1..=8: leaf with that many spheres; `EMPTY`: no child.
+    count: [u8; 8],
+}
+
+const EMPTY: u8 = u8::MAX;
+
+/// The tree plus the spheres in leaf order (SoA, padded by 8 for whole loads).
+#[derive(Clone, Debug)]
+pub struct Bvh {
+    nodes: Vec<Node8>,
+    cx: Vec<f32>,
+    cy: Vec<f32>,
+    cz: Vec<f32>,
+    r2: Vec<f32>,
+    /// Original sphere index of each leaf-order slot.
+    index: Vec<u32>,
+}
+
+/// A binary build node (temporary).
+struct BNode {
+    bounds: Aabb,
+    /// Inner: children; leaf: `start..start+count` in the build order.
+    left: u32,
+    right: u32,
+    start: u32,
+    count: u32,
+}
+
+const BINS: usize = 16;
+
+struct Builder<'a> {
+    boxes: &'a [Aabb],
+    centroid: Vec<[f32; 3]>,
+    order: Vec<u32>,
+    nodes: Vec<BNode>,
+}
+
+impl Builder<'_> {
+    fn bounds(&self, lo: usize, hi: usize) -> Aabb {
+        let mut b = Aabb::EMPTY;
+        for &i in &self.order[lo..hi] {
+            b.grow(&self.boxes[i as usize]);
+        }
+        b
+    }
+
+    /// Builds the subtree over `order[lo..hi]`; returns its node index.
+    fn build(&mut self, lo: usize, hi: usize, depth: usize) -> u32 {
+        let bounds = self.bounds(lo, hi);
+        let n = hi - lo;
+        let id = self.nodes.len() as u32;
+        self.nodes.push(BNode { bounds, left: 0, right: 0, start: lo as u32, count: n as u32 });
+        // Cost model: a leaf of up to 8 spheres costs one 8-wide sphere test (1.0);
+        // an inner level costs one 8-wide box test (0.5) plus its children by area.
+        let leaf_cost = n.div_ceil(8) as f32;
+        if n <= 1 {
+            return id;
+        }
+        let mut cb = Aabb::EMPTY;
+        for &i in &self.order[lo..hi] {
+            let c = self.centroid[i as usize];
+            cb.grow(&Aabb { min: c, max: c });
+        }
+        let mut best: Option<(f32, usize, f32)> = None; // (cost, axis, split position)
+        let area = bounds.area().max(f32::MIN_POSITIVE);
+        for axis in 0..3 {
+            let (lo_c, hi_c) = (cb.min[axis], cb.max[axis]);
+            if !(hi_c > lo_c) {
+                continue;
+            }
+            let scale = BINS as f32 / (hi_c - lo_c);
+            let bin_of = |c: f32| (((c - lo_c) * scale) as usize).min(BINS - 1);
+            let mut bin_box = [Aabb::EMPTY; BINS];
+            let mut bin_n = [0usize; BINS];
+            for &i in &self.order[lo..hi] {
+                let b = bin_of(self.centroid[i as usize][axis]);
+                bin_box[b].grow(&self.boxes[i as usize]);
+                bin_n[b] += 1;
+            }
+            for split in 1..BINS {
+                let (mut lb, mut rb) = (Aabb::EMPTY, Aabb::EMPTY);
+                let (mut ln, mut rn) = (0, 0);
+                for b in 0..split {
+                    lb.grow(&bin_box[b]);
+                    ln += bin_n[b];
+                }
+                for b in split..BINS {
+                    rb.grow(&bin_box[b]);
+                    rn += bin_n[b];
+                }
+                if ln == 0 || rn == 0 {
+                    continue;
+                }
+                let cost = 0.5 + (lb.area() * ln.div_ceil(8) as f32 + rb.area() * rn.div_ceil(8) as f32) / area;
+                if best.is_none_or(|(c, _, _)| cost < c) {
+                    best = Some((cost, axis, lo_c + split as f32 / scale));
+                }
+            }
+        }
+        let mid = match best {
+            _ if depth >= MAX_SAH_DEPTH && n > 8 => n / 2,
+            Some((cost, axis, pos)) if n > 8 || cost < leaf_cost => {
+                let cent = &self.centroid;
+                let slice = &mut self.order[lo..hi];
+                let mut m = 0;
+                for k in 0..slice.len() {
+                    if cent[slice[k] as usize][axis] < pos {
+                        slice.swap(k, m);
+                        m += 1;
+                    }
+                }
+                if m == 0 || m == n {
+                    n / 2
+                } else {
+                    m
+                }
+            }
+            // All centroids coincide: split in the middle if too many for a leaf.
+            None if n > 8 => n / 2,
+            _ => return id,
+        };
+        let left = self.build(lo, lo + mid, depth + 1);
+        let right = self.build(lo + mid, hi, depth + 1);
+        let node = &mut self.nodes[id as usize];
+        node.left = left;
+        node.right = right;
+        node.count = 0;
+        id
+    }
+}
+
+impl Bvh {
+    /// Builds the tree; `extent` bounds |coordinates| of every ray origin
+    /// (the camera and its lens), used to pad the boxes.
+    pub fn build(s: &Spheres, extent: f32) -> Bvh {
+        let n = s.len;
+        let mut d = extent.abs();
+        for i in 0..n {
+            d = d.max(s.cx[i].abs().max(s.cy[i].abs()).max(s.cz[i].abs()) + s.r[i].abs());
+        }
+        let pad = 2.0 * d * PAD;
+        let boxes: Vec<Aabb> = (0..n)
+            .map(|i| {
+                let c = [s.cx[i], s.cy[i], s.cz[i]];
+                let r = s.r[i].abs();
+                Aabb { min: c.map(|x| x - r - pad), max: c.map(|x| x + r + pad) }
+            })
+            .collect();
+        let centroid = (0..n).map(|i| [s.cx[i], s.cy[i], s.cz[i]]).collect();
+        let mut b = Builder { boxes: &boxes, centroid, order: (0..n as u32).collect(), nodes: Vec::new() };
+        if n > 0 {
+            b.build(0, n, 0);
+        }
+        let mut bvh = Bvh { nodes: Vec::new(), cx: vec![], cy: vec![], cz: vec![], r2: vec![], index: vec![] };
+        for &i in &b.order {
+            let i = i as usize;
+            bvh.cx.push(s.cx[i]);
+            bvh.cy.push(s.cy[i]);
+            bvh.cz.push(s.cz[i]);
+            bvh.r2.push(s.r2[i]);
+            bvh.index.push(i as u32);
+        }
+        for _ in 0..8 {
+            bvh.cx.push(0.0);
+            bvh.cy.push(0.0);
+            bvh.cz.push(0.0);
+            bvh.r2.push(-1.0); // never hit
+            bvh.index.push(MISS);
+        }
+        bvh.nodes.push(Node8 { min: [[0.0; 8]; 3], max: [[0.0; 8]; 3], child: [0; 8], count: [EMPTY; 8] });
+        if n > 0 {
+            bvh.collapse(&b.nodes, 0, 0);
+        }
+        bvh
+    }
+
+    /// Fills node `at` with up to 8 descendants of binary node `root`.
+    fn collapse(&mut self, bn: &[BNode], root: u32, at: usize) {
+        let mut kids = vec![root];
+        if bn[root as usize].count == 0 {
+            kids = vec![bn[root as usize].left, bn[root as usize].right];
+        }
+        // Open the largest inner child until there are 8.
+        while kids.len() < 8 {
+            let open = kids
+                .iter()
+                .enumerate()
+                .filter(|(_, &k)| bn[k as usize].count == 0)
+                .max_by(|a, b| bn[*a.1 as usize].bounds.area().total_cmp(&bn[*b.1 as usize].bounds.area()));
+            let Some((pos, &k)) = open else { break };
+            kids.swap_remove(pos);
+            kids.push(bn[k as usize].left);
+            kids.push(bn[k as usize].right);
+        }
+        for (slot, &k) in kids.iter().enumerate() {
+            let node = &bn[k as usize];
+            for a in 0..3 {
+                self.nodes[at].min[a][slot] = node.bounds.min[a];
+                self.nodes[at].max[a][slot] = node.bounds.max[a];
+            }
+            if node.count == 0 {
+                let child = self.nodes.len();
+                self.nodes.push(Node8 { min: [[0.0; 8]; 3], max: [[0.0; 8]; 3], child: [0; 8], count: [EMPTY; 8] });
+                self.nodes[at].child[slot] = child as u32;
+                self.nodes[at].count[slot] = 0;
+                self.collapse(bn, k, child);
+            } else {
+                self.nodes[at].child[slot] = node.start;
+                self.nodes[at].count[slot] = node.count as u8;
+            }
+        }
+    }
+
+    pub fn node_count(&self) -> usize {
+        self.nodes.len()
+    }
+
+    /// The closest hit of one ray, one box and one sphere at a time (scalar kernel).
+    pub fn closest_hit_scalar(&self, o: V3<f32>, d: V3<f32>) -> (u32, f32) {
+        let inv = inv_dir(d);
+        let mut best_t = f32::INFINITY;
+        let mut best = MISS;
+        let mut stack = Stack::new();
+        while let Some((ni, entry)) = stack.pop() {
+            if entry > best_t * PRUNE_SCALE {
+                continue;
+            }
+            let node = &self.nodes[ni as usize];
+            for k in 0..8 {
+                if node.count[k] == EMPTY {
+                    continue;
+                }
+                let (near, far) = slab(
+                    V3::new(node.min[0][k], node.min[1][k], node.min[2][k]),
+                    V3::new(node.max[0][k], node.max[1][k], node.max[2][k]),
+                    o,
+                    inv,
+                );
+                if !(near <= far * EXIT_SCALE && near <= best_t * PRUNE_SCALE) {
+                    continue;
+                }
+                if node.count[k] == 0 {
+                    stack.push((node.child[k], near));
+                } else {
+                    let start = node.child[k] as usize;
+                    for j in start..start + node.count[k] as usize {
+                        let c = V3::new(self.cx[j], self.cy[j], self.cz[j]);
+                        let (disc, f, b) = sphere_disc(o, d, c, self.r2[j]);
+                        if disc < 0.0 {
+                            continue;
+                        }
+                        let (hit, t) = sphere_t(disc, f, b, self.r2[j]);
+                        let i = self.index[j];
+                        if hit && (t < best_t || (t == best_t && i < best)) {
+                            best_t = t;
+                            best = i;
+                        }
+                    }
+                }
+            }
+        }
+        (best, best_t)
+    }
+
+    /// The closest hit of one ray: 8 child boxes, or 8 leaf spheres, per `f32x8` test.
+    pub fn closest_hit_wide(&self, o: V3<f32>, d: V3<f32>) -> (u32, f32) {
+        let inv = inv_dir(d);
+        let (o8, d8) = (splat3(o), splat3(d));
+        let inv8 = splat3(inv);
+        let mut best_t = f32::INFINITY;
+        let mut best = MISS;
+        let mut stack = Stack::new();
+        while let Some((ni, entry)) = stack.pop() {
+            if entry > best_t * PRUNE_SCALE {
+                continue;
+            }
+            let node = &self.nodes[ni as usize];
+            let bmin = V3::new(f32x8::new(node.min[0]), f32x8::new(node.min[1]), f32x8::new(node.min[2]));
+            let bmax = V3::new(f32x8::new(node.max[0]), f32x8::new(node.max[1]), f32x8::new(node.max[2]));
+            let (near, far) = slab(bmin, bmax, o8, inv8);
+            let ok = near.le(far * f32x8::splat(EXIT_SCALE)) & near.le(f32x8::splat(best_t * PRUNE_SCALE));
+            let mut mask = ok.to_bitmask();
+            let near = near.to_array();
+            // Leaves first (they tighten `best_t`), inner nodes pushed far-to-near.
+            let mut inner: [(u32, f32); 8] = [(0, 0.0); 8];
+            let mut ninner = 0;
+            while mask != 0 {
+                let k = mask.trailing_zeros() as usize;
+                mask &= mask - 1;
+                match node.count[k] {
+                    EMPTY => {}
+                    0 => {
+                        inner[ninner] = (node.child[k], near[k]);
+                        ninner += 1;
+                    }
+                    cnt => self.leaf_wide(node.child[k] as usize, cnt as usize, o8, d8, &mut best_t, &mut best),
+                }
+            }
+            inner[..ninner].sort_unstable_by(|a, b| b.1.total_cmp(&a.1));
+            for &e in &inner[..ninner] {
+                stack.push(e);
+            }
+        }
+        (best, best_t)
+    }
+
+    /// The closest hits of 8 rays walking the tree together (packet traversal):
+    /// a child is entered when any live ray (bit k of `live`) enters its box;
+    /// a leaf's spheres are each broadcast against the 8 rays, as in brute force.
+    pub fn closest_hit_packet(&self, o: V3<f32x8>, d: V3<f32x8>, live: u32) -> (u32x8, f32x8) {
+        let inv = V3::new(inv_lanes(d.x), inv_lanes(d.y), inv_lanes(d.z));
+        let live_mask: f32x8 = bytemuck::cast(u32x8::new(std::array::from_fn(|k| 0u32.wrapping_sub((live >> k) & 1))));
+        let mut best_t = f32x8::splat(f32::INFINITY);
+        let mut best = i32x8::splat(MISS as i32);
+        let mut stack = Stack::new();
+        let exit = f32x8::splat(EXIT_SCALE);
+        let prune = f32x8::splat(PRUNE_SCALE);
+        while let Some((ni, _)) = stack.pop() {
+            let node = &self.nodes[ni as usize];
+            for k in 0..8 {
+                let count = node.count[k];
+                if count == EMPTY {
+                    continue;
+                }
+                let bmin = V3::new(node.min[0][k], node.min[1][k], node.min[2][k]);
+                let bmax = V3::new(node.max[0][k], node.max[1][k], node.max[2][k]);
+                let (near, far) = slab(splat3(bmin), splat3(bmax), o, inv);
+                let enter = near.le(far * exit) & near.le(best_t * prune) & live_mask;
+                if !enter.any() {
+                    continue;
+                }
+                if count == 0 {
+                    stack.push((node.child[k], 0.0));
+                    continue;
+                }
+                let start = node.child[k] as usize;
+                for j in start..start + count as usize {
+                    let c = V3::new(f32x8::splat(self.cx[j]), f32x8::splat(self.cy[j]), f32x8::splat(self.cz[j]));
+                    let r2 = f32x8::splat(self.r2[j]);
+                    let (disc, f, b) = sphere_disc(o, d, c, r2);
+                    if !disc.ge(f32x8::splat(0.0)).any() {
+                        continue;
+                    }
+                    let (hit, t) = sphere_t(disc, f, b, r2);
+                    let i = i32x8::splat(self.index[j] as i32);
+                    let tie: f32x8 = bytemuck::cast(i.simd_lt(best));
+                    let closer = hit & (t.lt(best_t) | (t.eq(best_t) & tie));
+                    best_t = closer.select(t, best_t);
+                    best = bytemuck::cast::<f32x8, i32x8>(closer).select(i, best);
+                }
+            }
+        }
+        (bytemuck::cast(best), best_t)
+    }
+
+    #[inline(always)]
+    fn leaf_wide(&self, start: usize, cnt: usize, o: V3<f32x8>, d: V3<f32x8>, best_t: &mut f32, best: &mut u32) {
+        let ld = |v: &[f32]| f32x8::new(v[start..start + 8].try_into().unwrap());
+        let c = V3::new(ld(&self.cx), ld(&self.cy), ld(&self.cz));
+        let r2 = ld(&self.r2);
+        let (disc, f, b) = sphere_disc(o, d, c, r2);
+        let live = (1u32 << cnt) - 1;
+        if disc.ge(f32x8::splat(0.0)).to_bitmask() & live == 0 {
+            return;
+        }
+        let (hit, t) = sphere_t(disc, f, b, r2);
+        let mut m = hit.to_bitmask() & live;
+        let t = t.to_array();
+        while m != 0 {
+            let k = m.trailing_zeros() as usize;
+            m &= m - 1;
+            let i = self.index[start + k];
+            if t[k] < *best_t || (t[k] == *best_t && i < *best) {
+                *best_t = t[k];
+                *best = i;
+            }
+        }
+    }
+}
+
+/// The traversal stack of (node, entry distance), starting with the root.
+/// Uninitialized storage: filling 2 KiB per ray would cost more than the walk.
+struct Stack {
+    items: [MaybeUninit<(u32, f32)>; STACK],
+    len: usize,
+}
+
+impl Stack {
+    #[inline(always)]
+    fn new() -> Self {
+        let mut s = Stack { items: [const { MaybeUninit::uninit() }; STACK], len: 1 };
+        s.items[0].write((0, 0.0));
+        s
+    }
+    #[inline(always)]
+    fn push(&mut self, e: (u32, f32)) {
+        self.items[self.len].write(e);
+        self.len += 1;
+    }
+    #[inline(always)]
+    fn pop(&mut self) -> Option<(u32, f32)> {
+        if self.len == 0 {
+            return None;
+        }
+        self.len -= 1;
+        // SAFETY: every index below `len` was written by `new` or `push`.
+        Some(unsafe { self.items[self.len].assume_init() })
+    }
+}
+
+#[inline(always)]
+fn splat3(v: V3<f32>) -> V3<f32x8> {
+    V3::new(f32x8::splat(v.x), f32x8::splat(v.y), f32x8::splat(v.z))
+}
+
+/// `1 / d` per lane, with the same tiny-component rule as [`inv_dir`].
+#[inline(always)]
+fn inv_lanes(x: f32x8) -> f32x8 {
+    let tiny = f32x8::splat(TINY_DIR);
+    f32x8::splat(1.0) / x.abs().lt(tiny).select(tiny.copysign(x), x)
+}
+
+#[inline(always)]
+fn inv_dir(d: V3<f32>) -> V3<f32> {
+    let f = |x: f32| 1.0 / if x.abs() < TINY_DIR { TINY_DIR.copysign(x) } else { x };
+    V3::new(f(d.x), f(d.y), f(d.z))
+}
+
+/// Entry and exit distances of the ray `o + t d` (given `1/d`) through boxes,
+/// entry clamped at 0.
+#[inline(always)]
+fn slab<R: Real>(bmin: V3<R>, bmax: V3<R>, o: V3<R>, inv: V3<R>) -> (R, R) {
+    let t0 = (bmin - o).mul_elem(inv);
+    let t1 = (bmax - o).mul_elem(inv);
+    // No NaN can arise (|1/d| <= 1e30, finite coordinates) and the test only
+    // needs to be conservative, so the one-instruction min/max do.
+    let near = t0.x.fast_min(t1.x).fast_max(t0.y.fast_min(t1.y)).fast_max(t0.z.fast_min(t1.z)).fast_max(R::splat(0.0));
+    let far = t0.x.fast_max(t1.x).fast_min(t0.y.fast_max(t1.y)).fast_min(t0.z.fast_max(t1.z));
+    (near, far)
+}

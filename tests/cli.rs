@@ -1,0 +1,351 @@
+//! The `rtow` binary: bad input exits 2 and unwritable outputs exit 1, each
+//! with one `error: ...` line and without touching any output; exported scenes
+//! render the identical image; `--version`, `scenes` and `--stats-json` say
+//! what they promise.
+
+mod bad_input;
+
+use rtow::scene;
+use rtow::{Image, KernelKind, RenderOptions, Settings};
+use std::path::Path;
+use std::process::Command;
+
+const BIN: &str = env!("CARGO_BIN_EXE_rtow");
+/// A small render: a few milliseconds for any preset.
+const SMALL: [&str; 7] = ["--width", "32", "--height", "18", "--spp", "2", "-q"];
+/// What an output that must survive a failed run holds.
+const SENTINEL: &[u8] = b"not an image; a failed run must leave this file alone";
+
+struct Run {
+    code: i32,
+    stdout: String,
+    stderr: String,
+}
+
+fn rtow(dir: &Path, args: &[&str]) -> Run {
+    let out = Command::new(BIN).args(args).current_dir(dir).output().expect("rtow runs");
+    Run {
+        code: out.status.code().expect("rtow exited (not killed by a signal)"),
+        stdout: String::from_utf8(out.stdout).expect("utf-8 stdout"),
+        stderr: String::from_utf8(out.stderr).expect("utf-8 stderr"),
+    }
+}
+
+/// Asserts that the run failed with `code` and said so in exactly one
+/// `error: ...` line on stderr, and nothing on stdout; returns that line.
+fn failure(r: &Run, code: i32, what: &str) -> String {
+    assert!(!r.stderr.contains("panicked"), "{what}: panic: {}", r.stderr);
+    assert_eq!(r.code, code, "{what}: exit status (stderr: {})", r.stderr);
+    let lines: Vec<&str> = r.stderr.lines().collect();
+    assert_eq!(lines.len(), 1, "{what}: stderr is not one line: {:?}", r.stderr);
+    assert!(lines[0].starts_with("error: "), "{what}: {:?}", lines[0]);
+    assert!(r.stdout.is_empty(), "{what}: stdout: {:?}", r.stdout);
+    lines[0].to_string()
+}
+
+fn success(r: &Run, what: &str) {
+    assert_eq!(r.code, 0, "{what}: exit status (stderr: {})", r.stderr);
+}
+
+/// The names in `dir`, sorted (temporary files included: they start with `.rtow-`).
+fn listing(dir: &Path) -> Vec<String> {
+    let mut v: Vec<String> =
+        std::fs::read_dir(dir).unwrap().map(|e| e.unwrap().file_name().to_string_lossy().into_owned()).collect();
+    v.sort();
+    v
+}
+
+#[test]
+fn every_bad_scene_file_exits_2_naming_the_field_and_writes_nothing() {
+    let dir = tempfile::tempdir().unwrap();
+    let d = dir.path();
+    std::fs::write(d.join("keep.png"), SENTINEL).unwrap();
+    for c in bad_input::cases() {
+        std::fs::write(d.join(c.file), &c.text).unwrap();
+        let r = rtow(d, &["render", c.file, "-o", "keep.png", "--float", "new.pfm", "--stats-json", "new.json"]);
+        let line = failure(&r, 2, c.file);
+        bad_input::check_message(&c, &line);
+        assert_eq!(std::fs::read(d.join("keep.png")).unwrap(), SENTINEL, "{}", c.file);
+        let mut want = vec![c.file.to_string(), "keep.png".to_string()];
+        want.sort();
+        assert_eq!(listing(d), want, "{}: files left behind", c.file);
+        std::fs::remove_file(d.join(c.file)).unwrap();
+    }
+}
+
+#[test]
+fn bad_arguments_exit_2_naming_the_argument_and_write_nothing() {
+    let dir = tempfile::tempdir().unwrap();
+    let d = dir.path();
+    std::fs::write(d.join("keep.png"), SENTINEL).unwrap();
+    let render = |extra: &[&'static str]| -> Vec<&'static str> {
+        let mut v = vec!["render", "ch07-diffuse", "-q", "-o", "keep.png", "--stats-json", "new.json"];
+        v.extend_from_slice(extra);
+        v
+    };
+    let cases: Vec<(Vec<&str>, &[&str])> = vec![
+        (render(&["--width", "0"]), &["width: must be at least 1"]),
+        (render(&["--height", "0"]), &["height: must be at least 1"]),
+        (render(&["--spp", "0"]), &["spp: must be at least 1"]),
+        (render(&["--depth", "0"]), &["max_depth: must be at least 1"]),
+        (render(&["--width", "100000", "--height", "100000"]), &["width x height", "memory"]),
+        (render(&["--width", "8192", "--height", "8192", "--spp", "4000000000"]), &["spp: 4000000000"]),
+        (render(&["--width", "-5"]), &["'-5'"]),
+        (render(&["--width", "wide"]), &["--width", "'wide'"]),
+        (render(&["--kernel", "gpu"]), &["--kernel", "'gpu'", "scalar", "simd"]),
+        (render(&["--gamma", "nan"]), &["--gamma", "> 0"]),
+        (render(&["--gamma=-2.2"]), &["--gamma", "> 0"]),
+        (render(&["--gamma", "0"]), &["--gamma", "> 0"]),
+        (render(&["--tile", "0"]), &["tile"]),
+        (render(&["--bogus"]), &["--bogus"]),
+        // Bad input is reported before any output path is looked at.
+        (vec!["render", "ch07-diffuse", "-q", "--width", "0", "-o", "missing/out.png"], &["width"]),
+        (vec!["render", "no-such-preset", "-o", "keep.png"], &["unknown scene 'no-such-preset'"]),
+        (vec!["render", "missing.json", "-o", "keep.png"], &["cannot read missing.json"]),
+        (vec!["render", "scene.yaml", "-o", "keep.png"], &["scene.yaml", "unknown scene file type"]),
+        (vec!["render"], &["<SCENE>"]),
+        (vec!["export", "no-such-preset", "-o", "new.json"], &["unknown preset 'no-such-preset'"]),
+        (vec!["export", "final"], &["--output"]),
+        (vec!["paint"], &["'paint'"]),
+    ];
+    for (args, needles) in cases {
+        let what = args.join(" ");
+        let line = failure(&rtow(d, &args), 2, &what);
+        for n in needles {
+            assert!(line.contains(n), "{what}: {line:?} does not say {n:?}");
+        }
+        assert_eq!(std::fs::read(d.join("keep.png")).unwrap(), SENTINEL, "{what}");
+        assert_eq!(listing(d), ["keep.png"], "{what}: files left behind");
+    }
+}
+
+#[test]
+fn unwritable_outputs_exit_1_before_rendering_and_write_nothing() {
+    let dir = tempfile::tempdir().unwrap();
+    let d = dir.path();
+    std::fs::write(d.join("keep.png"), SENTINEL).unwrap();
+    std::fs::write(d.join("plain"), b"").unwrap();
+    std::fs::create_dir(d.join("dir.png")).unwrap();
+    let render = |extra: &[&'static str]| -> Vec<&'static str> {
+        let mut v = vec!["render", "ch08-fuzz"];
+        v.extend_from_slice(&SMALL);
+        v.extend_from_slice(extra);
+        v
+    };
+    let cases: Vec<(Vec<&str>, &[&str])> = vec![
+        (render(&["-o", "missing/out.png"]), &["missing/out.png", "does not exist"]),
+        (render(&["-o", "plain/out.png"]), &["plain/out.png", "not a folder"]),
+        (render(&["-o", "dir.png"]), &["dir.png", "is a directory"]),
+        (render(&["-o", "out.jpg"]), &["out.jpg", ".png"]),
+        // A later output that cannot be written stops the run before the
+        // image is written, so no run leaves some of its outputs behind.
+        (render(&["-o", "keep.png", "--float", "missing/out.pfm"]), &["missing/out.pfm", "does not exist"]),
+        (render(&["-o", "keep.png", "--float", "out.tiff"]), &["out.tiff", ".pfm"]),
+        (
+            render(&["-o", "keep.png", "--float", "plain/x.exr", "--stats-json", "s.json"]),
+            &["plain/x.exr", "not a folder"],
+        ),
+        (render(&["-o", "keep.png", "--stats-json", "missing/stats.json"]), &["missing/stats.json", "does not exist"]),
+        (render(&["-o", "keep.png", "--stats-json", "dir.png"]), &["dir.png", "is a directory"]),
+        (vec!["export", "final", "-o", "missing/final.json"], &["missing/final.json", "does not exist"]),
+        (vec!["export", "final", "-o", "plain/final.toml"], &["plain/final.toml"]),
+        (vec!["export", "final", "-o", "final.yaml"], &["final.yaml", ".json or .toml"]),
+    ];
+    for (args, needles) in cases {
+        let what = args.join(" ");
+        let line = failure(&rtow(d, &args), 1, &what);
+        assert!(line.starts_with("error: cannot write "), "{what}: {line}");
+        assert!(!line.contains(".rtow-"), "{what}: the temporary name leaked: {line}");
+        for n in needles {
+            assert!(line.contains(n), "{what}: {line:?} does not say {n:?}");
+        }
+        assert_eq!(std::fs::read(d.join("keep.png")).unwrap(), SENTINEL, "{what}");
+        assert_eq!(listing(d), ["dir.png", "keep.png", "plain"], "{what}: files left behind");
+        assert_eq!(listing(&d.join("dir.png")), Vec::<String>::new(), "{what}");
+    }
+}
+
+fn small_settings(scene: &scene::Scene) -> Settings {
+    Settings { width: 32, height: 18, spp: 2, ..rtow::default_settings(scene) }
+}
+
+fn render_lib(scene: &scene::Scene, s: Settings, kernel: KernelKind) -> rtow::Rendered {
+    let opts = RenderOptions { kernel, ..Default::default() };
+    rtow::render(scene, s, opts, None).unwrap()
+}
+
+#[test]
+fn a_render_writes_exactly_its_outputs_and_they_match_the_library() {
+    let dir = tempfile::tempdir().unwrap();
+    let d = dir.path();
+    let preset = scene::preset("ch08-fuzz").unwrap();
+    let s = Settings { max_depth: 7, seed: 12345, ..small_settings(&preset) };
+    let lib = render_lib(&preset, s, KernelKind::Scalar);
+    // Twice: once creating the outputs, once replacing them.
+    for round in 0..2 {
+        let r = rtow(
+            d,
+            &[
+                "render",
+                "ch08-fuzz",
+                "--width",
+                "32",
+                "--height",
+                "18",
+                "--spp",
+                "2",
+                "--depth",
+                "7",
+                "--seed",
+                "12345",
+                "--kernel",
+                "scalar",
+                "-o",
+                "out.png",
+                "--float",
+                "out.pfm",
+                "--stats-json",
+                "stats.json",
+            ],
+        );
+        success(&r, "render");
+        assert!(r.stdout.contains("out.png"), "round {round}: summary line: {:?}", r.stdout);
+        assert_eq!(listing(d), ["out.pfm", "out.png", "stats.json"], "round {round}");
+        let png = image::open(d.join("out.png")).unwrap().into_rgb8();
+        assert_eq!(png.dimensions(), (32, 18));
+        assert_eq!(png.into_raw(), lib.image.to_rgb8(preset.mode.default_gamma()));
+        assert_eq!(Image::load_float(&d.join("out.pfm")).unwrap(), lib.image);
+        let stats: serde_json::Value =
+            serde_json::from_str(&std::fs::read_to_string(d.join("stats.json")).unwrap()).unwrap();
+        assert_eq!(stats["image_hash"], lib.stats.image_hash.as_str());
+    }
+}
+
+#[test]
+fn stats_json_reports_the_run() {
+    let dir = tempfile::tempdir().unwrap();
+    let d = dir.path();
+    for kernel in ["scalar", "simd"] {
+        let r = rtow(
+            d,
+            &[
+                "render",
+                "ch07-diffuse",
+                "--width",
+                "24",
+                "--height",
+                "10",
+                "--spp",
+                "3",
+                "--depth",
+                "9",
+                "--seed",
+                "77",
+                "--threads",
+                "2",
+                "--kernel",
+                kernel,
+                "-q",
+                "-o",
+                "out.png",
+                "--stats-json",
+                "stats.json",
+            ],
+        );
+        success(&r, kernel);
+        assert_eq!(r.stdout, "", "-q prints nothing");
+        let text = std::fs::read_to_string(d.join("stats.json")).unwrap();
+        let v: serde_json::Value = serde_json::from_str(&text).unwrap();
+        let o = v.as_object().unwrap_or_else(|| panic!("not an object: {text}"));
+        for key in [
+            "rays",
+            "samples",
+            "seconds",
+            "mrays_per_s",
+            "kernel",
+            "threads",
+            "isa",
+            "width",
+            "height",
+            "spp",
+            "max_depth",
+            "seed",
+        ] {
+            assert!(o.contains_key(key), "{kernel}: no {key} in {text}");
+        }
+        let u = |k: &str| v[k].as_u64().unwrap_or_else(|| panic!("{k} is not an integer: {text}"));
+        let f = |k: &str| v[k].as_f64().unwrap_or_else(|| panic!("{k} is not a number: {text}"));
+        assert_eq!(v["kernel"], kernel);
+        assert_eq!(v["isa"], rtow::isa());
+        assert_eq!((u("width"), u("height"), u("spp")), (24, 10, 3));
+        assert_eq!((u("max_depth"), u("seed"), u("threads")), (9, 77, 2));
+        assert_eq!(u("samples"), 24 * 10 * 3);
+        // Every sample casts its camera ray; no path casts more than max_depth.
+        assert!(u("rays") >= u("samples") && u("rays") <= u("samples") * 9, "{text}");
+        assert!(f("seconds") > 0.0, "{text}");
+        let mrays = u("rays") as f64 / f("seconds") / 1e6;
+        assert!((f("mrays_per_s") / mrays - 1.0).abs() < 1e-9, "{text}");
+    }
+}
+
+#[test]
+fn version_names_the_simd_instruction_set() {
+    let dir = tempfile::tempdir().unwrap();
+    for flag in ["--version", "-V"] {
+        let r = rtow(dir.path(), &[flag]);
+        success(&r, flag);
+        assert!(r.stdout.contains(env!("CARGO_PKG_VERSION")), "{:?}", r.stdout);
+        assert!(r.stdout.contains(rtow::isa()), "{:?} lacks {:?}", r.stdout, rtow::isa());
+    }
+}
+
+#[test]
+fn scenes_lists_every_preset() {
+    let dir = tempfile::tempdir().unwrap();
+    let r = rtow(dir.path(), &["scenes"]);
+    success(&r, "scenes");
+    let lines: Vec<&str> = r.stdout.lines().collect();
+    assert_eq!(lines.len(), scene::presets().len(), "{}", r.stdout);
+    for (p, line) in scene::presets().iter().zip(&lines) {
+        assert_eq!(line.split_whitespace().next(), Some(p.name), "{line}");
+        assert!(line.contains(p.description), "{line}");
+    }
+}
+
+/// `rtow export` writes every preset in both formats; the file loads back as
+/// the preset and renders the identical image through the library with both
+/// kernels, and through the binary (same PNG, same image hash).
+#[test]
+fn exported_presets_render_the_identical_image() {
+    let dir = tempfile::tempdir().unwrap();
+    let d = dir.path();
+    let kernels = [(KernelKind::Scalar, "scalar"), (KernelKind::Simd, "simd")];
+    let cli_render = |spec: &str, kernel: &str| -> (Vec<u8>, serde_json::Value) {
+        let mut args = vec!["render", spec, "--kernel", kernel, "-o", "cli.png", "--stats-json", "cli.json"];
+        args.extend_from_slice(&SMALL);
+        success(&rtow(d, &args), &format!("render {spec} --kernel {kernel}"));
+        let stats = serde_json::from_str(&std::fs::read_to_string(d.join("cli.json")).unwrap()).unwrap();
+        (std::fs::read(d.join("cli.png")).unwrap(), stats)
+    };
+    for p in scene::presets() {
+        let preset = (p.build)();
+        let s = small_settings(&preset);
+        let want: Vec<Image> = kernels.iter().map(|&(k, _)| render_lib(&preset, s, k).image).collect();
+        let want_cli: Vec<_> = kernels.iter().map(|&(_, k)| cli_render(p.name, k)).collect();
+        for ext in ["json", "toml"] {
+            let file = format!("{}.{ext}", p.name);
+            let r = rtow(d, &["export", p.name, "-o", &file]);
+            success(&r, &file);
+            assert!(r.stdout.is_empty() && r.stderr.is_empty(), "{file}: {:?} {:?}", r.stdout, r.stderr);
+            let loaded = scene::load_scene(&d.join(&file)).unwrap_or_else(|e| panic!("{file}: {e}"));
+            assert_eq!(loaded, preset, "{file}");
+            for (i, &(kernel, name)) in kernels.iter().enumerate() {
+                let got = render_lib(&loaded, small_settings(&loaded), kernel).image;
+                assert!(got == want[i], "{file}: {name} kernel renders a different image");
+                let (png, stats) = cli_render(&file, name);
+                assert!(png == want_cli[i].0, "{file}: {name}: the binary writes a different PNG");
+                assert_eq!(stats["image_hash"], want_cli[i].1["image_hash"], "{file} {name}");
+            }
+        }
+    }
+}

@@ -1,0 +1,209 @@
+//! Scene files through the library: every kind of bad input is an error that
+//! names the field (and its line and column where the parser can place it),
+//! never a panic; writing scene files fails cleanly; valid scenes round-trip.
+
+mod bad_input;
+
+use proptest::prelude::*;
+use rtow::scene::{self, Camera, Format, Material, RenderDefaults, Scene, Sky, Sphere};
+use rtow::{Error, Settings};
+use std::path::Path;
+
+fn format_of(file: &str) -> Format {
+    Format::from_path(Path::new(file)).unwrap()
+}
+
+#[test]
+fn every_bad_scene_is_an_input_error_naming_the_field() {
+    for c in bad_input::cases() {
+        let r = std::panic::catch_unwind(|| scene::scene_from_str(&c.text, format_of(c.file), Path::new(c.file)));
+        let r = r.unwrap_or_else(|_| panic!("{}: panicked", c.file));
+        let e = match r {
+            Ok(s) => panic!("{}: accepted: {s:?}", c.file),
+            Err(e) => e,
+        };
+        assert_eq!(e.exit_code(), 2, "{}: {e}", c.file);
+        let msg = e.to_string();
+        assert_eq!(msg.lines().count(), 1, "{}: not one line: {msg:?}", c.file);
+        bad_input::check_message(&c, &msg);
+        // Errors the parser finds carry the file name, and a position when it has one.
+        if let Error::Parse { path, .. } = &e {
+            assert_eq!(path, Path::new(c.file));
+        } else {
+            assert!(c.at.is_none(), "{}: a {:?} cannot carry a position", c.file, e);
+        }
+    }
+}
+
+#[test]
+fn values_at_the_edges_of_their_ranges_are_accepted() {
+    // Validation must not overreach: the limits themselves are valid.
+    let json = r#"{
+  "camera": {"look_from": [0, 0, 0], "look_at": [0, 0, -1e-6], "vfov_deg": 179.9, "defocus_angle_deg": 0},
+  "spheres": [
+    {"center": [0, 1, -1], "radius": 0.5, "material": {"type": "metal", "albedo": [0, 0, 0], "fuzz": 1}},
+    {"center": [0, 1, -1], "radius": 0.5, "material": {"type": "metal", "albedo": [9, 9, 9], "fuzz": 0}}
+  ],
+  "render": {"width": 1, "height": 134217728, "samples_per_pixel": 1, "max_depth": 1}
+}"#;
+    let toml = "[camera]\nlook_from = [0, 0, 0]\nlook_at = [0, 0, -1]\nvup = [1e-3, 1, 0]\naperture = 0\n\n\
+                [[spheres]]\ncenter = [0, 0, -1]\nradius = -1e-30\nmaterial = { type = \"dielectric\", ior = 1e-30 }\n";
+    for (text, f) in [(json, "ok.json"), (toml, "ok.toml")] {
+        scene::scene_from_str(text, format_of(f), Path::new(f)).unwrap_or_else(|e| panic!("{f}: {e}"));
+    }
+}
+
+#[test]
+fn load_scene_rejects_what_it_cannot_read() {
+    let dir = tempfile::tempdir().unwrap();
+    for (name, contents, says) in [
+        ("scene.yaml", &b"camera: {}"[..], "unknown scene file type"),
+        ("missing.json", &b""[..], "cannot read"),
+        ("latin1.toml", &b"[camera]\n# caf\xe9\n"[..], "cannot read"),
+    ] {
+        let p = dir.path().join(name);
+        if name != "missing.json" {
+            std::fs::write(&p, contents).unwrap();
+        }
+        let e = scene::load_scene(&p).unwrap_err();
+        assert_eq!(e.exit_code(), 2, "{e}");
+        assert!(e.to_string().contains(says), "{e}");
+        assert!(e.to_string().contains(name), "{e}");
+    }
+}
+
+#[test]
+fn settings_of_zero_or_too_large_name_the_setting() {
+    let ok = Settings { width: 8, height: 4, spp: 1, max_depth: 1, seed: 0 };
+    ok.validate().unwrap();
+    let cases: [(Settings, &str); 6] = [
+        (Settings { width: 0, ..ok }, "width"),
+        (Settings { height: 0, ..ok }, "height"),
+        (Settings { spp: 0, ..ok }, "spp"),
+        (Settings { max_depth: 0, ..ok }, "max_depth"),
+        (Settings { width: u32::MAX, height: u32::MAX, ..ok }, "width x height"),
+        (Settings { width: 8192, height: 8192, spp: u32::MAX, ..ok }, "spp"),
+    ];
+    for (s, field) in cases {
+        let e = s.validate().unwrap_err();
+        assert_eq!(e.exit_code(), 2);
+        assert!(matches!(&e, Error::Invalid { field: f, .. } if f == field), "{s:?}: {e}");
+        // The library refuses before it allocates anything.
+        let scene = scene::preset("ch04-sphere").unwrap();
+        let e = rtow::render(&scene, s, Default::default(), None).err().expect("render refused");
+        assert!(matches!(&e, Error::Invalid { field: f, .. } if f == field), "{e}");
+    }
+}
+
+#[test]
+fn saving_to_an_unwritable_path_is_an_output_error_and_writes_nothing() {
+    let dir = tempfile::tempdir().unwrap();
+    let s = scene::preset("ch09-glass").unwrap();
+    std::fs::write(dir.path().join("plain"), b"").unwrap();
+    for (target, says) in [
+        ("no/such/folder/s.json", "does not exist"),
+        ("plain/s.toml", "not a folder"),
+        ("s.yaml", "unknown scene file type"),
+        ("s", "unknown scene file type"),
+    ] {
+        let e = scene::save_scene(&s, &dir.path().join(target)).unwrap_err();
+        assert_eq!(e.exit_code(), 1, "{target}: {e}");
+        assert!(e.to_string().contains(says), "{target}: {e}");
+    }
+    let left: Vec<_> = std::fs::read_dir(dir.path()).unwrap().map(|e| e.unwrap().file_name()).collect();
+    assert_eq!(left, ["plain"]);
+}
+
+#[test]
+fn every_seed_round_trips_through_both_formats() {
+    // TOML integers are i64 in the spec; the toml crate reads and writes the
+    // whole u64 range, which is what a scene's seed needs.
+    let dir = tempfile::tempdir().unwrap();
+    let mut s = scene::preset("ch04-sphere").unwrap();
+    for seed in [0, i64::MAX as u64, i64::MAX as u64 + 1, u64::MAX] {
+        s.render.seed = Some(seed);
+        for name in ["s.json", "s.toml"] {
+            let p = dir.path().join(name);
+            scene::save_scene(&s, &p).unwrap();
+            assert_eq!(scene::load_scene(&p).unwrap(), s, "{name} {seed}");
+        }
+    }
+}
+
+fn finite() -> impl Strategy<Value = f32> {
+    prop_oneof![
+        -1e6f32..1e6,
+        any::<f32>().prop_filter("finite", |x| x.is_finite()),
+        Just(f32::MIN_POSITIVE / 4.0),
+        Just(f32::MAX),
+    ]
+}
+
+fn v3() -> impl Strategy<Value = [f32; 3]> {
+    [finite(), finite(), finite()]
+}
+
+fn colour() -> impl Strategy<Value = [f32; 3]> {
+    [0f32..=4.0, 0f32..=4.0, 0f32..=4.0]
+}
+
+fn material() -> impl Strategy<Value = Material> {
+    prop_oneof![
+        colour().prop_map(|albedo| Material::Lambertian { albedo }),
+        (colour(), 0f32..=1.0).prop_map(|(albedo, fuzz)| Material::Metal { albedo, fuzz }),
+        (1e-3f32..10.0).prop_map(|ior| Material::Dielectric { ior }),
+    ]
+}
+
+fn sphere() -> impl Strategy<Value = Sphere> {
+    (v3(), finite().prop_filter("non-zero", |r| *r != 0.0), material()).prop_map(|(center, radius, material)| Sphere {
+        center,
+        radius,
+        material,
+    })
+}
+
+fn scene_strategy() -> impl Strategy<Value = Scene> {
+    (
+        (-100f32..100.0, -100f32..100.0, -100f32..100.0),
+        1f32..179.0,
+        prop::option::of(0f32..10.0),
+        prop::option::of(1e-3f32..100.0),
+        prop::collection::vec(sphere(), 0..6),
+        (colour(), colour()),
+        (prop::option::of(1u32..4096), prop::option::of(any::<u64>())),
+    )
+        .prop_map(|((x, y, z), vfov_deg, aperture, focus_dist, spheres, (horizon, zenith), (w, seed))| Scene {
+            mode: Default::default(),
+            camera: Camera {
+                look_from: [x, y, z],
+                look_at: [x + 1.0, y - 0.5, z + 2.0],
+                vup: [0.0, 1.0, 0.0],
+                vfov_deg,
+                defocus_angle_deg: None,
+                aperture,
+                focus_dist,
+            },
+            spheres,
+            sky: Sky { horizon, zenith },
+            render: RenderDefaults { width: w, seed, ..Default::default() },
+        })
+}
+
+proptest! {
+    #![proptest_config(ProptestConfig::with_cases(128))]
+
+    /// Any valid scene, with any finite floats (subnormal, huge, -0), is
+    /// written and read back bit for bit in both formats.
+    #[test]
+    fn valid_scenes_round_trip_exactly(s in scene_strategy()) {
+        s.validate().unwrap();
+        for format in [Format::Json, Format::Toml] {
+            let text = scene::scene_to_string(&s, format);
+            let back = scene::scene_from_str(&text, format, Path::new("p")).unwrap();
+            prop_assert_eq!(&back, &s);
+            let bits = |s: &Scene| s.spheres.iter().map(|p| (p.center.map(f32::to_bits), p.radius.to_bits())).collect::<Vec<_>>();
+            prop_assert_eq!(bits(&back), bits(&s));
+        }
+    }
+}
