@@ -15,7 +15,7 @@
 //!   log RMSE, between consecutive sample counts).
 
 use crate::error::{Error, Result};
-use crate::estimator::Adaptive;
+use crate::estimator::{Adaptive, ROULETTE_AFTER_RAYS};
 use crate::film::Image;
 use crate::kernel::KernelKind;
 use crate::plan::Settings;
@@ -37,16 +37,17 @@ pub const DEFAULT_ADAPTIVE_THRESHOLD: f32 = 0.02;
 /// An estimator variant: plain, Russian roulette, adaptive sampling, or both.
 #[derive(Clone, Copy, Debug, PartialEq)]
 pub struct Variant {
-    pub rr: bool,
+    /// Russian roulette from this many rays on.
+    pub rr: Option<u32>,
     /// Relative error threshold of adaptive sampling.
     pub adaptive: Option<f32>,
 }
 
 impl Variant {
-    pub const PLAIN: Variant = Variant { rr: false, adaptive: None };
+    pub const PLAIN: Variant = Variant { rr: None, adaptive: None };
 
-    /// Parses `plain`, `rr`, `adaptive`, `adaptive:T` or a `+`-joined
-    /// combination such as `rr+adaptive:0.05`.
+    /// Parses `plain`, `rr`, `rr:N`, `adaptive`, `adaptive:T` or a
+    /// `+`-joined combination such as `rr+adaptive:0.05`.
     pub fn parse(text: &str) -> Result<Variant> {
         let bad = |m: String| Error::invalid("--variants", m);
         let mut v = Variant::PLAIN;
@@ -56,34 +57,58 @@ impl Variant {
         }
         for part in text.split('+') {
             let part = part.trim();
-            if part == "rr" && !v.rr {
-                v.rr = true;
-            } else if (part == "adaptive" || part.starts_with("adaptive:")) && v.adaptive.is_none() {
-                let t = match part.strip_prefix("adaptive:") {
-                    None => DEFAULT_ADAPTIVE_THRESHOLD,
-                    Some(t) => t
-                        .parse::<f32>()
-                        .map_err(|_| bad(format!("'{text}': '{t}' is not a number (adaptive:THRESHOLD)")))?,
-                };
-                if !(t.is_finite() && t > 0.0) {
-                    return Err(bad(format!("'{text}': the adaptive threshold must be a positive number")));
+            let (name, value) = match part.split_once(':') {
+                Some((n, x)) => (n, Some(x)),
+                None => (part, None),
+            };
+            match name {
+                "rr" if v.rr.is_none() => {
+                    let n = match value {
+                        None => ROULETTE_AFTER_RAYS,
+                        Some(x) => match x.parse::<u32>() {
+                            Ok(n) if n >= 1 => n,
+                            _ => {
+                                return Err(bad(format!(
+                                    "'{text}': '{x}' is not a number of rays of at least 1 (rr:N)"
+                                )))
+                            }
+                        },
+                    };
+                    v.rr = Some(n);
                 }
-                v.adaptive = Some(t);
-            } else {
-                return Err(bad(format!(
-                    "unknown or repeated variant '{part}' in '{text}' (use plain, rr, adaptive, adaptive:THRESHOLD, or e.g. rr+adaptive:0.05)"
-                )));
+                "adaptive" if v.adaptive.is_none() => {
+                    let t = match value {
+                        None => DEFAULT_ADAPTIVE_THRESHOLD,
+                        Some(x) => x.parse::<f32>().unwrap_or(f32::NAN),
+                    };
+                    if !(t.is_finite() && t > 0.0) {
+                        return Err(bad(format!(
+                            "'{text}': the adaptive threshold must be a positive number (adaptive:THRESHOLD)"
+                        )));
+                    }
+                    v.adaptive = Some(t);
+                }
+                _ => {
+                    return Err(bad(format!(
+                        "unknown or repeated variant '{part}' in '{text}' (use plain, rr, rr:N, adaptive, adaptive:THRESHOLD, or e.g. rr+adaptive:0.05)"
+                    )))
+                }
             }
         }
         Ok(v)
     }
 
     pub fn name(&self) -> String {
-        match (self.rr, self.adaptive) {
-            (false, None) => "plain".into(),
-            (true, None) => "rr".into(),
-            (false, Some(t)) => format!("adaptive:{t}"),
-            (true, Some(t)) => format!("rr+adaptive:{t}"),
+        let rr = match self.rr {
+            Some(n) if n == ROULETTE_AFTER_RAYS => "rr".to_string(),
+            Some(n) => format!("rr:{n}"),
+            None => String::new(),
+        };
+        match (rr.as_str(), self.adaptive) {
+            ("", None) => "plain".into(),
+            (rr, None) => rr.into(),
+            ("", Some(t)) => format!("adaptive:{t}"),
+            (rr, Some(t)) => format!("{rr}+adaptive:{t}"),
         }
     }
 }
@@ -108,10 +133,13 @@ pub struct Config {
     pub reference: Reference,
     pub threads: Option<usize>,
     pub tile: u32,
-    /// Renders per measurement; the fastest counts (the image is the same every time).
+    /// Passes over every measurement; the fastest time counts (the image is the same every time).
     pub repeat: u32,
     /// First adaptive decision point.
     pub adaptive_min: u32,
+    /// Also compare every configuration at the error the baseline reaches at
+    /// this sample count (one of `spp_list`).
+    pub at_spp: Option<u32>,
 }
 
 impl Config {
@@ -140,6 +168,11 @@ impl Config {
         }
         if self.spp_list.windows(2).any(|w| w[0] >= w[1]) {
             return Err(Error::invalid("--spp-list", "sample counts must increase strictly"));
+        }
+        if let Some(n) = self.at_spp {
+            if !self.spp_list.contains(&n) {
+                return Err(Error::invalid("--at-spp", format!("{n} is not one of --spp-list")));
+            }
         }
         if self.repeat == 0 {
             return Err(Error::invalid("--repeat", "must be at least 1"));
@@ -243,6 +276,11 @@ pub struct Report {
     pub seed: u64,
     /// How the reference was made (for the outputs).
     pub reference: String,
+    /// Renders per measurement (the fastest counts) and worker threads.
+    pub repeat: u32,
+    pub threads: usize,
+    /// See [`Config::at_spp`].
+    pub at_spp: Option<u32>,
     /// The reference, when this run rendered it (written out for reuse with `--reference`).
     pub rendered_reference: Option<Image>,
     pub rows: Vec<Row>,
@@ -260,14 +298,8 @@ pub enum Event<'a> {
 pub fn run(scene: &Scene, name: &str, cfg: &Config, mut on: impl FnMut(Event)) -> Result<Report> {
     cfg.validate()?;
     let s = cfg.settings;
-    let base = RenderOptions {
-        kernel: KernelKind::Simd,
-        threads: cfg.threads,
-        tile: cfg.tile,
-        rr: false,
-        adaptive: None,
-        accel: crate::plan::AccelChoice::Auto,
-    };
+    let base =
+        RenderOptions { kernel: KernelKind::Simd, threads: cfg.threads, tile: cfg.tile, ..RenderOptions::default() };
     let (reference, ref_text, rendered) = match &cfg.reference {
         Reference::File(path) => {
             let img = Image::load_float(path).map_err(|e| Error::invalid("--reference", e.to_string()))?;
@@ -297,7 +329,11 @@ pub fn run(scene: &Scene, name: &str, cfg: &Config, mut on: impl FnMut(Event)) -
             (r.image, format!("{n} spp, seed {seed} (simd kernel, plain)"), true)
         }
     };
-    let mut rows = Vec::new();
+    // Every measurement once per pass, `repeat` passes: a change of load on
+    // the machine then falls on every configuration alike instead of on
+    // whichever ran at the time. The fastest time counts; the image (and so
+    // the error) is the same in every pass.
+    let mut plan = Vec::new();
     for &kernel in &cfg.kernels {
         for &variant in &cfg.variants {
             for &spp in &cfg.spp_list {
@@ -308,21 +344,26 @@ pub fn run(scene: &Scene, name: &str, cfg: &Config, mut on: impl FnMut(Event)) -
                     })?),
                     None => None,
                 };
-                let opts = RenderOptions { kernel, rr: variant.rr, adaptive, ..base };
-                let mut best: Option<crate::render::Rendered> = None;
-                for _ in 0..cfg.repeat {
-                    let r = render(scene, Settings { spp, ..s }, opts, None)?;
-                    if let Some(b) = &best {
-                        debug_assert_eq!(b.stats.image_hash, r.stats.image_hash);
-                        if b.stats.seconds <= r.stats.seconds {
-                            continue;
-                        }
-                    }
-                    best = Some(r);
-                }
-                let r = best.expect("repeat is at least 1");
+                let opts = RenderOptions {
+                    kernel,
+                    rr: variant.rr.is_some(),
+                    rr_after: variant.rr.unwrap_or(ROULETTE_AFTER_RAYS),
+                    adaptive,
+                    ..base
+                };
+                plan.push((kernel, variant, spp, opts));
+            }
+        }
+    }
+    let mut rows: Vec<Row> = Vec::with_capacity(plan.len());
+    let mut threads = 0;
+    for pass in 0..cfg.repeat {
+        for (i, &(kernel, variant, spp, opts)) in plan.iter().enumerate() {
+            let r = render(scene, Settings { spp, ..s }, opts, None)?;
+            threads = r.stats.threads;
+            if pass == 0 {
                 let m = error_metrics(&r.image, &reference);
-                let row = Row {
+                rows.push(Row {
                     kernel,
                     variant,
                     spp,
@@ -333,9 +374,20 @@ pub fn run(scene: &Scene, name: &str, cfg: &Config, mut on: impl FnMut(Event)) -
                     relmse: m.relmse,
                     mean_rel_error: m.mean_rel_error,
                     image_hash: r.stats.image_hash,
-                };
-                on(Event::Measured(&row));
-                rows.push(row);
+                });
+            } else {
+                let row = &mut rows[i];
+                if row.image_hash != r.stats.image_hash {
+                    return Err(Error::Input(format!(
+                        "{} at {spp} spp rendered a different image on pass {}: renders must be deterministic",
+                        row.label(),
+                        pass + 1
+                    )));
+                }
+                row.seconds = row.seconds.min(r.stats.seconds);
+            }
+            if pass + 1 == cfg.repeat {
+                on(Event::Measured(&rows[i]));
             }
         }
     }
@@ -346,9 +398,40 @@ pub fn run(scene: &Scene, name: &str, cfg: &Config, mut on: impl FnMut(Event)) -
         max_depth: s.max_depth,
         seed: s.seed,
         reference: ref_text,
+        repeat: cfg.repeat,
+        threads,
+        at_spp: cfg.at_spp,
         rendered_reference: rendered.then_some(reference),
         rows,
     })
+}
+
+/// Axis ticks of a log scale: 1, 2 and 5 times the powers of ten in `lo..=hi`.
+fn ticks(lo: f64, hi: f64) -> Vec<f64> {
+    let mut out = Vec::new();
+    if !(lo > 0.0 && hi >= lo && hi.is_finite()) {
+        return out;
+    }
+    let mut d = lo.log10().floor() as i32;
+    while d <= hi.log10().ceil() as i32 {
+        for m in [1.0, 2.0, 5.0] {
+            let v = m * 10f64.powi(d);
+            if v >= lo && v <= hi {
+                out.push(v);
+            }
+        }
+        d += 1;
+    }
+    if out.len() < 2 {
+        out = vec![lo, hi];
+    }
+    out
+}
+
+/// A tick value with as many decimals as it needs (0.005, 0.02, 1, 20).
+fn tick_label(v: f64) -> String {
+    let decimals = if v > 0.0 { (-v.log10().floor()).max(0.0) as usize } else { 0 };
+    format!("{v:.decimals$}")
 }
 
 /// A configuration's measurements as (seconds, RMSE) points, in sample-count order.
@@ -407,6 +490,15 @@ impl Curve {
     }
 }
 
+/// What a curve's horizontal axis measures. Seconds are what a user waits,
+/// but on a shared machine they are noisy; rays are exact and repeatable (and
+/// ignore differences in the cost of a ray, e.g. between kernels).
+#[derive(Clone, Copy, Debug, PartialEq, Eq)]
+pub enum Cost {
+    Seconds,
+    Rays,
+}
+
 /// How `other` compares to `base`.
 #[derive(Clone, Debug, PartialEq)]
 pub struct Comparison {
@@ -447,12 +539,21 @@ pub fn compare(base: &Curve, other: &Curve) -> Comparison {
 impl Report {
     /// One curve per (kernel, variant), in the order measured.
     pub fn curves(&self) -> Vec<Curve> {
+        self.curves_by(Cost::Seconds)
+    }
+
+    /// One curve per (kernel, variant) with `cost` on the horizontal axis.
+    pub fn curves_by(&self, cost: Cost) -> Vec<Curve> {
         let mut out: Vec<Curve> = Vec::new();
         for r in &self.rows {
             let label = r.label();
+            let x = match cost {
+                Cost::Seconds => r.seconds,
+                Cost::Rays => r.rays as f64,
+            };
             match out.iter_mut().find(|c| c.label == label) {
-                Some(c) => c.points.push((r.seconds, r.rmse)),
-                None => out.push(Curve { label, points: vec![(r.seconds, r.rmse)] }),
+                Some(c) => c.points.push((x, r.rmse)),
+                None => out.push(Curve { label, points: vec![(x, r.rmse)] }),
             }
         }
         out
@@ -461,7 +562,12 @@ impl Report {
     /// Every configuration against the first one, and, for every other kernel,
     /// its variants against its own first variant.
     pub fn comparisons(&self) -> Vec<Comparison> {
-        let curves = self.curves();
+        self.comparisons_by(Cost::Seconds)
+    }
+
+    /// [`Report::comparisons`] with `cost` in place of seconds.
+    pub fn comparisons_by(&self, cost: Cost) -> Vec<Comparison> {
+        let curves = self.curves_by(cost);
         let mut out = Vec::new();
         let Some(first) = curves.first() else {
             return out;
@@ -515,20 +621,61 @@ impl Report {
 
     /// Lines describing the comparisons, for the terminal and the markdown file.
     pub fn comparison_lines(&self) -> Vec<String> {
+        let by_rays = self.comparisons_by(Cost::Rays);
         self.comparisons()
             .iter()
-            .map(|c| {
+            .zip(&by_rays)
+            .map(|(c, r)| {
                 let ee = match c.equal_error {
-                    Some((e, x)) => format!("equal error (RMSE {e:.4}): {x:.2}x"),
-                    None => "equal error: curves do not overlap".into(),
+                    Some((e, x)) => format!("equal error (RMSE {e:.4}): {x:.2}x in time"),
+                    None => "equal error: curves do not overlap in time".into(),
+                };
+                let er = match r.equal_error {
+                    Some((e, x)) => format!("{x:.2}x in rays (RMSE {e:.4})"),
+                    None => "curves do not overlap in rays".into(),
                 };
                 let et = match c.equal_time {
                     Some((t, x)) => format!("equal time ({t:.3} s): MSE ratio {x:.2}x"),
                     None => "equal time: time ranges do not overlap".into(),
                 };
-                format!("{} vs {}: {ee}; {et}", c.other, c.base)
+                format!("{} vs {}: {ee}, {er}; {et}", c.other, c.base)
             })
             .collect()
+    }
+
+    /// With `at_spp` set: what every other configuration needs to reach the
+    /// RMSE that the baseline (the first configuration) measured at `at_spp`.
+    pub fn reach_lines(&self) -> Vec<String> {
+        let Some(n) = self.at_spp else {
+            return vec![];
+        };
+        let (by_time, by_rays) = (self.curves(), self.curves_by(Cost::Rays));
+        let Some(base) = by_time.first() else {
+            return vec![];
+        };
+        let Some(b) = self.rows.iter().find(|r| r.label() == base.label && r.spp == n) else {
+            return vec![];
+        };
+        let mut out = vec![format!(
+            "to reach the RMSE of {} at {n} spp ({:.5}, {:.3} s, {:.2}M rays):",
+            b.label(),
+            b.rmse,
+            b.seconds,
+            b.rays as f64 / 1e6
+        )];
+        for (ct, cr) in by_time.iter().zip(&by_rays).skip(1) {
+            out.push(match (ct.time_at(b.rmse), cr.time_at(b.rmse)) {
+                (Some(t), Some(r)) => format!(
+                    "  {}: {t:.3} s ({:.2}x the time), {:.2}M rays ({:.2}x the rays)",
+                    ct.label,
+                    t / b.seconds,
+                    r / 1e6,
+                    r / b.rays as f64
+                ),
+                _ => format!("  {}: does not reach it at the measured sample counts", ct.label),
+            });
+        }
+        out
     }
 
     /// Kernels that rendered the same variant and spp to different images
@@ -547,8 +694,10 @@ impl Report {
 
     pub fn markdown(&self) -> String {
         let mut s = format!(
-            "# Run time against error: {} ({}x{}, depth {}, seed {})\n\nReference: {}.\n\n",
-            self.scene, self.width, self.height, self.max_depth, self.seed, self.reference
+            "# Run time against error: {} ({}x{}, depth {}, seed {})\n\nReference: {}. Seconds: wall time of the render \
+             (scene preparation apart), the fastest of {} run(s), {} thread(s). Error against the reference: RMSE and relMSE \
+             of the linear image; mean signed rel. error = mean of (x - r) / (r + 0.01), zero in expectation without bias.\n\n",
+            self.scene, self.width, self.height, self.max_depth, self.seed, self.reference, self.repeat, self.threads
         );
         s += "| kernel | variant | spp | seconds | Mrays/s | samples/px | RMSE | relMSE | mean signed rel. error | efficiency 1/(MSE s) |\n";
         s += "|---|---|---:|---:|---:|---:|---:|---:|---:|---:|\n";
@@ -569,9 +718,18 @@ impl Report {
                 r.efficiency()
             );
         }
+        let reach = self.reach_lines();
+        if let Some((head, rest)) = reach.split_first() {
+            let _ = writeln!(s, "\n{}\n", head.replace("to reach", "To reach"));
+            for l in rest {
+                let _ = writeln!(s, "- {}", l.trim_start());
+            }
+        }
         let lines = self.comparison_lines();
         if !lines.is_empty() {
-            s += "\nSpeedups (log-log interpolation between measured sample counts):\n\n";
+            s +=
+                "\nSpeedups (log-log interpolation between measured sample counts; in rays: the same with rays traced \
+                  in place of seconds):\n\n";
             for l in lines {
                 let _ = writeln!(s, "- {l}");
             }
@@ -583,9 +741,12 @@ impl Report {
     pub fn svg(&self) -> Result<String> {
         use plotters::prelude::*;
         let curves = self.curves();
-        let pts: Vec<(f64, f64)> = curves.iter().flat_map(|c| c.usable()).collect();
-        if pts.is_empty() {
-            return Err(Error::Input("nothing to plot: no measurement has a positive time and error".into()));
+        let mut pts: Vec<(f64, f64)> = curves.iter().flat_map(|c| c.usable()).collect();
+        let empty = pts.is_empty();
+        if empty {
+            // Nothing to draw (e.g. a scene without noise: every error is 0);
+            // still write a plot that says so rather than fail after measuring.
+            pts = vec![(1e-3, 1e-3), (1.0, 1.0)];
         }
         let bound = |f: fn(&(f64, f64)) -> f64, lo: bool| {
             let v = pts.iter().map(f);
@@ -602,22 +763,29 @@ impl Report {
             let root = SVGBackend::with_string(&mut svg, (820, 560)).into_drawing_area();
             let plot_err = |e: &dyn std::fmt::Display| Error::Input(format!("plot: {e}"));
             root.fill(&WHITE).map_err(|e| plot_err(&e))?;
-            let title = format!("{} {}x{}: RMSE against render time (log-log)", self.scene, self.width, self.height);
+            let title = format!(
+                "{} {}x{}: RMSE against render time (log-log){}",
+                self.scene,
+                self.width,
+                self.height,
+                if empty { ": no measurement has a positive error" } else { "" }
+            );
             let mut chart = ChartBuilder::on(&root)
                 .caption(title, ("sans-serif", 20))
                 .margin(12)
                 .x_label_area_size(44)
                 .y_label_area_size(70)
-                .build_cartesian_2d((t0..t1).log_scale(), (e0..e1).log_scale())
+                .build_cartesian_2d(
+                    (t0..t1).log_scale().with_key_points(ticks(t0, t1)),
+                    (e0..e1).log_scale().with_key_points(ticks(e0, e1)),
+                )
                 .map_err(|e| plot_err(&e))?;
             chart
                 .configure_mesh()
-                .x_labels(12)
-                .y_labels(12)
                 .x_desc("render time (s)")
                 .y_desc("RMSE vs reference")
-                .x_label_formatter(&|v| format!("{v:.3}"))
-                .y_label_formatter(&|v| format!("{v:.4}"))
+                .x_label_formatter(&|v| tick_label(*v))
+                .y_label_formatter(&|v| tick_label(*v))
                 .draw()
                 .map_err(|e| plot_err(&e))?;
             let palette = [
@@ -694,11 +862,28 @@ mod tests {
         assert_eq!(Variant::parse("rr").unwrap().name(), "rr");
         assert_eq!(Variant::parse("adaptive").unwrap().adaptive, Some(DEFAULT_ADAPTIVE_THRESHOLD));
         let v = Variant::parse("rr+adaptive:0.05").unwrap();
-        assert_eq!((v.rr, v.adaptive), (true, Some(0.05)));
+        assert_eq!((v.rr, v.adaptive), (Some(ROULETTE_AFTER_RAYS), Some(0.05)));
         assert_eq!(Variant::parse(&v.name()).unwrap(), v);
-        for bad in
-            ["", "fast", "rr+rr", "adaptive:x", "adaptive:0", "adaptive:-1", "adaptive:nan", "adaptive:inf", "plain+rr"]
-        {
+        let v = Variant::parse("adaptive:0.1+rr:3").unwrap();
+        assert_eq!((v.rr, v.adaptive), (Some(3), Some(0.1)));
+        assert_eq!(v.name(), "rr:3+adaptive:0.1");
+        assert_eq!(Variant::parse(&v.name()).unwrap(), v);
+        for bad in [
+            "",
+            "fast",
+            "rr+rr",
+            "adaptive:x",
+            "adaptive:0",
+            "adaptive:-1",
+            "adaptive:nan",
+            "adaptive:inf",
+            "plain+rr",
+            "rr:0",
+            "rr:x",
+            "rr:-2",
+            "adaptive:",
+            "rr+adaptive+adaptive",
+        ] {
             let e = Variant::parse(bad).unwrap_err().to_string();
             assert!(e.starts_with("--variants:"), "{bad}: {e}");
         }
@@ -722,6 +907,58 @@ mod tests {
         // Disjoint time ranges: no equal-time comparison.
         let later = curve("later", 1e-3, &[10.0, 20.0]);
         assert_eq!(compare(&slow, &later).equal_time, None);
+    }
+
+    #[test]
+    fn report_compares_in_seconds_and_in_rays() {
+        // `simd/rr` traces half the rays for the same errors but takes as long.
+        let row = |variant: Variant, spp: u32, rays: u64, rmse: f64| Row {
+            kernel: KernelKind::Simd,
+            variant,
+            spp,
+            seconds: spp as f64,
+            rays,
+            samples: 0,
+            rmse,
+            relmse: 0.0,
+            mean_rel_error: 0.0,
+            image_hash: String::new(),
+        };
+        let rr = Variant::parse("rr").unwrap();
+        let rows = vec![
+            row(Variant::PLAIN, 4, 400, 0.5),
+            row(Variant::PLAIN, 16, 1600, 0.25),
+            row(rr, 4, 200, 0.5),
+            row(rr, 16, 800, 0.25),
+        ];
+        let report = Report {
+            scene: "s".into(),
+            width: 1,
+            height: 1,
+            max_depth: 1,
+            seed: 0,
+            reference: String::new(),
+            repeat: 1,
+            threads: 1,
+            at_spp: Some(16),
+            rendered_reference: None,
+            rows,
+        };
+        let t = report.comparisons_by(Cost::Seconds);
+        let r = report.comparisons_by(Cost::Rays);
+        assert_eq!((t.len(), r.len()), (1, 1));
+        assert_eq!((t[0].base.as_str(), t[0].other.as_str()), ("simd/plain", "simd/rr"));
+        assert!((t[0].equal_error.unwrap().1 - 1.0).abs() < 1e-12);
+        assert!((r[0].equal_error.unwrap().1 - 2.0).abs() < 1e-12);
+        let line = &report.comparison_lines()[0];
+        assert!(line.contains("1.00x in time") && line.contains("2.00x in rays"), "{line}");
+        // At the baseline's 16-spp error, rr takes the same time and half the rays.
+        let reach = report.reach_lines();
+        assert!(reach[0].contains("simd/plain at 16 spp (0.25000"), "{reach:?}");
+        assert!(reach[1].contains("1.00x the time") && reach[1].contains("0.50x the rays"), "{reach:?}");
+        assert!(report.markdown().contains("- simd/rr: 16.000 s"), "{}", report.markdown());
+        assert!(report.svg().unwrap().contains("simd/rr"));
+        assert_eq!(report.csv().lines().count(), 5);
     }
 
     #[test]
@@ -754,6 +991,16 @@ mod tests {
     }
 
     #[test]
+    fn log_ticks() {
+        assert_eq!(ticks(0.003, 0.06), vec![0.005, 0.01, 0.02, 0.05]);
+        assert_eq!(ticks(0.9, 25.0), vec![1.0, 2.0, 5.0, 10.0, 20.0]);
+        assert!(ticks(0.0, 1.0).is_empty());
+        assert_eq!(ticks(0.003, 0.0045), vec![0.003, 0.0045]);
+        let labels: Vec<String> = [0.005, 0.02, 1.0, 20.0].iter().map(|&v| tick_label(v)).collect();
+        assert_eq!(labels, ["0.005", "0.02", "1", "20"]);
+    }
+
+    #[test]
     fn reference_seed_differs() {
         for s in [0u64, 1, 42, u64::MAX] {
             assert_ne!(reference_seed(s), s);
@@ -772,9 +1019,11 @@ mod tests {
             tile: 16,
             repeat: 1,
             adaptive_min: 16,
+            at_spp: None,
         };
         good.validate().unwrap();
-        let cases: Vec<(&str, Box<dyn Fn(&mut Config)>)> = vec![
+        type Break = Box<dyn Fn(&mut Config)>;
+        let cases: Vec<(&str, Break)> = vec![
             ("--kernels", Box::new(|c| c.kernels.clear())),
             ("--kernels", Box::new(|c| c.kernels = vec![KernelKind::Simd, KernelKind::Simd])),
             ("--variants", Box::new(|c| c.variants.clear())),
@@ -784,6 +1033,7 @@ mod tests {
             ("--spp-list", Box::new(|c| c.spp_list = vec![4, 2])),
             ("--reference-spp", Box::new(|c| c.reference = Reference::Spp(0))),
             ("--repeat", Box::new(|c| c.repeat = 0)),
+            ("--at-spp", Box::new(|c| c.at_spp = Some(3))),
             (
                 "--adaptive-min",
                 Box::new(|c| {

@@ -197,7 +197,7 @@ impl Image {
             let mut num = || it.next().and_then(|s| s.parse::<f64>().ok()).ok_or_else(|| bad("bad PFM header".into()));
             let (w, h, scale) = (num()? as u32, num()? as u32, num()?);
             let body = &bytes[text_end + 1..];
-            if body.len() != (w * h * 12) as usize {
+            if body.len() as u64 != w as u64 * h as u64 * 12 {
                 return Err(bad("PFM size does not match its header".into()));
             }
             let rd = |i: usize| {

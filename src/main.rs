@@ -202,6 +202,9 @@ struct EstimatorArgs {
     /// min(1, max throughput component) and is reweighted (unbiased; changes the noise).
     #[arg(long)]
     rr: bool,
+    /// With --rr: the roulette starts once a path has traced N rays.
+    #[arg(long, value_name = "N", default_value_t = rtow::estimator::ROULETTE_AFTER_RAYS)]
+    rr_after: u32,
     /// Adaptive sampling: a pixel stops taking samples once the relative
     /// standard error of its mean is at most THRESHOLD (e.g. 0.02); --spp is the maximum.
     #[arg(long, value_name = "THRESHOLD")]
@@ -224,8 +227,9 @@ struct ConvergeArgs {
     /// Kernels to measure, comma separated.
     #[arg(long, value_enum, value_delimiter = ',', default_value = "simd")]
     kernels: Vec<KernelKind>,
-    /// Estimator variants, comma separated: plain, rr, adaptive (threshold 0.02),
-    /// adaptive:THRESHOLD, rr+adaptive:THRESHOLD. The first kernel's first variant is the baseline.
+    /// Estimator variants, comma separated: plain, rr (roulette after the default number of rays),
+    /// rr:N (after N rays), adaptive (threshold 0.02), adaptive:THRESHOLD, or combinations such as
+    /// rr+adaptive:0.05. The first kernel's first variant is the baseline.
     #[arg(long, value_delimiter = ',', default_value = "plain,rr,adaptive")]
     variants: Vec<String>,
     /// Samples per pixel to measure, increasing (the maximum, for adaptive variants).
@@ -259,12 +263,17 @@ struct ConvergeArgs {
     /// Tile edge in pixels
     #[arg(long, default_value_t = 16)]
     tile: u32,
-    /// Render each measurement N times and keep the fastest (the image is the same).
+    /// Render every measurement N times, in N passes over all of them, and keep the fastest
+    /// time (the image is the same).
     #[arg(long, value_name = "N", default_value_t = 1)]
     repeat: u32,
     /// Adaptive variants decide after N, 2N, 4N, ... samples.
     #[arg(long, value_name = "N", default_value_t = rtow::estimator::ADAPTIVE_MIN_SPP)]
     adaptive_min: u32,
+    /// Also report what every configuration needs to reach the error of the baseline at N spp
+    /// (N from --spp-list).
+    #[arg(long, value_name = "N")]
+    at_spp: Option<u32>,
 }
 
 /// `println!` that ignores a closed stdout (e.g. piped into `head`): the
@@ -305,6 +314,7 @@ fn cmd_converge(a: ConvergeArgs) -> Result<()> {
         tile: a.tile,
         repeat: a.repeat,
         adaptive_min: a.adaptive_min,
+        at_spp: a.at_spp,
     };
     cfg.validate()?;
     if a.out.exists() && !a.out.is_dir() {
@@ -347,7 +357,7 @@ fn cmd_converge(a: ConvergeArgs) -> Result<()> {
             )
         }
     })?;
-    for l in report.comparison_lines() {
+    for l in report.comparison_lines().iter().chain(&report.reach_lines()) {
         say!("{l}");
     }
     for p in report.write(&a.out)? {
@@ -453,6 +463,7 @@ fn cmd_render(a: RenderArgs) -> Result<()> {
         tile: a.image.tile,
         accel: a.image.accel,
         rr: a.estimator.rr,
+        rr_after: a.estimator.rr_after,
         adaptive: a.estimator.adaptive()?,
     };
     if a.explain {

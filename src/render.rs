@@ -23,6 +23,8 @@ pub struct RenderOptions {
     pub accel: AccelChoice,
     /// Russian roulette on the path throughput (unbiased; changes the noise).
     pub rr: bool,
+    /// Roulette starts once a path has traced this many rays.
+    pub rr_after: u32,
     /// Adaptive sampling: pixels stop once their relative error is low enough.
     pub adaptive: Option<Adaptive>,
 }
@@ -35,6 +37,7 @@ impl Default for RenderOptions {
             tile: 16,
             accel: AccelChoice::Auto,
             rr: false,
+            rr_after: crate::estimator::ROULETTE_AFTER_RAYS,
             adaptive: None,
         }
     }
@@ -65,7 +68,8 @@ pub struct Stats {
     pub spp: u32,
     pub max_depth: u32,
     pub seed: u64,
-    pub russian_roulette: bool,
+    /// Russian roulette from this many rays on (`null`: off).
+    pub russian_roulette: Option<u32>,
     pub adaptive: Option<Adaptive>,
     /// Samples with a NaN or infinite component, kept out of the image.
     pub rejected_samples: u64,
@@ -123,7 +127,11 @@ pub fn render(
     if let Some(a) = opts.adaptive {
         Adaptive::new(a.threshold, a.min_spp)?;
     }
-    prep.estimator = Estimator { russian_roulette: opts.rr, adaptive: opts.adaptive };
+    if opts.rr {
+        crate::estimator::check_roulette_after(opts.rr_after)?;
+    }
+    let russian_roulette = opts.rr.then_some(opts.rr_after);
+    prep.estimator = Estimator { russian_roulette, adaptive: opts.adaptive };
     let prepare_seconds = t0.elapsed().as_secs_f64();
     let pool = rayon::ThreadPoolBuilder::new()
         .num_threads(opts.threads.unwrap_or(0))
@@ -149,7 +157,7 @@ pub fn render(
         spp: settings.spp,
         max_depth: settings.max_depth,
         seed: settings.seed,
-        russian_roulette: opts.rr,
+        russian_roulette,
         adaptive: opts.adaptive,
         rejected_samples: rejected,
         isect_occupancy: occ(counters.isect_active, counters.isect_lanes),

@@ -84,6 +84,8 @@ fn converge_writes_table_plot_and_reference_and_reuses_the_reference() {
         "1,4,16",
         "--reference",
         reference.to_str().unwrap(),
+        "--repeat",
+        "2",
         "--out",
         again.to_str().unwrap(),
     ];
@@ -125,6 +127,7 @@ fn bad_flags_are_clear_errors() {
         (conv(&["--spp-list", "4,2"]), "--spp-list"),
         (conv(&["--spp-list", "0,2"]), "--spp-list"),
         (conv(&["--variants", "fast"]), "--variants"),
+        (conv(&["--variants", "rr:0"]), "--variants"),
         (conv(&["--variants", "adaptive:-1"]), "--variants"),
         (conv(&["--variants", "plain,plain"]), "--variants"),
         (conv(&["--kernels", "gpu"]), "--kernels"),
@@ -145,6 +148,11 @@ fn bad_flags_are_clear_errors() {
     let r = dir.path().join("r.pfm");
     rtow::Image::new(3, 2).save(&r, 1.0).unwrap();
     fails_naming(&to_refs(&conv(&["--reference", r.to_str().unwrap()])), "--reference", 2);
+
+    // A float image whose header claims more pixels than fit anywhere.
+    let huge = dir.path().join("huge.pfm");
+    std::fs::write(&huge, b"PF\n100000 100000\n-1.0\n\0\0\0\0").unwrap();
+    fails_naming(&to_refs(&conv(&["--reference", huge.to_str().unwrap()])), "--reference", 2);
 
     // --out that is a file.
     let f = dir.path().join("file");
@@ -173,6 +181,7 @@ fn bad_flags_are_clear_errors() {
         (vec!["--adaptive", "0"], "--adaptive"),
         (vec!["--adaptive", "0.1", "--adaptive-min", "1"], "--adaptive-min"),
         (vec!["--adaptive", "lots"], "--adaptive"),
+        (vec!["--rr", "--rr-after", "0"], "--rr-after"),
     ] {
         let mut a = vec!["render", "ch07-diffuse", "-o", p, "--width", "8", "--height", "4", "-q"];
         a.extend(extra);
@@ -202,16 +211,45 @@ fn render_flags_report_the_estimator() {
         "--spp",
         "64",
         "--rr",
+        "--rr-after",
+        "4",
         "--adaptive",
         "0.2",
+        "--adaptive-min",
+        "16",
         "-q",
         "--stats-json",
         json.to_str().unwrap(),
     ]);
     assert!(o.status.success(), "{}", text(&o.stderr));
     let v: serde_json::Value = serde_json::from_str(&std::fs::read_to_string(&json).unwrap()).unwrap();
-    assert_eq!(v["russian_roulette"], true);
+    assert_eq!(v["russian_roulette"], 4);
     assert_eq!(v["adaptive"]["min_spp"], 16);
     let samples = v["samples"].as_u64().unwrap();
-    assert!(samples >= 16 * 9 * 16 && samples < 16 * 9 * 64, "{samples}");
+    assert!((16 * 9 * 16..16 * 9 * 64).contains(&samples), "{samples}");
+}
+
+#[test]
+fn a_scene_without_noise_still_gets_its_outputs() {
+    // Chapter 1's gradient traces no rays: every error is exactly 0.
+    let dir = tempfile::tempdir().unwrap();
+    let out = dir.path().join("g");
+    let o = rtow(&[
+        "converge",
+        "ch01-gradient",
+        "--width",
+        "8",
+        "--height",
+        "4",
+        "--spp-list",
+        "1,2",
+        "--reference-spp",
+        "4",
+        "--out",
+        out.to_str().unwrap(),
+    ]);
+    assert!(o.status.success(), "{}", text(&o.stderr));
+    let svg = std::fs::read_to_string(out.join("ch01-gradient.svg")).unwrap();
+    assert!(svg.contains("no measurement has a positive error"));
+    assert!(out.join("ch01-gradient.csv").exists());
 }

@@ -18,7 +18,8 @@ fn run(scene: &str, s: Settings, opts: RenderOptions) -> Rendered {
 }
 
 fn opts(kernel: KernelKind, rr: bool, adaptive: Option<Adaptive>) -> RenderOptions {
-    RenderOptions { kernel, threads: Some(2), tile: 16, rr, adaptive, ..Default::default() }
+    // Roulette early, so that it decides much of the image.
+    RenderOptions { kernel, threads: Some(2), tile: 16, rr, rr_after: 2, adaptive, ..Default::default() }
 }
 
 fn assert_same(a: &Rendered, b: &Rendered, what: &str) {
@@ -64,11 +65,11 @@ fn pixel_stats(prep: &Prepared, n: u32) -> Vec<[(f64, f64); 3]> {
 /// renders with independent seeds are compared pixel by pixel (a z-test per
 /// pixel and channel, Bonferroni-corrected to a 1e-3 family-wise level) and
 /// as a whole (the mean difference over all pixels, |z| < 4).
-fn roulette_keeps_the_mean(scene: &str, w: u32, h: u32, n: u32) {
+fn roulette_keeps_the_mean(scene: &str, w: u32, h: u32, n: u32, after: u32) {
     let sc = preset(scene).unwrap();
     let plain = Prepared::new(&sc, settings(w, h, n, 11), AccelChoice::Auto).unwrap();
     let mut rr = Prepared::new(&sc, settings(w, h, n, 12), AccelChoice::Auto).unwrap();
-    rr.estimator.russian_roulette = true;
+    rr.estimator.russian_roulette = Some(after);
     let a = pixel_stats(&plain, n);
     let b = pixel_stats(&rr, n);
     let tests = (a.len() * 3) as f64;
@@ -125,8 +126,11 @@ fn erfc(x: f64) -> f64 {
 
 #[test]
 fn roulette_is_unbiased_on_diffuse_glass_and_metal() {
-    roulette_keeps_the_mean("ch07-diffuse", 24, 14, 512);
-    roulette_keeps_the_mean("ch09-glass", 24, 14, 512);
+    // Early roulette (after the camera ray and after 2 rays) makes the test
+    // sensitive: most of the image goes through the roulette. And the default.
+    roulette_keeps_the_mean("ch07-diffuse", 24, 14, 512, 1);
+    roulette_keeps_the_mean("ch09-glass", 24, 14, 512, 2);
+    roulette_keeps_the_mean("ch09-glass", 24, 14, 256, rtow::estimator::ROULETTE_AFTER_RAYS);
 }
 
 #[test]
@@ -136,7 +140,8 @@ fn roulette_traces_fewer_rays_and_changes_the_noise() {
     let rr = run("ch07-diffuse", s, opts(KernelKind::Simd, true, None));
     assert!(rr.stats.rays < plain.stats.rays, "{} vs {}", rr.stats.rays, plain.stats.rays);
     assert_ne!(rr.image, plain.image);
-    assert!(rr.stats.russian_roulette && !plain.stats.russian_roulette);
+    assert_eq!(rr.stats.russian_roulette, Some(2));
+    assert_eq!(plain.stats.russian_roulette, None);
 }
 
 #[test]
@@ -146,6 +151,12 @@ fn roulette_scalar_and_simd_agree_bit_for_bit() {
         let b = run(scene, s, opts(KernelKind::Simd, true, None));
         assert_same(&a, &b, scene);
     }
+    // The default start.
+    let s = settings(40, 23, 8, 5);
+    let dflt = |kernel| RenderOptions { rr_after: rtow::estimator::ROULETTE_AFTER_RAYS, ..opts(kernel, true, None) };
+    let a = run("ch09-glass", s, dflt(KernelKind::Scalar));
+    let b = run("ch09-glass", s, dflt(KernelKind::Simd));
+    assert_same(&a, &b, "default roulette start");
 }
 
 #[test]

@@ -397,7 +397,7 @@ fn scatter(prep: &Prepared, ws: &mut Workspace, kind: Kind, depth: u32, idx: &[u
     if roulette_applies(&prep.estimator, depth + 1) {
         let (t, survives) = roulette(thr, &mut rng);
         thr = t;
-        alive = alive & survives;
+        alive &= survives;
     }
     let alive = alive.to_bitmask() & ((1u32 << active) - 1);
     let slot = gather_u(&cur.slot, idx);
