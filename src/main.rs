@@ -10,6 +10,15 @@ use std::path::{Path, PathBuf};
 use std::process::ExitCode;
 use std::time::Instant;
 
+/// `println!` that ignores a closed stdout (e.g. piped into `head`) instead of
+/// panicking; what matters is in the files and the exit status.
+macro_rules! say {
+    ($($t:tt)*) => {{
+        use std::io::Write as _;
+        let _ = writeln!(std::io::stdout(), $($t)*);
+    }};
+}
+
 #[derive(Parser)]
 #[command(name = "rtow", about = "A data-oriented SIMD path tracer for Ray Tracing in One Weekend")]
 struct Cli {
@@ -165,14 +174,14 @@ fn cmd_bench(a: BenchArgs) -> Result<bool> {
         rtow::bench::run(&scene, &name, s, &a.kernels, a.image.threads, a.image.accel, a.repeat, |k, i, st| {
             eprintln!("  {} run {}: {:.3} s, {:.2} Mrays/s", k.name(), i + 1, st.seconds, st.mrays_per_s)
         })?;
-    print!("{}", report.table());
+    say!("{}", report.table().trim_end_matches('\n'));
     for path in [&a.json, &a.save].into_iter().flatten() {
         rtow::output::write_atomic(path, report.to_json().as_bytes())?;
     }
     let mut ok = true;
     if let Some(b) = &baseline {
         for c in rtow::bench::compare(&report, b, a.tolerance)? {
-            println!(
+            say!(
                 "{:<7} baseline {:.2} Mrays/s -> {:.2} Mrays/s ({:+.1}%), image {}: {}",
                 c.kernel,
                 c.baseline_mrays,
@@ -274,15 +283,6 @@ struct ConvergeArgs {
     /// (N from --spp-list).
     #[arg(long, value_name = "N")]
     at_spp: Option<u32>,
-}
-
-/// `println!` that ignores a closed stdout (e.g. piped into `head`): the
-/// converge outputs that matter are its files.
-macro_rules! say {
-    ($($t:tt)*) => {{
-        use std::io::Write as _;
-        let _ = writeln!(std::io::stdout(), $($t)*);
-    }};
 }
 
 fn cmd_converge(a: ConvergeArgs) -> Result<()> {
@@ -468,7 +468,7 @@ fn cmd_render(a: RenderArgs) -> Result<()> {
     };
     if a.explain {
         let prep = rtow::plan::Prepared::new(&scene, s, a.image.accel)?;
-        println!("{}", prep.plan.explain());
+        say!("{}", prep.plan.explain());
     }
     let r = render_with_progress(&scene, s, opts, a.quiet)?;
     let gamma = a.gamma.unwrap_or(scene.mode.default_gamma());
@@ -482,7 +482,7 @@ fn cmd_render(a: RenderArgs) -> Result<()> {
     }
     if !a.quiet {
         let st = &r.stats;
-        println!(
+        say!(
             "{name}: {}x{} {} spp -> {}: {} rays, {} samples in {:.3} s = {:.2} Mrays/s ({} kernel, {} threads, {}){}",
             st.width,
             st.height,
@@ -510,7 +510,7 @@ fn cmd_stress(quick: bool, seed: u64, threads: Option<usize>) -> Result<bool> {
     use std::io::Write;
     let cfg = rtow::stress::Config { quick, seed, threads };
     let report = rtow::stress::run(&cfg, &mut |part| eprintln!("done: {part}"))?;
-    print!("{}", report.table());
+    say!("{}", report.table().trim_end_matches('\n'));
     let _ = std::io::stdout().flush();
     Ok(report.passed())
 }
@@ -524,7 +524,7 @@ fn run(cli: Cli) -> Result<bool> {
         Command::Scenes => {
             let width = scene::presets().iter().map(|p| p.name.len()).max().unwrap_or(0);
             for p in scene::presets() {
-                println!("{:<width$}  {}", p.name, p.description);
+                say!("{:<width$}  {}", p.name, p.description);
             }
             Ok(true)
         }
