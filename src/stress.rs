@@ -1042,6 +1042,33 @@ fn scatter_dir<R: Real, S: Stream<R>>(
 }
 
 /// A synthetic direction within 10^U(-8,-1) of the tangent plane at normal `n`.
+/// Scattered direction `j` from hit point `k` (scalar): `None` when the
+/// material absorbs the path, or when the direction is not finite (counted in `t.nan`).
+fn scattered(
+    scatter: Scatter,
+    dirs: &mut Gen,
+    srf: &Surface<f32>,
+    hs: &HitSetup,
+    stream_seed: u64,
+    (k, j): (usize, usize),
+    t: &mut Tally,
+) -> Option<V3<f32>> {
+    let (dir, alive) = if scatter == Scatter::Grazing {
+        (grazing_dir(dirs, srf.n), true)
+    } else {
+        let mut rng = ScalarStream::for_path(stream_seed, k as u64, j as u64);
+        scatter_dir(scatter, hs.d, srf, hs.fuzz, hs.ior, &mut rng)
+    };
+    if !alive {
+        return None;
+    }
+    if !finite3(dir) {
+        t.nan += 1;
+        return None;
+    }
+    Some(dir)
+}
+
 fn grazing_dir(g: &mut Gen, n: V3<f32>) -> V3<f32> {
     let n = v64(n).normalize();
     let s = g.exp10(-8.0, -1.0).copysign(g.unif() - 0.5);
@@ -1145,19 +1172,9 @@ fn self_sweep(scatter: Scatter, imp: Impl, sizes: &Sizes, seed: u64, rule: Offse
                 let sigma = hs.r.signum() as f64 * if srf.front { 1.0 } else { -1.0 };
                 let m = (v64(srf.n) * sigma).normalize();
                 for j in 0..sizes.per_point {
-                    let (dir, alive) = if scatter == Scatter::Grazing {
-                        (grazing_dir(&mut dirs, srf.n), true)
-                    } else {
-                        let mut rng = ScalarStream::for_path(stream_seed, k as u64, j as u64);
-                        scatter_dir(scatter, hs.d, &srf, hs.fuzz, hs.ior, &mut rng)
+                    let Some(dir) = scattered(scatter, &mut dirs, &srf, &hs, stream_seed, (k, j), t) else {
+                        continue;
                     };
-                    if !alive {
-                        continue;
-                    }
-                    if !finite3(dir) {
-                        t.nan += 1;
-                        continue;
-                    }
                     let o2 = spawn(&srf, dir);
                     let (i2, t2) = closest_hit_scalar(&sph, o2, dir);
                     h.v(o2);
@@ -1222,19 +1239,9 @@ fn self_sweep(scatter: Scatter, imp: Impl, sizes: &Sizes, seed: u64, rule: Offse
                 t.err(((pp - c64).length() - r_abs).abs(), r_abs, None, false);
                 let m = (pp - c64).normalize();
                 for j in 0..sizes.per_point {
-                    let (dir, alive) = if scatter == Scatter::Grazing {
-                        (grazing_dir(&mut dirs, n), true)
-                    } else {
-                        let mut rng = ScalarStream::for_path(stream_seed, k as u64, j as u64);
-                        scatter_dir(scatter, hs.d, &srf, hs.fuzz, hs.ior, &mut rng)
+                    let Some(dir) = scattered(scatter, &mut dirs, &srf, &hs, stream_seed, (k, j), t) else {
+                        continue;
                     };
-                    if !alive {
-                        continue;
-                    }
-                    if !finite3(dir) {
-                        t.nan += 1;
-                        continue;
-                    }
                     let hit2 = textbook_hit(p, dir, hs.c, hs.r, TEXTBOOK_T_MIN);
                     classify_spawn(t, m, r_abs, dir, hit2.is_some(), hit2.unwrap_or(f32::INFINITY));
                 }
