@@ -1,0 +1,71 @@
+//! `rtow bench --save / --baseline`: the regression test users run on a speedup.
+//! Exit status 0 when throughput held and the image is the same; 1 when the
+//! image changed or throughput fell by more than the tolerance.
+
+use std::path::Path;
+use std::process::Command;
+
+fn bench(dir: &Path, extra: &[&str]) -> std::process::Output {
+    bench_spp(dir, "2", extra)
+}
+
+fn bench_spp(dir: &Path, spp: &str, extra: &[&str]) -> std::process::Output {
+    Command::new(env!("CARGO_BIN_EXE_rtow"))
+        .args(["bench", "ch05-ground", "--kernels", "scalar,simd", "--repeat", "1"])
+        .args(["--width", "24", "--height", "14", "--spp", spp, "--threads", "1"])
+        .args(extra)
+        .current_dir(dir)
+        .output()
+        .expect("rtow runs")
+}
+
+fn edit(path: &Path, f: impl Fn(&mut serde_json::Value)) {
+    let mut v: serde_json::Value = serde_json::from_str(&std::fs::read_to_string(path).unwrap()).unwrap();
+    f(&mut v);
+    std::fs::write(path, serde_json::to_string(&v).unwrap()).unwrap();
+}
+
+#[test]
+fn baseline_catches_a_changed_image_and_a_slowdown() {
+    let dir = tempfile::tempdir().unwrap();
+    let saved = bench(dir.path(), &["--save", "base.json"]);
+    assert!(saved.status.success(), "{}", String::from_utf8_lossy(&saved.stderr));
+    let base = dir.path().join("base.json");
+    let v: serde_json::Value = serde_json::from_str(&std::fs::read_to_string(&base).unwrap()).unwrap();
+    let kernels = v["kernels"].as_array().unwrap();
+    assert_eq!(kernels.len(), 2);
+    assert_eq!(kernels[0]["image_hash"], kernels[1]["image_hash"], "scalar and SIMD images differ");
+    assert!(kernels[1]["speedup"].as_f64().unwrap() > 0.0);
+
+    // Same code: passes, and says the image is identical (tolerance 100%: timings of
+    // sub-millisecond renders are noise; the slowdown verdict is tested below).
+    let ok = bench(dir.path(), &["--baseline", "base.json", "--tolerance", "100"]);
+    let out = String::from_utf8_lossy(&ok.stdout).to_string();
+    assert_eq!(ok.status.code(), Some(0), "{out}{}", String::from_utf8_lossy(&ok.stderr));
+    assert!(out.contains("identical") && !out.contains("REGRESSION"), "{out}");
+
+    // A baseline with another image: exit 1, whatever the speed.
+    let changed = dir.path().join("changed.json");
+    std::fs::copy(&base, &changed).unwrap();
+    edit(&changed, |v| v["kernels"][1]["image_hash"] = "0123456789abcdef".into());
+    let r = bench(dir.path(), &["--baseline", "changed.json", "--tolerance", "100"]);
+    assert_eq!(r.status.code(), Some(1));
+    assert!(String::from_utf8_lossy(&r.stdout).contains("CHANGED"));
+
+    // A baseline 1000x faster: this run is a slowdown beyond 5%: exit 1.
+    let fast = dir.path().join("fast.json");
+    std::fs::copy(&base, &fast).unwrap();
+    edit(&fast, |v| {
+        let m = v["kernels"][1]["mrays_per_s"].as_f64().unwrap();
+        v["kernels"][1]["mrays_per_s"] = (m * 1000.0).into();
+    });
+    let r = bench(dir.path(), &["--baseline", "fast.json"]);
+    assert_eq!(r.status.code(), Some(1));
+    assert!(String::from_utf8_lossy(&r.stdout).contains("REGRESSION"));
+
+    // A baseline of other settings is an input error, not a verdict.
+    let r = bench_spp(dir.path(), "3", &["--baseline", "base.json"]);
+    let err = String::from_utf8_lossy(&r.stderr);
+    assert_eq!(r.status.code(), Some(2), "{err}");
+    assert!(err.contains("baseline settings"), "{err}");
+}
