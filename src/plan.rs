@@ -145,15 +145,6 @@ impl Prepared {
         kinds.dedup();
         let jitter = settings.spp > 1;
         let camera = Camera::new(&scene.camera, settings.width, settings.height, jitter);
-        let plan = Plan {
-            mode: scene.mode,
-            kinds: if scene.mode == Mode::Path { kinds.iter().map(|k| k.name()).collect() } else { vec![] },
-            lens: camera.lens && scene.mode != Mode::Gradient,
-            jitter,
-            accel: "brute force",
-            stop_at_zero_throughput: true,
-        };
-        let camera = Camera { lens: plan.lens, ..camera };
         let use_bvh = match accel {
             AccelChoice::Brute => false,
             AccelChoice::Bvh | AccelChoice::BvhRay => true,
@@ -166,12 +157,19 @@ impl Prepared {
             Bvh::build(&spheres, extent)
         });
         let packets = accel != AccelChoice::BvhRay;
-        let accel = match (&bvh, packets) {
-            (None, _) => "brute force",
-            (Some(_), false) => "bvh8, one ray at a time (8-wide nodes)",
-            (Some(_), true) => "bvh8, 8-ray packets (scalar kernel: one ray at a time)",
+        let plan = Plan {
+            mode: scene.mode,
+            kinds: if scene.mode == Mode::Path { kinds.iter().map(|k| k.name()).collect() } else { vec![] },
+            lens: camera.lens && scene.mode != Mode::Gradient,
+            jitter,
+            accel: match (&bvh, packets) {
+                (None, _) => "brute force",
+                (Some(_), false) => "bvh8, one ray at a time (8-wide nodes)",
+                (Some(_), true) => "bvh8, 8-ray packets (scalar kernel: one ray at a time)",
+            },
+            stop_at_zero_throughput: true,
         };
-        let plan = Plan { accel, ..plan };
+        let camera = Camera { lens: plan.lens, ..camera };
         Ok(Prepared {
             plan,
             settings,
