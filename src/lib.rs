@@ -10,9 +10,8 @@
 //! [`real::Real`] and instantiated for `f32` and `wide::f32x8`, so for the same
 //! seed they produce bit-identical images.
 
-pub mod bench;
 pub mod camera;
-pub mod converge;
+
 pub mod error;
 pub mod estimator;
 pub mod film;
@@ -25,7 +24,7 @@ pub mod real;
 pub mod render;
 pub mod sampling;
 pub mod scene;
-pub mod stress;
+pub mod tools;
 pub mod vec3;
 
 pub use error::{Error, Result};

@@ -1,12 +1,12 @@
 //! Numerical stability: the f32 intersection (scalar and 8-wide) against the f64
-//! oracle of `rtow::stress`, the ray offset, NaN-free films, and the quick form of
+//! oracle of `rtow::tools::stress`, the ray offset, NaN-free films, and the quick form of
 //! `rtow stress` (sweeps, stress scenes, image comparisons) with both kernels.
 
 use glam::DVec3;
 use proptest::prelude::*;
 use rtow::geometry::{surface, Spheres};
 use rtow::scene::{self, Kind, Material, Sphere};
-use rtow::stress::{self, check_group, Group, GroupResult};
+use rtow::tools::stress::{self, check_group, Group, GroupResult};
 use rtow::vec3::V3;
 use rtow::{KernelKind, RenderOptions};
 use std::f64::consts::TAU;
