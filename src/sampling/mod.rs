@@ -10,6 +10,13 @@
 //! Sampling functions are branch-free (no rejection loops), so every path draws
 //! the same number of values per event on both widths: camera jitter 2, lens 2,
 //! lambertian 2, metal 2, dielectric 1.
+//!
+//! Two samplers feed those functions ([`SamplerKind`]): the independent
+//! streams above, and Owen-scrambled Sobol points ([`sobol`], [`SobolStream`]),
+//! whose values are addressed by dimension along the [`layout`].
+
+pub mod lanes;
+pub mod sobol;
 
 use crate::real::Real;
 use crate::vec3::V3;
@@ -45,6 +52,107 @@ pub fn path_state(seed: u64, pixel: u64, sample: u64) -> [u32; 4] {
 /// A source of uniform reals in [0, 1), one per lane.
 pub trait Stream<R: Real> {
     fn next(&mut self) -> R;
+    /// Moves to dimension `dim` of the [`layout`] (uniform across lanes): the
+    /// next value is that dimension's, the one after it `dim + 1`'s. Streams
+    /// that do not address dimensions (the independent one) ignore it, so it
+    /// costs them nothing.
+    #[inline(always)]
+    fn seek(&mut self, _dim: u32) {}
+}
+
+/// Which sampler draws a path's values.
+#[derive(Clone, Copy, Debug, Default, PartialEq, Eq, serde::Serialize, serde::Deserialize, clap::ValueEnum)]
+#[serde(rename_all = "lowercase")]
+pub enum SamplerKind {
+    /// Independent uniform numbers: one xoshiro128+ stream per path (the book's way).
+    #[default]
+    Independent,
+    /// Owen-scrambled Sobol points along the dimension layout, padding past it.
+    Sobol,
+}
+
+impl SamplerKind {
+    pub fn name(self) -> &'static str {
+        match self {
+            SamplerKind::Independent => "independent",
+            SamplerKind::Sobol => "sobol",
+        }
+    }
+}
+
+/// The dimension layout: which dimension of a path's sample each random
+/// decision takes. `depth` counts the rays a path traced before the hit that
+/// scatters (0: the camera ray's hit).
+///
+/// | dimensions | use |
+/// |---|---|
+/// | 0, 1 | pixel jitter (x, y): a (0,2)-sequence |
+/// | 2, 3 | lens (radius, angle), when the camera has a lens |
+/// | 4 + 3 depth, +1 | scattering: two for a lambertian or metal direction (z, angle); a dielectric's reflect-or-refract choice takes the first |
+/// | 4 + 3 depth + 2 | the Russian-roulette decision after that bounce |
+///
+/// Bounces 0 to 39 take Sobol dimensions (4 to 123, [`sobol::SOBOL_DIMS`] in
+/// all); from bounce 40 on the dimensions are padding (independent hashed
+/// values). The dimensions wrap around past 2^32 (a path of more than 1.4e9
+/// bounces), which no render reaches.
+pub mod layout {
+    pub const PIXEL: u32 = 0;
+    pub const LENS: u32 = 2;
+    pub const FIRST_BOUNCE: u32 = 4;
+    pub const PER_BOUNCE: u32 = 3;
+    /// Bounces whose dimensions are all Sobol dimensions.
+    pub const SOBOL_BOUNCES: u32 = 40;
+
+    /// The first of the two scattering dimensions of bounce `depth`.
+    #[inline(always)]
+    pub const fn scatter(depth: u32) -> u32 {
+        FIRST_BOUNCE.wrapping_add(PER_BOUNCE.wrapping_mul(depth))
+    }
+
+    /// The Russian-roulette dimension of bounce `depth`.
+    #[inline(always)]
+    pub const fn roulette(depth: u32) -> u32 {
+        scatter(depth).wrapping_add(2)
+    }
+
+    /// Sobol dimensions of the groups measured apart: pixel only, + lens,
+    /// + first bounce (scatter and roulette), + every bounce of the layout.
+    pub const GROUPS: [(&str, u32); 4] = [("pixel", 2), ("lens", 4), ("bounce1", 7), ("all", scatter(SOBOL_BOUNCES))];
+}
+
+/// A path's Sobol sample, lane-wise: the pixel's key and the sample index per
+/// lane, the current dimension (uniform) and the number of leading dimensions
+/// that are Sobol (the rest padding). A pure function of those: no state is
+/// carried between draws but the dimension.
+#[derive(Clone, Copy, Debug)]
+pub struct SobolStream<U> {
+    pub key: U,
+    pub index: U,
+    pub dim: u32,
+    pub sobol_dims: u32,
+}
+
+impl SobolStream<u32> {
+    /// The scalar stream of path (`pixel`, `sample`) of a render with `seed`.
+    pub fn for_path(seed: u64, pixel: u64, sample: u32, sobol_dims: u32) -> Self {
+        SobolStream { key: sobol::pixel_key(seed, pixel), index: sample, dim: 0, sobol_dims }
+    }
+}
+
+impl<R: Real> Stream<R> for SobolStream<R::U32>
+where
+    R::U32: lanes::U32Lanes,
+{
+    #[inline(always)]
+    fn next(&mut self) -> R {
+        let bits = sobol::sample_bits(self.key, self.index, self.dim, self.sobol_dims);
+        self.dim = self.dim.wrapping_add(1);
+        R::unit_from_bits(bits)
+    }
+    #[inline(always)]
+    fn seek(&mut self, dim: u32) {
+        self.dim = dim;
+    }
 }
 
 /// The scalar stream: rand_xoshiro's generator, used as is.
@@ -196,6 +304,36 @@ mod tests {
             let a = (u as f64 - 0.5) * 2.0 * std::f64::consts::PI;
             assert!((c as f64 - a.cos()).abs() < 2.5e-7, "cos at {u}");
             assert!((s as f64 - a.sin()).abs() < 2.5e-7, "sin at {u}");
+        }
+    }
+
+    #[test]
+    fn sobol_streams_agree_across_widths() {
+        let x8 = |sample0: u32| SobolStream {
+            key: u32x8::new(std::array::from_fn(|k| sobol::pixel_key(42, k as u64))),
+            index: u32x8::new(std::array::from_fn(|k| sample0 + k as u32)),
+            dim: 0,
+            sobol_dims: sobol::SOBOL_DIMS as u32,
+        };
+        for sample0 in [0u32, 100, 1 << 20] {
+            let mut w = x8(sample0);
+            let mut sc: Vec<SobolStream<u32>> =
+                (0..8).map(|k| SobolStream::for_path(42, k, sample0 + k as u32, sobol::SOBOL_DIMS as u32)).collect();
+            for depth in [0u32, 1, 7, 39, 40, 41, 1000] {
+                Stream::<f32x8>::seek(&mut w, layout::scatter(depth));
+                let v3: V3<f32x8> = unit_vector(&mut w);
+                let r: f32x8 = w.next();
+                for (k, s) in sc.iter_mut().enumerate() {
+                    Stream::<f32>::seek(s, layout::scatter(depth));
+                    let v: V3<f32> = unit_vector(s);
+                    let rs: f32 = s.next();
+                    assert_eq!(v.x.to_bits(), v3.x.to_array()[k].to_bits());
+                    assert_eq!(v.y.to_bits(), v3.y.to_array()[k].to_bits());
+                    assert_eq!(v.z.to_bits(), v3.z.to_array()[k].to_bits());
+                    assert_eq!(rs.to_bits(), r.to_array()[k].to_bits());
+                    assert_eq!(s.dim, layout::roulette(depth) + 1);
+                }
+            }
         }
     }
 
