@@ -380,8 +380,8 @@ mod tests {
         for (d, cols) in PUBLISHED {
             assert_eq!(DIRECTIONS[d], cols, "dimension {d}");
         }
-        for j in 0..32 {
-            assert_eq!(DIRECTIONS[0][j], 1 << (31 - j));
+        for (j, c) in DIRECTIONS[0].iter().enumerate() {
+            assert_eq!(*c, 1 << (31 - j));
         }
         // Every generator matrix is upper triangular with a unit diagonal
         // (column j is an odd m_j times 2^(31 - j)), as a Sobol matrix must be.
