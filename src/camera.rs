@@ -1,7 +1,7 @@
 //! Camera rays for both widths: the book's positionable thin-lens camera.
 
 use crate::real::Real;
-use crate::sampling::{in_unit_disk, Stream};
+use crate::sampling::{in_unit_disk, layout, Stream};
 use crate::vec3::V3;
 use glam::DVec3;
 
@@ -71,10 +71,11 @@ impl Camera {
 
     /// The ray through pixel (`px`, `py`) (integer coordinates, as reals):
     /// `(origin, unit direction)`. Draws 2 values for jitter and 2 for the lens
-    /// when those are on.
+    /// when those are on (dimensions `layout::PIXEL` and `layout::LENS`).
     #[inline(always)]
     pub fn ray<R: Real, S: Stream<R>>(&self, px: R, py: R, rng: &mut S) -> (V3<R>, V3<R>) {
         let (sx, sy) = if self.jitter {
+            rng.seek(layout::PIXEL);
             let jx = rng.next() - R::splat(0.5);
             let jy = rng.next() - R::splat(0.5);
             (px + jx, py + jy)
@@ -84,6 +85,7 @@ impl Camera {
         let target = V3::splat3(self.to_pixel00) + V3::splat3(self.du) * sx + V3::splat3(self.dv) * sy;
         let center = V3::splat3(self.center);
         if self.lens {
+            rng.seek(layout::LENS);
             let (lx, ly) = in_unit_disk(rng);
             let lo = V3::splat3(self.lens_u) * lx + V3::splat3(self.lens_v) * ly;
             ((center + lo), (target - lo).normalize())

@@ -12,6 +12,7 @@
 use crate::error::{Error, Result};
 use crate::film::TileFilm;
 use crate::real::Real;
+use crate::sampling::Sampler;
 use crate::sampling::Stream;
 use crate::vec3::V3;
 use serde::Serialize;
@@ -122,6 +123,8 @@ pub struct Estimator {
     /// Russian roulette from this many rays on (`None`: off).
     pub russian_roulette: Option<u32>,
     pub adaptive: Option<Adaptive>,
+    /// Which sampler draws the paths' random decisions.
+    pub sampler: Sampler,
 }
 
 impl Estimator {

@@ -223,7 +223,7 @@ pub trait Wide:
     + 'static
 {
     /// The matching unsigned lanes (same as `Real::U32`, with its arithmetic).
-    type U: Lanes32;
+    type U: Lanes32 + crate::sampling::lanes::U32Lanes;
     /// Lane indices of one packet (`[u32; LANES]`).
     type Idx: Copy + Default + AsRef<[u32]> + AsMut<[u32]>;
     /// Whole-vector load of `v[i..i + LANES]`.

@@ -9,6 +9,7 @@ use crate::plan::{Mode, Plan, Prepared};
 use crate::prepare::prepare;
 use crate::probe::{Probe, WorkCounters};
 use crate::real::Wide;
+use crate::sampling::Sampler;
 use crate::scene::Scene;
 use crate::settings::{KernelChoice, RenderOptions, Settings};
 use rayon::prelude::*;
@@ -121,6 +122,8 @@ pub struct Stats {
     /// Russian roulette from this many rays on (`null`: off).
     pub russian_roulette: Option<u32>,
     pub adaptive: Option<Adaptive>,
+    /// `independent` or `sobol` (`sobol-pixel`, ... for partial layouts).
+    pub sampler: Sampler,
     /// Samples with a NaN or infinite component, kept out of the image.
     pub rejected_samples: u64,
     /// Exact work counters and lane occupancy, when the render counted them.
@@ -181,7 +184,7 @@ pub fn render_probed<P: Probe + Send>(
     opts.validate()?;
     let kernel = Kernel::resolve(opts.kernel)?;
     let russian_roulette = opts.rr.then_some(opts.rr_after);
-    let estimator = Estimator { russian_roulette, adaptive: opts.adaptive };
+    let estimator = Estimator { russian_roulette, adaptive: opts.adaptive, sampler: opts.sampler };
     let prep = prepare(scene, settings, opts.accel, estimator)?;
     let prepare_seconds = t0.elapsed().as_secs_f64();
     let pool = rayon::ThreadPoolBuilder::new()
@@ -210,6 +213,7 @@ pub fn render_probed<P: Probe + Send>(
         seed: settings.seed,
         russian_roulette,
         adaptive: opts.adaptive,
+        sampler: opts.sampler,
         rejected_samples: out.rejected,
         work: None,
         image_hash: format!("{:016x}", out.image.hash()),

@@ -5,6 +5,7 @@
 use crate::error::{Error, Result};
 use crate::estimator::Adaptive;
 use crate::limits::{MAX_PIXELS, MAX_TILE};
+use crate::sampling::Sampler;
 use serde::{Deserialize, Serialize};
 use std::fmt;
 use std::str::FromStr;
@@ -92,6 +93,9 @@ pub struct RenderDefaults {
     pub max_depth: Option<u32>,
     #[serde(default, skip_serializing_if = "Option::is_none")]
     pub seed: Option<u64>,
+    /// The sampler (`independent` or `sobol`); `--sampler` replaces it.
+    #[serde(default, skip_serializing_if = "Option::is_none")]
+    pub sampler: Option<Sampler>,
 }
 
 impl RenderDefaults {
@@ -195,6 +199,8 @@ pub struct RenderOptions {
     pub rr_after: u32,
     /// Adaptive sampling: pixels stop once their relative error is low enough.
     pub adaptive: Option<Adaptive>,
+    /// Independent streams or Owen-scrambled Sobol points.
+    pub sampler: Sampler,
 }
 
 impl Default for RenderOptions {
@@ -207,6 +213,7 @@ impl Default for RenderOptions {
             rr: false,
             rr_after: crate::estimator::ROULETTE_AFTER_RAYS,
             adaptive: None,
+            sampler: Sampler::default(),
         }
     }
 }

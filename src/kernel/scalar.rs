@@ -8,7 +8,7 @@ use crate::geometry::{spawn, surface, MISS};
 use crate::material::{dielectric, lambertian, metal, Kind};
 use crate::plan::{Mode, Prepared};
 use crate::probe::{PathId, Probe};
-use crate::sampling::ScalarStream;
+use crate::sampling::{layout, Independent, PathSampler, Sampler, Sobol, Stream};
 use crate::vec3::V3;
 use std::ops::Range;
 
@@ -16,6 +16,19 @@ use std::ops::Range;
 /// the rays traced. With adaptive sampling a pixel stops at the first decision
 /// point where its error estimate is low enough.
 pub fn render_tile<P: Probe>(prep: &Prepared, tile: &mut TileFilm, samples: Range<u32>, probe: &mut P) -> u64 {
+    match prep.estimator.sampler {
+        Sampler::Independent => render_tile_with(prep, Independent, tile, samples, probe),
+        Sampler::Sobol { dims } => render_tile_with(prep, Sobol { dims }, tile, samples, probe),
+    }
+}
+
+fn render_tile_with<S: PathSampler, P: Probe>(
+    prep: &Prepared,
+    sampler: S,
+    tile: &mut TileFilm,
+    samples: Range<u32>,
+    probe: &mut P,
+) -> u64 {
     let s = &prep.settings;
     let est = &prep.estimator;
     let mut rays = 0;
@@ -26,7 +39,7 @@ pub fn render_tile<P: Probe>(prep: &Prepared, tile: &mut TileFilm, samples: Rang
         while done < samples.end {
             let end = est.round_end(done, samples.end);
             for sample in done..end {
-                let mut rng = ScalarStream::for_path(s.seed, pixel as u64, sample as u64);
+                let mut rng = sampler.scalar(s.seed, pixel as u64, sample);
                 let (c, n) = trace(prep, x, y, PathId { pixel, sample }, &mut rng, probe);
                 rays += n as u64;
                 tile.add(local, c);
@@ -46,7 +59,7 @@ pub fn trace<P: Probe>(
     x: u32,
     y: u32,
     id: PathId<f32>,
-    rng: &mut ScalarStream,
+    rng: &mut impl Stream<f32>,
     probe: &mut P,
 ) -> ([f32; 3], u32) {
     let sp = &prep.spheres;
@@ -69,6 +82,7 @@ pub fn trace<P: Probe>(
         }
         let (kind, row) = (sp.kind[i], sp.row[i] as usize);
         let m = &prep.materials;
+        rng.seek(layout::scatter(depth));
         let (dir, atten) = match prep.plan.mode {
             Mode::Normals => return (normal_colour(srf.n).to_array(), rays),
             Mode::Flat | Mode::Gradient => return (m.flat_colour(kind, row as u32), rays),
@@ -90,6 +104,7 @@ pub fn trace<P: Probe>(
             return ([0.0; 3], rays);
         }
         if roulette_applies(&prep.estimator, rays) {
+            rng.seek(layout::roulette(depth));
             let (t, survives) = roulette(thr, rng);
             if !survives {
                 return ([0.0; 3], rays);

@@ -28,7 +28,7 @@ use crate::material::{dielectric, lambertian, metal, Kind};
 use crate::plan::{Mode, Prepared};
 use crate::probe::{PathId, Probe, Stage};
 use crate::real::Wide;
-use crate::sampling::{path_state, XoshiroLanes};
+use crate::sampling::{layout, Independent, PathSampler, Sampler, Sobol, Stream};
 use crate::vec3::V3;
 use std::ops::Range;
 
@@ -70,7 +70,15 @@ impl Paths {
 
     /// Appends the lanes of `alive` (a bitmask) of a packet: SIMD stream compaction.
     #[inline(always)]
-    fn append<W: Wide>(&mut self, alive: u32, o: V3<W>, d: V3<W>, thr: V3<W>, rng: &XoshiroLanes<W::U>, slot: W::U) {
+    fn append<W: Wide, S: PathSampler>(
+        &mut self,
+        alive: u32,
+        o: V3<W>,
+        d: V3<W>,
+        thr: V3<W>,
+        rng: [W::U; 4],
+        slot: W::U,
+    ) {
         let at = self.len;
         let put = |v: &mut Vec<f32>, x: W| W::compress_store_u(x.to_bits(), alive, bytemuck::cast_slice_mut(v), at);
         for (a, (ov, dv, tv)) in [(o.x, d.x, thr.x), (o.y, d.y, thr.y), (o.z, d.z, thr.z)].into_iter().enumerate() {
@@ -78,8 +86,8 @@ impl Paths {
             put(&mut self.d[a], dv);
             put(&mut self.thr[a], tv);
         }
-        for w in 0..4 {
-            W::compress_store_u(rng.s[w], alive, &mut self.rng[w], at);
+        for (w, words) in rng.into_iter().enumerate().take(S::WORDS) {
+            W::compress_store_u(words, alive, &mut self.rng[w], at);
         }
         self.len = at + W::compress_store_u(slot, alive, &mut self.slot, at);
     }
@@ -175,6 +183,20 @@ pub fn render_tile<W: Wide, P: Probe>(
     samples: Range<u32>,
     probe: &mut P,
 ) -> u64 {
+    match prep.estimator.sampler {
+        Sampler::Independent => render_tile_with::<W, P, _>(prep, Independent, ws, tile, samples, probe),
+        Sampler::Sobol { dims } => render_tile_with::<W, P, _>(prep, Sobol { dims }, ws, tile, samples, probe),
+    }
+}
+
+fn render_tile_with<W: Wide, P: Probe, S: PathSampler>(
+    prep: &Prepared,
+    sampler: S,
+    ws: &mut Workspace,
+    tile: &mut TileFilm,
+    samples: Range<u32>,
+    probe: &mut P,
+) -> u64 {
     let px = tile.sum.len();
     assert!(px <= MAX_PATHS, "tile of {px} pixels exceeds the wavefront's {MAX_PATHS} paths");
     let est = &prep.estimator;
@@ -184,7 +206,7 @@ pub fn render_tile<W: Wide, P: Probe>(
     let mut done = samples.start;
     while done < samples.end && !ws.active.is_empty() {
         let end = est.round_end(done, samples.end);
-        rays += render_round::<W, P>(prep, ws, tile, done, end, probe);
+        rays += render_round::<W, P, S>(prep, sampler, ws, tile, done, end, probe);
         done = end;
         if let (true, Some(a)) = (done < samples.end, est.adaptive) {
             ws.active.retain(|&l| !a.converged(tile, l as usize));
@@ -194,8 +216,9 @@ pub fn render_tile<W: Wide, P: Probe>(
 }
 
 /// Samples `s0..s1` of every active pixel, in batches of at most `MAX_PATHS` paths.
-fn render_round<W: Wide, P: Probe>(
+fn render_round<W: Wide, P: Probe, S: PathSampler>(
     prep: &Prepared,
+    sampler: S,
     ws: &mut Workspace,
     tile: &mut TileFilm,
     s0: u32,
@@ -219,12 +242,12 @@ fn render_round<W: Wide, P: Probe>(
         let n = (b1 - b0) as usize * na;
         ws.result[..n].fill([0.0; 3]);
         ws.batch_start = b0;
-        generate::<W, P>(prep, ws, tile, b0, b1, probe);
+        generate::<W, P, S>(prep, sampler, ws, tile, b0, b1, probe);
         for depth in 0..prep.settings.max_depth {
             if ws.cur.len == 0 {
                 break;
             }
-            rays += bounce::<W, P>(prep, ws, depth, probe);
+            rays += bounce::<W, P, S>(prep, sampler, ws, depth, probe);
         }
         for s in 0..(b1 - b0) as usize {
             for (j, &local) in ws.active.iter().enumerate() {
@@ -238,7 +261,15 @@ fn render_round<W: Wide, P: Probe>(
 
 /// Camera rays for samples `s0..s1` of every active pixel of the tile, W at a time.
 /// Path `slot` is sample `s0 + slot / na` of active pixel `slot % na`.
-fn generate<W: Wide, P: Probe>(prep: &Prepared, ws: &mut Workspace, tile: &TileFilm, s0: u32, s1: u32, probe: &mut P) {
+fn generate<W: Wide, P: Probe, S: PathSampler>(
+    prep: &Prepared,
+    sampler: S,
+    ws: &mut Workspace,
+    tile: &TileFilm,
+    s0: u32,
+    s1: u32,
+    probe: &mut P,
+) {
     let st = &prep.settings;
     let na = ws.active.len();
     let n = (s1 - s0) as usize * na;
@@ -246,10 +277,10 @@ fn generate<W: Wide, P: Probe>(prep: &Prepared, ws: &mut Workspace, tile: &TileF
     // Pixel coordinates ride in the throughput arrays until the rays exist.
     for slot in 0..n {
         let (x, y) = tile.pixel_of(ws.active[slot % na] as usize);
-        let sample = s0 as u64 + (slot / na) as u64;
-        let state = path_state(st.seed, y as u64 * st.width as u64 + x as u64, sample);
-        for w in 0..4 {
-            p.rng[w][slot] = state[w];
+        let sample = s0 + (slot / na) as u32;
+        let state = sampler.words(st.seed, y as u64 * st.width as u64 + x as u64, sample);
+        for (w, word) in state.into_iter().enumerate().take(S::WORDS) {
+            p.rng[w][slot] = word;
         }
         p.thr[0][slot] = x as f32;
         p.thr[1][slot] = y as f32;
@@ -258,7 +289,10 @@ fn generate<W: Wide, P: Probe>(prep: &Prepared, ws: &mut Workspace, tile: &TileF
     p.len = n;
     for i in (0..n).step_by(W::LANES) {
         let p = &mut ws.cur;
-        let mut rng = XoshiroLanes { s: std::array::from_fn(|w| W::load_u(&p.rng[w], i)) };
+        let mut rng =
+            sampler.lanes::<W>(std::array::from_fn(
+                |w| if w < S::WORDS { W::load_u(&p.rng[w], i) } else { W::u_splat(0) },
+            ));
         let (o, d) = prep.camera.ray(W::load(&p.thr[0], i), W::load(&p.thr[1], i), &mut rng);
         let o = if P::PATHS {
             let idx: W::Idx = index_run::<W>(i);
@@ -273,8 +307,8 @@ fn generate<W: Wide, P: Probe>(prep: &Prepared, ws: &mut Workspace, tile: &TileF
             da.store(&mut p.d[a], i);
             W::splat(1.0).store(&mut p.thr[a], i);
         }
-        for w in 0..4 {
-            W::store_u(rng.s[w], &mut p.rng[w], i);
+        for (w, words) in S::lane_words::<W>(&rng).into_iter().enumerate().take(S::WORDS) {
+            W::store_u(words, &mut p.rng[w], i);
         }
     }
 }
@@ -292,7 +326,13 @@ fn index_run<W: Wide>(i: usize) -> W::Idx {
 /// One bounce of every live path: intersect, classify, shade misses, scatter.
 /// `depth` counts the rays each path has traced before this bounce (0: camera
 /// rays). Returns the rays traced.
-fn bounce<W: Wide, P: Probe>(prep: &Prepared, ws: &mut Workspace, depth: u32, probe: &mut P) -> u64 {
+fn bounce<W: Wide, P: Probe, S: PathSampler>(
+    prep: &Prepared,
+    sampler: S,
+    ws: &mut Workspace,
+    depth: u32,
+    probe: &mut P,
+) -> u64 {
     let n = ws.cur.len;
     for i in (0..n).step_by(W::LANES) {
         let live = (n - i).min(W::LANES);
@@ -324,7 +364,7 @@ fn bounce<W: Wide, P: Probe>(prep: &Prepared, ws: &mut Workspace, depth: u32, pr
         match prep.plan.mode {
             Mode::Path if prep.plan.kinds.contains(kind) => {
                 for_packets::<W, P>(q, probe, |idx, active, probe| {
-                    scatter::<W, P>(prep, ws, kind, depth, idx.as_ref(), active, probe)
+                    scatter::<W, P, S>(prep, sampler, ws, kind, depth, idx.as_ref(), active, probe)
                 });
             }
             Mode::Path => debug_assert!(q.is_empty(), "the plan left out a kind that was hit"),
@@ -412,8 +452,10 @@ fn debug_shade<W: Wide, P: Probe>(
 
 /// Scatters a packet of paths that hit material `kind`; survivors join the next bounce.
 #[inline(always)]
-fn scatter<W: Wide, P: Probe>(
+#[allow(clippy::too_many_arguments)]
+fn scatter<W: Wide, P: Probe, S: PathSampler>(
     prep: &Prepared,
+    sampler: S,
     ws: &mut Workspace,
     kind: Kind,
     depth: u32,
@@ -423,7 +465,14 @@ fn scatter<W: Wide, P: Probe>(
 ) {
     let (d, srf, sph) = surfaces::<W, P>(prep, ws, idx, active, probe);
     let cur = &ws.cur;
-    let mut rng = XoshiroLanes { s: std::array::from_fn(|w| W::gather_u(&cur.rng[w], idx)) };
+    let mut rng = sampler.lanes::<W>(std::array::from_fn(|w| {
+        if w < S::WORDS {
+            W::gather_u(&cur.rng[w], idx)
+        } else {
+            W::u_splat(0)
+        }
+    }));
+    rng.seek(layout::scatter(depth));
     let mut rows = [0usize; 16];
     for (k, r) in rows.iter_mut().enumerate().take(W::LANES) {
         *r = prep.spheres.row[W::lane_u(sph, k) as usize] as usize;
@@ -454,11 +503,12 @@ fn scatter<W: Wide, P: Probe>(
     // Every lane draws, as the scalar path does when it gets here; lanes that
     // are already dead draw too, but their streams are never used again.
     if roulette_applies(&prep.estimator, depth + 1) {
+        rng.seek(layout::roulette(depth));
         let (t, survives) = roulette(thr, &mut rng);
         thr = t;
         alive = alive & survives;
     }
     let alive = W::mask_bits(alive) & low_bits(active);
     let slot = W::gather_u(&cur.slot, idx);
-    ws.next.append::<W>(alive, spawn(&srf, dir), dir, thr, &rng, slot);
+    ws.next.append::<W, S>(alive, spawn(&srf, dir), dir, thr, S::lane_words::<W>(&rng), slot);
 }

@@ -60,23 +60,146 @@ pub trait Stream<R: Real> {
     fn seek(&mut self, _dim: u32) {}
 }
 
-/// Which sampler draws a path's values.
-#[derive(Clone, Copy, Debug, Default, PartialEq, Eq, serde::Serialize, serde::Deserialize, clap::ValueEnum)]
-#[serde(rename_all = "lowercase")]
-pub enum SamplerKind {
+/// Which sampler draws a path's values (the estimator's choice; it changes
+/// the noise, not the expected image).
+#[derive(Clone, Copy, Debug, Default, PartialEq, Eq)]
+pub enum Sampler {
     /// Independent uniform numbers: one xoshiro128+ stream per path (the book's way).
     #[default]
     Independent,
-    /// Owen-scrambled Sobol points along the dimension layout, padding past it.
-    Sobol,
+    /// Owen-scrambled Sobol points along the [`layout`]: the first `dims`
+    /// dimensions (at most [`sobol::SOBOL_DIMS`]) are Sobol, the rest padding.
+    Sobol { dims: u32 },
 }
 
-impl SamplerKind {
+impl Sampler {
+    /// Every dimension of the layout on Sobol points.
+    pub const SOBOL: Sampler = Sampler::Sobol { dims: sobol::SOBOL_DIMS as u32 };
+    /// The names [`Sampler::parse`] accepts (the `sobol-*` ones put only the
+    /// named groups of the layout on Sobol points, to measure what each gains).
+    pub const NAMES: &'static [&'static str] = &["independent", "sobol", "sobol-pixel", "sobol-lens", "sobol-bounce1"];
+
     pub fn name(self) -> &'static str {
         match self {
-            SamplerKind::Independent => "independent",
-            SamplerKind::Sobol => "sobol",
+            Sampler::Independent => "independent",
+            Sampler::Sobol { dims } if dims >= sobol::SOBOL_DIMS as u32 => "sobol",
+            Sampler::Sobol { dims } if dims <= layout::LENS => "sobol-pixel",
+            Sampler::Sobol { dims } if dims <= layout::FIRST_BOUNCE => "sobol-lens",
+            Sampler::Sobol { .. } => "sobol-bounce1",
         }
+    }
+
+    pub fn parse(text: &str) -> Option<Sampler> {
+        Some(match text {
+            "independent" => Sampler::Independent,
+            "sobol" => Sampler::SOBOL,
+            "sobol-pixel" => Sampler::Sobol { dims: layout::LENS },
+            "sobol-lens" => Sampler::Sobol { dims: layout::FIRST_BOUNCE },
+            "sobol-bounce1" => Sampler::Sobol { dims: layout::scatter(1) },
+            _ => return None,
+        })
+    }
+}
+
+impl std::fmt::Display for Sampler {
+    fn fmt(&self, f: &mut std::fmt::Formatter<'_>) -> std::fmt::Result {
+        f.write_str(self.name())
+    }
+}
+
+impl std::str::FromStr for Sampler {
+    type Err = String;
+    fn from_str(s: &str) -> Result<Sampler, String> {
+        Sampler::parse(s).ok_or_else(|| format!("'{s}' is not one of {}", Sampler::NAMES.join(", ")))
+    }
+}
+
+impl serde::Serialize for Sampler {
+    fn serialize<S: serde::Serializer>(&self, s: S) -> Result<S::Ok, S::Error> {
+        s.serialize_str(self.name())
+    }
+}
+
+impl<'de> serde::Deserialize<'de> for Sampler {
+    fn deserialize<D: serde::Deserializer<'de>>(d: D) -> Result<Sampler, D::Error> {
+        let name = String::deserialize(d)?;
+        name.parse().map_err(serde::de::Error::custom)
+    }
+}
+
+/// How the kernels make and keep a path's stream, one implementation per
+/// sampler. The kernels are instantiated for each (chosen once per tile), so
+/// the hot path has no dispatch, and with [`Independent`] they run exactly the
+/// code they ran before samplers existed.
+pub trait PathSampler: Copy + Send + Sync {
+    /// The `u32` words of per-path state the wavefront keeps (at most 4).
+    const WORDS: usize;
+    type Scalar: Stream<f32>;
+    type Lanes<W: Wide>: Stream<W>;
+    /// The scalar stream of path (`pixel`, `sample`) of a render with `seed`.
+    fn scalar(&self, seed: u64, pixel: u64, sample: u32) -> Self::Scalar;
+    /// The same path's state words (the first `WORDS` are used).
+    fn words(&self, seed: u64, pixel: u64, sample: u32) -> [u32; 4];
+    /// Lanes of streams from their state words.
+    fn lanes<W: Wide>(&self, words: [W::U; 4]) -> Self::Lanes<W>;
+    /// The state words of lanes of streams (after their draws).
+    fn lane_words<W: Wide>(s: &Self::Lanes<W>) -> [W::U; 4];
+}
+
+/// The independent sampler: rand_xoshiro's stream per path (scalar), the same
+/// xoshiro128+ lane-wise (wavefront).
+#[derive(Clone, Copy, Debug, Default)]
+pub struct Independent;
+
+impl PathSampler for Independent {
+    const WORDS: usize = 4;
+    type Scalar = ScalarStream;
+    type Lanes<W: Wide> = XoshiroLanes<W::U>;
+    #[inline]
+    fn scalar(&self, seed: u64, pixel: u64, sample: u32) -> ScalarStream {
+        ScalarStream::for_path(seed, pixel, sample as u64)
+    }
+    #[inline]
+    fn words(&self, seed: u64, pixel: u64, sample: u32) -> [u32; 4] {
+        path_state(seed, pixel, sample as u64)
+    }
+    #[inline(always)]
+    fn lanes<W: Wide>(&self, words: [W::U; 4]) -> XoshiroLanes<W::U> {
+        XoshiroLanes { s: words }
+    }
+    #[inline(always)]
+    fn lane_words<W: Wide>(s: &XoshiroLanes<W::U>) -> [W::U; 4] {
+        s.s
+    }
+}
+
+/// The Sobol sampler: state words (pixel key, sample index); the dimension is
+/// set by the kernel along the [`layout`] and is the same in every lane.
+#[derive(Clone, Copy, Debug)]
+pub struct Sobol {
+    /// Leading dimensions on Sobol points; the rest are padding.
+    pub dims: u32,
+}
+
+impl PathSampler for Sobol {
+    const WORDS: usize = 2;
+    type Scalar = SobolStream<u32>;
+    type Lanes<W: Wide> = SobolStream<W::U>;
+    #[inline]
+    fn scalar(&self, seed: u64, pixel: u64, sample: u32) -> SobolStream<u32> {
+        SobolStream::for_path(seed, pixel, sample, self.dims)
+    }
+    #[inline]
+    fn words(&self, seed: u64, pixel: u64, sample: u32) -> [u32; 4] {
+        [sobol::pixel_key(seed, pixel), sample, 0, 0]
+    }
+    #[inline(always)]
+    fn lanes<W: Wide>(&self, w: [W::U; 4]) -> SobolStream<W::U> {
+        SobolStream { key: w[0], index: w[1], dim: 0, sobol_dims: self.dims }
+    }
+    #[inline(always)]
+    fn lane_words<W: Wide>(s: &SobolStream<W::U>) -> [W::U; 4] {
+        [s.key, s.index, s.key, s.index]
     }
 }
 

@@ -31,6 +31,7 @@ fn settings(width: u32, height: u32, spp: u32, depth: u32) -> RenderDefaults {
         samples_per_pixel: Some(spp),
         max_depth: Some(depth),
         seed: None,
+        sampler: None,
     }
 }
 
