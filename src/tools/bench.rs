@@ -11,6 +11,7 @@
 use crate::error::{Error, Result};
 use crate::probe::WorkCounters;
 use crate::render::{render, render_counted, Kernel, Stats};
+use crate::sampling::Sampler;
 use crate::scene::Scene;
 use crate::settings::{AccelChoice, KernelChoice, RenderOptions, Settings};
 use serde::{Deserialize, Serialize};
@@ -25,6 +26,8 @@ pub struct Config {
     pub accel: AccelChoice,
     /// Timed renders per kernel; the median one is reported.
     pub repeat: usize,
+    /// The sampler every render uses.
+    pub sampler: Sampler,
 }
 
 impl Config {
@@ -97,7 +100,13 @@ pub fn run(
     let mut entries = Vec::new();
     for &choice in &cfg.kernels {
         let kernel = Kernel::resolve(choice)?;
-        let opts = RenderOptions { kernel: choice, threads: cfg.threads, accel: cfg.accel, ..Default::default() };
+        let opts = RenderOptions {
+            kernel: choice,
+            threads: cfg.threads,
+            accel: cfg.accel,
+            sampler: cfg.sampler,
+            ..Default::default()
+        };
         let mut runs = Vec::new();
         for i in 0..cfg.repeat {
             let r = render(scene, cfg.settings, opts, None)?;
@@ -197,6 +206,9 @@ pub struct BaselineEntry {
     /// Exact work counters (absent in baselines saved before they existed).
     #[serde(default)]
     pub work: Option<WorkCounters>,
+    /// The sampler (absent in baselines saved before there was a choice: independent).
+    #[serde(default)]
+    pub sampler: Option<String>,
 }
 
 #[derive(Clone, Debug, Deserialize)]
@@ -215,9 +227,18 @@ impl Baseline {
 
     /// Checks, before anything is measured, that this baseline measured the same
     /// scene and settings and has at least one of `kernels`.
-    pub fn check(&self, scene: &str, s: &Settings, kernels: &[KernelChoice]) -> Result<()> {
+    pub fn check(&self, scene: &str, s: &Settings, kernels: &[KernelChoice], sampler: Sampler) -> Result<()> {
         if self.scene != scene {
             return Err(Error::Input(format!("baseline is of scene '{}', this run of '{scene}'", self.scene)));
+        }
+        for b in &self.kernels {
+            let theirs = b.sampler.as_deref().unwrap_or(Sampler::Independent.name());
+            if theirs != sampler.name() {
+                return Err(Error::Input(format!(
+                    "baseline sampler {theirs} differs from this run's {} (--sampler)",
+                    sampler.name()
+                )));
+            }
         }
         for b in &self.kernels {
             if (b.width, b.height, b.spp, b.max_depth, b.seed) != (s.width, s.height, s.spp, s.max_depth, s.seed) {

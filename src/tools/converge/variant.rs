@@ -1,7 +1,9 @@
-//! Estimator variants of `rtow converge`: plain, Russian roulette, adaptive sampling, or both.
+//! Estimator variants of `rtow converge`: plain, Russian roulette, adaptive
+//! sampling, Sobol points, or combinations.
 
 use crate::error::{Error, Result};
 use crate::estimator::ROULETTE_AFTER_RAYS;
+use crate::sampling::Sampler;
 
 /// The threshold of the `adaptive` variant when none is given (`adaptive:T`).
 pub const DEFAULT_ADAPTIVE_THRESHOLD: f32 = 0.02;
@@ -13,13 +15,17 @@ pub struct Variant {
     pub rr: Option<u32>,
     /// Relative error threshold of adaptive sampling.
     pub adaptive: Option<f32>,
+    /// The sampler (`plain` is independent sampling).
+    pub sampler: Sampler,
 }
 
 impl Variant {
-    pub const PLAIN: Variant = Variant { rr: None, adaptive: None };
+    pub const PLAIN: Variant = Variant { rr: None, adaptive: None, sampler: Sampler::Independent };
 
-    /// Parses `plain`, `rr`, `rr:N`, `adaptive`, `adaptive:T` or a
-    /// `+`-joined combination such as `rr+adaptive:0.05`.
+    /// Parses `plain`, `rr`, `rr:N`, `adaptive`, `adaptive:T`, a sampler
+    /// (`sobol`, or `sobol-pixel`, `sobol-lens`, `sobol-bounce1` for part of
+    /// the layout on Sobol points) or a `+`-joined combination such as
+    /// `sobol+rr+adaptive:0.05`.
     pub fn parse(text: &str) -> Result<Variant> {
         let bad = |m: String| Error::invalid("--variants", m);
         let mut v = Variant::PLAIN;
@@ -48,6 +54,11 @@ impl Variant {
                     };
                     v.rr = Some(n);
                 }
+                name if value.is_none() && v.sampler == Sampler::Independent && name.starts_with("sobol") => {
+                    v.sampler = Sampler::parse(name).ok_or_else(|| {
+                        bad(format!("'{text}': unknown sampler '{name}' (use one of {})", Sampler::NAMES[1..].join(", ")))
+                    })?;
+                }
                 "adaptive" if v.adaptive.is_none() => {
                     let t = match value {
                         None => DEFAULT_ADAPTIVE_THRESHOLD,
@@ -62,7 +73,7 @@ impl Variant {
                 }
                 _ => {
                     return Err(bad(format!(
-                        "unknown or repeated variant '{part}' in '{text}' (use plain, rr, rr:N, adaptive, adaptive:THRESHOLD, or e.g. rr+adaptive:0.05)"
+                        "unknown or repeated variant '{part}' in '{text}' (use plain, rr, rr:N, adaptive, adaptive:THRESHOLD, sobol, or e.g. sobol+rr+adaptive:0.05)"
                     )))
                 }
             }
@@ -76,11 +87,20 @@ impl Variant {
             Some(n) => format!("rr:{n}"),
             None => String::new(),
         };
-        match (rr.as_str(), self.adaptive) {
-            ("", None) => "plain".into(),
-            (rr, None) => rr.into(),
-            ("", Some(t)) => format!("adaptive:{t}"),
-            (rr, Some(t)) => format!("{rr}+adaptive:{t}"),
+        let mut parts: Vec<String> = Vec::new();
+        if self.sampler != Sampler::Independent {
+            parts.push(self.sampler.name().into());
+        }
+        if !rr.is_empty() {
+            parts.push(rr);
+        }
+        if let Some(t) = self.adaptive {
+            parts.push(format!("adaptive:{t}"));
+        }
+        if parts.is_empty() {
+            "plain".into()
+        } else {
+            parts.join("+")
         }
     }
 }
