@@ -16,8 +16,11 @@
 //! ```
 //!
 //! Lane k of every packet computes exactly what the scalar kernel computes for
-//! that path: the formulas are the width-generic ones, the random stream is the
-//! same xoshiro128+ run lane-wise, and the closest-hit tie rule is the same.
+//! that path: the formulas are the width-generic ones, the random values are
+//! the same (the sampler's stream run lane-wise: xoshiro128+ for the
+//! independent sampler, the Sobol generator for `sobol`, with the dimension of
+//! each draw set by the bounce, which every path of a pass shares), and the
+//! closest-hit tie rule is the same.
 //! Memory is bounded: a workspace holds at most `MAX_PATHS` paths.
 
 use super::{normal_colour, sky};

@@ -160,8 +160,14 @@ pub enum Event<'a> {
 pub fn run(scene: &Scene, name: &str, cfg: &Config, mut on: impl FnMut(Event)) -> Result<Report> {
     cfg.validate()?;
     let s = cfg.settings;
-    let base =
-        RenderOptions { kernel: KernelChoice::Simd, threads: cfg.threads, tile: cfg.tile, ..RenderOptions::default() };
+    // The reference is always rendered with independent sampling, whatever the default sampler.
+    let base = RenderOptions {
+        kernel: KernelChoice::Simd,
+        threads: cfg.threads,
+        tile: cfg.tile,
+        sampler: crate::sampling::Sampler::Independent,
+        ..RenderOptions::default()
+    };
     let (reference, ref_text, rendered) = match &cfg.reference {
         Reference::File(path) => {
             let img = Image::load_float(path).map_err(|e| Error::invalid("--reference", e.to_string()))?;
