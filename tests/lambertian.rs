@@ -8,7 +8,7 @@
 //! chi-square law with (cells - 1) degrees of freedom.
 
 mod common;
-use common::stats::{chi2, chi2_critical, normal_cdf, normal_quantile};
+use common::stats::{chi2, chi2_critical, normal_quantile};
 use rtow::material::lambertian;
 use rtow::sampling::{ScalarStream, Stream};
 use rtow::vec3::V3;
