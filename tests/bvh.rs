@@ -45,9 +45,9 @@ fn check(s: &Spheres, extent: f32, rays: &[(V3<f32>, V3<f32>)]) -> Result<(), Te
 fn packets<W: Wide>(s: &Spheres, bvh: &Bvh, rays: &[(V3<f32>, V3<f32>)]) -> Result<(), TestCaseError> {
     for chunk in rays.chunks(W::LANES) {
         let n = chunk.len();
-        let lane = |f: &dyn Fn(&(V3<f32>, V3<f32>)) -> f32| W::from_fn(|k| f(&chunk[k.min(n - 1)]));
-        let o = V3::new(lane(&|r| r.0.x), lane(&|r| r.0.y), lane(&|r| r.0.z));
-        let d = V3::new(lane(&|r| r.1.x), lane(&|r| r.1.y), lane(&|r| r.1.z));
+        let at = |k: usize| chunk[k.min(n - 1)];
+        let o = V3::new(W::from_fn(|k| at(k).0.x), W::from_fn(|k| at(k).0.y), W::from_fn(|k| at(k).0.z));
+        let d = V3::new(W::from_fn(|k| at(k).1.x), W::from_fn(|k| at(k).1.y), W::from_fn(|k| at(k).1.z));
         let live = if n == 32 { u32::MAX } else { (1u32 << n) - 1 };
         let (pi, pt) = bvh.closest_hit_packet(o, d, live, &mut ());
         let (ri, rt) = bvh.closest_hits_one_by_one(o, d, live, &mut ());
