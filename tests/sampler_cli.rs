@@ -1,0 +1,119 @@
+//! `--sampler` through the binary: render, scene files, bench and converge.
+#![cfg(feature = "cli")]
+
+use rtow::sampling::Sampler;
+use rtow::{render, KernelChoice, RenderOptions, Settings};
+use std::path::Path;
+use std::process::{Command, Output};
+
+const BIN: &str = env!("CARGO_BIN_EXE_rtow");
+
+fn rtow(dir: &Path, args: &[&str]) -> Output {
+    Command::new(BIN).args(args).current_dir(dir).output().expect("rtow runs")
+}
+
+fn ok(o: &Output) {
+    assert!(o.status.success(), "exit {:?}: {}", o.status.code(), String::from_utf8_lossy(&o.stderr));
+}
+
+fn stats(dir: &Path) -> serde_json::Value {
+    serde_json::from_str(&std::fs::read_to_string(dir.join("s.json")).unwrap()).unwrap()
+}
+
+const SMALL: [&str; 9] = ["--width", "24", "--height", "14", "--spp", "4", "--seed", "3", "-q"];
+
+#[test]
+fn render_takes_the_sampler_from_the_flag_or_the_scene() {
+    let d = tempfile::tempdir().unwrap();
+    let dir = d.path();
+    let args = |extra: &[&str]| [&["render", "ch07-diffuse", "--stats-json", "s.json"][..], &SMALL, extra].concat();
+    ok(&rtow(dir, &args(&["--sampler", "sobol"])));
+    let v = stats(dir);
+    assert_eq!(v["sampler"], "sobol");
+    let sc = rtow::scene::preset("ch07-diffuse").unwrap();
+    let s = Settings { width: 24, height: 14, spp: 4, max_depth: rtow::default_settings(&sc).max_depth, seed: 3 };
+    let lib = render(
+        &sc,
+        s,
+        RenderOptions { kernel: KernelChoice::Simd, sampler: Sampler::SOBOL, ..Default::default() },
+        None,
+    )
+    .unwrap();
+    assert_eq!(v["image_hash"], lib.stats.image_hash.as_str());
+    ok(&rtow(dir, &args(&[])));
+    assert_eq!(stats(dir)["sampler"], "independent");
+
+    // A scene file's render table names it; the flag wins.
+    ok(&rtow(dir, &["export", "ch07-diffuse", "-o", "scene.json"]));
+    let mut j: serde_json::Value =
+        serde_json::from_str(&std::fs::read_to_string(dir.join("scene.json")).unwrap()).unwrap();
+    j["render"]["sampler"] = "sobol".into();
+    std::fs::write(dir.join("scene.json"), j.to_string()).unwrap();
+    let file_args = |extra: &[&str]| [&["render", "scene.json", "--stats-json", "s.json"][..], &SMALL, extra].concat();
+    ok(&rtow(dir, &file_args(&[])));
+    assert_eq!(stats(dir)["sampler"], "sobol");
+    ok(&rtow(dir, &file_args(&["--sampler", "independent"])));
+    assert_eq!(stats(dir)["sampler"], "independent");
+}
+
+#[test]
+fn an_unknown_sampler_is_bad_input() {
+    let d = tempfile::tempdir().unwrap();
+    let o = rtow(d.path(), &[&["render", "ch07-diffuse", "--sampler", "halton"][..], &SMALL].concat());
+    assert_eq!(o.status.code(), Some(2), "{}", String::from_utf8_lossy(&o.stderr));
+    let err = String::from_utf8_lossy(&o.stderr);
+    assert!(err.contains("independent") && err.contains("sobol"), "{err}");
+    assert!(!d.path().join("ch07-diffuse.png").exists());
+}
+
+#[test]
+fn bench_and_converge_measure_sobol() {
+    let d = tempfile::tempdir().unwrap();
+    let dir = d.path();
+    let o = rtow(
+        dir,
+        &[
+            "bench",
+            "ch07-diffuse",
+            "--width",
+            "16",
+            "--height",
+            "9",
+            "--spp",
+            "2",
+            "--repeat",
+            "1",
+            "--sampler",
+            "sobol",
+            "--json",
+            "b.json",
+        ],
+    );
+    ok(&o);
+    let b: serde_json::Value = serde_json::from_str(&std::fs::read_to_string(dir.join("b.json")).unwrap()).unwrap();
+    for k in b["kernels"].as_array().unwrap() {
+        assert_eq!(k["sampler"], "sobol");
+    }
+    let o = rtow(
+        dir,
+        &[
+            "converge",
+            "ch07-diffuse",
+            "--width",
+            "16",
+            "--height",
+            "9",
+            "--variants",
+            "plain,sobol,sobol+rr",
+            "--spp-list",
+            "4,8",
+            "--reference-spp",
+            "64",
+            "--out",
+            "c",
+        ],
+    );
+    ok(&o);
+    let csv = std::fs::read_to_string(dir.join("c/ch07-diffuse.csv")).unwrap();
+    assert!(csv.contains(",sobol,4,") && csv.contains(",sobol+rr,8,"), "{csv}");
+}
