@@ -26,7 +26,8 @@ const SMALL: [&str; 9] = ["--width", "24", "--height", "14", "--spp", "4", "--se
 fn render_takes_the_sampler_from_the_flag_or_the_scene() {
     let d = tempfile::tempdir().unwrap();
     let dir = d.path();
-    let args = |extra: &[&str]| [&["render", "ch07-diffuse", "--stats-json", "s.json"][..], &SMALL, extra].concat();
+    let args =
+        |extra: &[&'static str]| [&["render", "ch07-diffuse", "--stats-json", "s.json"][..], &SMALL, extra].concat();
     ok(&rtow(dir, &args(&["--sampler", "sobol"])));
     let v = stats(dir);
     assert_eq!(v["sampler"], "sobol");
@@ -49,7 +50,8 @@ fn render_takes_the_sampler_from_the_flag_or_the_scene() {
         serde_json::from_str(&std::fs::read_to_string(dir.join("scene.json")).unwrap()).unwrap();
     j["render"]["sampler"] = "sobol".into();
     std::fs::write(dir.join("scene.json"), j.to_string()).unwrap();
-    let file_args = |extra: &[&str]| [&["render", "scene.json", "--stats-json", "s.json"][..], &SMALL, extra].concat();
+    let file_args =
+        |extra: &[&'static str]| [&["render", "scene.json", "--stats-json", "s.json"][..], &SMALL, extra].concat();
     ok(&rtow(dir, &file_args(&[])));
     assert_eq!(stats(dir)["sampler"], "sobol");
     ok(&rtow(dir, &file_args(&["--sampler", "independent"])));
