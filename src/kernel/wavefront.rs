@@ -295,7 +295,7 @@ fn index_run<W: Wide>(i: usize) -> W::Idx {
 fn bounce<W: Wide, P: Probe>(prep: &Prepared, ws: &mut Workspace, depth: u32, probe: &mut P) -> u64 {
     let n = ws.cur.len;
     probe.rays(depth, n as u32);
-    if depth > 0 && REORDER_BINS > 1 {
+    if depth > 0 && REORDER {
         reorder(ws);
     }
     for i in (0..n).step_by(W::LANES) {
@@ -344,11 +344,10 @@ fn bounce<W: Wide, P: Probe>(prep: &Prepared, ws: &mut Workspace, depth: u32, pr
     n as u64
 }
 
-/// Direction bins for reordering secondary rays (1: no reordering). Experiment knob.
-const REORDER_BINS: usize = match option_env!("RTOW_REORDER_BINS") {
-    Some(_) => 128,
-    None => 1,
-};
+/// Reorder secondary rays before intersection (an experiment, off: see docs/performance.md).
+const REORDER: bool = option_env!("RTOW_REORDER").is_some();
+/// Bins of the reordering key: direction octant x a 4 x 4 cell of the origin.
+const REORDER_BINS: usize = 128;
 
 /// Reorders the live paths by the direction of their next ray (a counting sort
 /// over octant and a coarse azimuth/elevation cell), so that a packet's rays
@@ -361,13 +360,13 @@ fn reorder(ws: &mut Workspace) {
         let oct = (x < 0.0) as usize | ((y < 0.0) as usize) << 1 | ((z < 0.0) as usize) << 2;
         let cell = |a: f32| ((a * 0.5).floor() as i64 & 3) as usize;
         let (ox, oz) = (cell(cur.o[0][i]), cell(cur.o[2][i]));
-        (oct << 4 | ox << 2 | oz) % REORDER_BINS
+        oct << 4 | ox << 2 | oz
     };
-    let mut count = [0usize; 128];
+    let mut count = [0usize; REORDER_BINS];
     for i in 0..n {
         count[key(i)] += 1;
     }
-    let mut start = [0usize; 128];
+    let mut start = [0usize; REORDER_BINS];
     for b in 1..REORDER_BINS {
         start[b] = start[b - 1] + count[b - 1];
     }
