@@ -360,3 +360,35 @@ fn exported_presets_render_the_identical_image() {
         }
     }
 }
+
+#[test]
+fn explain_prints_the_plan_the_render_uses() {
+    let dir = tempfile::tempdir().unwrap();
+    let small = ["--width", "16", "--height", "9", "--spp", "2", "--depth", "3", "-q"];
+    let r = rtow(dir.path(), &[&["render", "final", "--explain", "-o", "a.png"][..], &small].concat());
+    success(&r, "explain final");
+    assert!(r.stdout.contains("material passes: lambertian, metal, dielectric"), "{}", r.stdout);
+    assert!(r.stdout.contains("thin-lens") && r.stdout.contains("jittered"), "{}", r.stdout);
+    assert!(r.stdout.contains("bvh8, packets"), "{}", r.stdout);
+    let r = rtow(
+        dir.path(),
+        &[&["render", "ch08-metal", "--explain", "--accel", "brute", "-o", "b.png"][..], &small].concat(),
+    );
+    success(&r, "explain ch08");
+    assert!(r.stdout.contains("material passes: lambertian, metal;"), "{}", r.stdout);
+    assert!(r.stdout.contains("pinhole") && r.stdout.contains("brute force"), "{}", r.stdout);
+}
+
+#[test]
+fn book_sets_the_books_settings_and_explicit_flags_win() {
+    let dir = tempfile::tempdir().unwrap();
+    let r = rtow(
+        dir.path(),
+        &["render", "final", "--book", "--spp", "1", "--depth", "2", "-q", "-o", "b.png", "--stats-json", "s.json"],
+    );
+    success(&r, "--book");
+    let v: serde_json::Value =
+        serde_json::from_str(&std::fs::read_to_string(dir.path().join("s.json")).unwrap()).unwrap();
+    assert_eq!((v["width"].as_u64(), v["height"].as_u64()), (Some(1200), Some(675)), "--book size");
+    assert_eq!((v["spp"].as_u64(), v["max_depth"].as_u64()), (Some(1), Some(2)), "explicit flags win");
+}
