@@ -17,6 +17,7 @@ pub mod estimator;
 pub mod film;
 pub mod geometry;
 pub mod kernel;
+pub mod limits;
 pub mod material;
 pub mod output;
 pub mod plan;

@@ -4,6 +4,7 @@ use clap::{Args, CommandFactory, FromArgMatches, Parser, Subcommand};
 use indicatif::{ProgressBar, ProgressStyle};
 use rtow::plan::AccelChoice;
 use rtow::scene::{self, Scene};
+use rtow::output::{check_extension, Outputs};
 use rtow::{Error, KernelKind, RenderOptions, Result, Settings};
 use std::io::IsTerminal;
 use std::path::{Path, PathBuf};
@@ -16,6 +17,15 @@ macro_rules! say {
     ($($t:tt)*) => {{
         use std::io::Write as _;
         let _ = writeln!(std::io::stdout(), $($t)*);
+    }};
+}
+
+/// `eprintln!` that never panics: with stderr on a full or closed device the
+/// message is lost, but the exit status stays the documented one.
+macro_rules! tell {
+    ($($t:tt)*) => {{
+        use std::io::Write as _;
+        let _ = writeln!(std::io::stderr(), $($t)*);
     }};
 }
 
@@ -151,16 +161,39 @@ struct BenchArgs {
 }
 
 fn cmd_bench(a: BenchArgs) -> Result<bool> {
+    // Everything is checked before the first measurement: the scene, the
+    // flags, the baseline against this run, and every output path.
+    rtow::limits::check_threads(a.image.threads)?;
     let (scene, name) = load(&a.scene)?;
     let s = settings(&scene, &a.image);
+    s.validate()?;
     if a.image.tile != 16 {
         return Err(Error::invalid("--tile", "rtow bench uses the default tile size"));
     }
     if !(a.tolerance >= 0.0) {
         return Err(Error::invalid("--tolerance", "must be a percentage >= 0"));
     }
+    if a.repeat == 0 {
+        return Err(Error::invalid("--repeat", "must be at least 1"));
+    }
     let baseline = a.baseline.as_deref().map(rtow::tools::bench::Baseline::load).transpose()?;
-    eprintln!(
+    if let Some(b) = &baseline {
+        b.check_matches(&name, s, &a.kernels)?;
+    }
+    let mut outputs = Outputs::new();
+    if scene::preset(&a.scene).is_none() {
+        outputs.input(Path::new(&a.scene), "scene file");
+    }
+    if let Some(b) = &a.baseline {
+        outputs.input(b, "baseline");
+    }
+    let mut ids = Vec::new();
+    for (path, flag) in [(&a.json, "--json"), (&a.save, "--save")] {
+        if let Some(p) = path {
+            ids.push(outputs.add(p, flag)?);
+        }
+    }
+    tell!(
         "bench {name}: {}x{} {} spp depth {} seed {}, {} repetition(s) per kernel, built for {}",
         s.width,
         s.height,
@@ -172,12 +205,14 @@ fn cmd_bench(a: BenchArgs) -> Result<bool> {
     );
     let report =
         rtow::tools::bench::run(&scene, &name, s, &a.kernels, a.image.threads, a.image.accel, a.repeat, |k, i, st| {
-            eprintln!("  {} run {}: {:.3} s, {:.2} Mrays/s", k.name(), i + 1, st.seconds, st.mrays_per_s)
+            tell!("  {} run {}: {:.3} s, {:.2} Mrays/s", k.name(), i + 1, st.seconds, st.mrays_per_s)
         })?;
     say!("{}", report.table().trim_end_matches('\n'));
-    for path in [&a.json, &a.save].into_iter().flatten() {
-        rtow::output::write_atomic(path, report.to_json().as_bytes())?;
+    let json = report.to_json();
+    for id in ids {
+        outputs.stage(id, json.as_bytes())?;
     }
+    outputs.commit()?;
     let mut ok = true;
     if let Some(b) = &baseline {
         for c in rtow::tools::bench::compare(&report, b, a.tolerance)? {
@@ -287,6 +322,7 @@ struct ConvergeArgs {
 
 fn cmd_converge(a: ConvergeArgs) -> Result<()> {
     use rtow::tools::converge::{self, Event, Reference, Variant};
+    rtow::limits::check_threads(a.threads)?;
     let (scene, name) = load(&a.scene)?;
     let mut s = rtow::default_settings(&scene);
     s.width = a.width.unwrap_or(s.width);
@@ -400,18 +436,6 @@ fn settings(scene: &Scene, a: &ImageArgs) -> Settings {
     s
 }
 
-fn check_writable_ext(path: &Path, allowed: &[&str], what: &str) -> Result<()> {
-    let ext = path.extension().and_then(|e| e.to_str()).map(|e| e.to_ascii_lowercase()).unwrap_or_default();
-    if allowed.contains(&ext.as_str()) {
-        Ok(())
-    } else {
-        Err(Error::Output {
-            path: path.to_path_buf(),
-            message: format!("{what} must end in .{}", allowed.join(" or .")),
-        })
-    }
-}
-
 fn progress_bar(quiet: bool) -> Option<ProgressBar> {
     if quiet || !std::io::stderr().is_terminal() {
         return None;
@@ -444,19 +468,24 @@ fn render_with_progress(scene: &Scene, s: Settings, opts: RenderOptions, quiet: 
 }
 
 fn cmd_render(a: RenderArgs) -> Result<()> {
+    rtow::limits::check_threads(a.image.threads)?;
     let (scene, name) = load(&a.scene)?;
     let s = settings(&scene, &a.image);
     let out = a.output.clone().unwrap_or_else(|| PathBuf::from(format!("{name}.png")));
-    check_writable_ext(&out, &["png"], "the output image")?;
+    check_extension(&out, &["png"], "-o")?;
     if let Some(f) = &a.float {
-        check_writable_ext(f, &["pfm", "exr"], "--float")?;
+        check_extension(f, &["pfm", "exr"], "--float")?;
     }
     // Bad input first (exit 2), then every output path, before the render:
-    // a failure after it would waste the render and leave some outputs written.
+    // the outputs are one transaction, written only when all of them are ready.
     s.validate()?;
-    for p in std::iter::once(&out).chain(&a.float).chain(&a.stats_json) {
-        rtow::output::check_writable(p)?;
+    let mut outputs = Outputs::new();
+    if scene::preset(&a.scene).is_none() {
+        outputs.input(Path::new(&a.scene), "scene file");
     }
+    let png_id = outputs.add(&out, "-o")?;
+    let float_id = a.float.as_deref().map(|f| outputs.add(f, "--float")).transpose()?;
+    let stats_id = a.stats_json.as_deref().map(|j| outputs.add(j, "--stats-json")).transpose()?;
     let opts = RenderOptions {
         kernel: a.kernel,
         threads: a.image.threads,
@@ -471,15 +500,17 @@ fn cmd_render(a: RenderArgs) -> Result<()> {
         say!("{}", prep.plan.explain());
     }
     let r = render_with_progress(&scene, s, opts, a.quiet)?;
+    r.stats.check_finite()?;
     let gamma = a.gamma.unwrap_or(scene.mode.default_gamma());
-    r.image.save(&out, gamma)?;
-    if let Some(f) = &a.float {
-        r.image.save(f, 1.0)?;
+    outputs.stage(png_id, &rtow::output::image_bytes(&r.image, &out, gamma)?)?;
+    if let (Some(id), Some(f)) = (float_id, &a.float) {
+        outputs.stage(id, &rtow::output::image_bytes(&r.image, f, 1.0)?)?;
     }
-    if let Some(j) = &a.stats_json {
+    if let Some(id) = stats_id {
         let text = serde_json::to_string_pretty(&r.stats).expect("stats serialize") + "\n";
-        rtow::output::write_atomic(j, text.as_bytes())?;
+        outputs.stage(id, text.as_bytes())?;
     }
+    outputs.commit()?;
     if !a.quiet {
         let st = &r.stats;
         say!(
@@ -507,9 +538,10 @@ fn cmd_render(a: RenderArgs) -> Result<()> {
 
 /// Prints the stress tables; exits with status 1 when a bound is broken.
 fn cmd_stress(quick: bool, seed: u64, threads: Option<usize>) -> Result<bool> {
+    rtow::limits::check_threads(threads)?;
     use std::io::Write;
     let cfg = rtow::tools::stress::Config { quick, seed, threads };
-    let report = rtow::tools::stress::run(&cfg, &mut |part| eprintln!("done: {part}"))?;
+    let report = rtow::tools::stress::run(&cfg, &mut |part| tell!("done: {part}"))?;
     say!("{}", report.table().trim_end_matches('\n'));
     let _ = std::io::stdout().flush();
     Ok(report.passed())
@@ -532,6 +564,7 @@ fn run(cli: Cli) -> Result<bool> {
         Command::Export { preset, output } => {
             let s = scene::preset(&preset)
                 .ok_or_else(|| Error::Input(format!("unknown preset '{preset}' (see `rtow scenes`)")))?;
+            check_extension(&output, &["json", "toml"], "-o")?;
             scene::save_scene(&s, &output).map(|_| true)
         }
     }
@@ -559,11 +592,12 @@ fn clap_exit(e: clap::Error) -> ! {
         }
         line.push_str(part);
     }
-    eprintln!("error: {line}");
+    tell!("error: {line}");
     std::process::exit(2)
 }
 
 pub fn main() -> ExitCode {
+    rtow::output::install_signal_cleanup();
     let version = format!("{} (SIMD: {})", env!("CARGO_PKG_VERSION"), rtow::isa());
     let version: &'static str = Box::leak(version.into_boxed_str());
     let cli = match Cli::command().version(version).try_get_matches().and_then(|m| Cli::from_arg_matches(&m)) {
@@ -574,7 +608,7 @@ pub fn main() -> ExitCode {
         Ok(true) => ExitCode::SUCCESS,
         Ok(false) => ExitCode::from(1),
         Err(e) => {
-            eprintln!("error: {e}");
+            tell!("error: {e}");
             ExitCode::from(e.exit_code() as u8)
         }
     }

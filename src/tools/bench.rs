@@ -48,6 +48,7 @@ pub fn run(
         let mut runs = Vec::new();
         for i in 0..repeat {
             let r = render(scene, settings, opts, None)?;
+            r.stats.check_finite()?;
             on_run(kernel, i, &r.stats);
             runs.push(r.stats);
         }
@@ -127,10 +128,35 @@ pub struct Baseline {
 
 impl Baseline {
     pub fn load(path: &Path) -> Result<Baseline> {
-        let text = std::fs::read_to_string(path)
-            .map_err(|e| Error::Input(format!("cannot read baseline {}: {e}", path.display())))?;
-        serde_json::from_str(&text)
+        let bytes = crate::limits::read_bounded(path, crate::limits::MAX_BASELINE_BYTES, "baseline")?;
+        serde_json::from_slice(&bytes)
             .map_err(|e| Error::Parse { path: path.to_path_buf(), message: format!("not a rtow bench baseline: {e}") })
+    }
+}
+
+impl Baseline {
+    /// Checks, before anything is measured, that this baseline measured what
+    /// a run of `scene` with `settings` and `kernels` will: the same scene,
+    /// the same settings for each kernel it has, at least one of the kernels.
+    pub fn check_matches(&self, scene: &str, settings: Settings, kernels: &[KernelKind]) -> Result<()> {
+        if self.scene != scene {
+            return Err(Error::Input(format!("baseline is of scene '{}', this run of '{scene}'", self.scene)));
+        }
+        let s = settings;
+        let mut any = false;
+        for b in self.kernels.iter().filter(|b| kernels.iter().any(|k| k.name() == b.kernel)) {
+            any = true;
+            if (b.width, b.height, b.spp, b.max_depth, b.seed) != (s.width, s.height, s.spp, s.max_depth, s.seed) {
+                return Err(Error::Input(format!(
+                    "baseline settings {}x{} {} spp depth {} seed {} differ from this run's {}x{} {} spp depth {} seed {}",
+                    b.width, b.height, b.spp, b.max_depth, b.seed, s.width, s.height, s.spp, s.max_depth, s.seed
+                )));
+            }
+        }
+        if !any {
+            return Err(Error::Input("the baseline has none of the kernels measured".into()));
+        }
+        Ok(())
     }
 }
 
