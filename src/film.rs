@@ -200,10 +200,7 @@ impl Image {
             let size = |what: &str, s: &str| -> Result<u32> {
                 match s.parse::<i64>() {
                     Ok(v) if v >= 1 && v as u64 <= crate::plan::MAX_PIXELS => Ok(v as u32),
-                    Ok(v) => Err(bad(format!(
-                        "PFM header: {what} {v} must be from 1 to {}",
-                        crate::plan::MAX_PIXELS
-                    ))),
+                    Ok(v) => Err(bad(format!("PFM header: {what} {v} must be from 1 to {}", crate::plan::MAX_PIXELS))),
                     Err(_) => Err(bad(format!("PFM header: {what} '{s}' is not an integer"))),
                 }
             };
@@ -245,7 +242,12 @@ impl Image {
             reader.limits(limits);
             let img = reader.decode().map_err(|e| bad(e.to_string()))?;
             if img.width() as u64 * img.height() as u64 > crate::plan::MAX_PIXELS {
-                return Err(bad(format!("{}x{} pixels, at most {}", img.width(), img.height(), crate::plan::MAX_PIXELS)));
+                return Err(bad(format!(
+                    "{}x{} pixels, at most {}",
+                    img.width(),
+                    img.height(),
+                    crate::plan::MAX_PIXELS
+                )));
             }
             let img = img.into_rgb32f();
             let (w, h) = img.dimensions();

@@ -47,6 +47,11 @@ pub const MAX_RADIUS: f32 = 1e6;
 pub const MIN_FOCUS: f32 = 1e-6;
 pub const MAX_FOCUS: f32 = 1e7;
 
+/// Narrowest field of view (degrees): below about 1e-4 degrees the whole
+/// image spans fewer f32 steps than it has pixels and every pixel sees the
+/// same ray. (`stress-far-camera` uses 0.0027 degrees.)
+pub const MIN_VFOV_DEG: f32 = 1e-4;
+
 /// Largest thin-lens radius (world units).
 pub const MAX_LENS_RADIUS: f32 = MAX_COORD;
 

@@ -153,10 +153,7 @@ pub fn check_extension(path: &Path, allowed: &[&str], flag: &str) -> Result<()> 
         Ok(())
     } else {
         let list: Vec<String> = allowed.iter().map(|e| format!(".{e}")).collect();
-        Err(Error::invalid(
-            flag,
-            format!("{}: unsupported file type; use {}", path.display(), list.join(" or ")),
-        ))
+        Err(Error::invalid(flag, format!("{}: unsupported file type; use {}", path.display(), list.join(" or "))))
     }
 }
 
@@ -209,7 +206,12 @@ impl Outputs {
             if same_file(&target, &o.target) {
                 return Err(Error::invalid(
                     flag,
-                    format!("{} is the same file as {} {}: one would be lost", path.display(), o.flag, o.shown.display()),
+                    format!(
+                        "{} is the same file as {} {}: one would be lost",
+                        path.display(),
+                        o.flag,
+                        o.shown.display()
+                    ),
                 ));
             }
         }
@@ -260,6 +262,11 @@ impl Outputs {
     /// Renames every staged output into place; all or none (see the module
     /// documentation). Every output must have been staged.
     pub fn commit(mut self) -> Result<()> {
+        // Test hook (tests/hostile.rs): hold the staged files for a while so a
+        // test can signal the process between staging and commit.
+        if let Some(ms) = std::env::var("RTOW_TEST_PAUSE_BEFORE_COMMIT_MS").ok().and_then(|v| v.parse().ok()) {
+            std::thread::sleep(std::time::Duration::from_millis(ms));
+        }
         let mut list = pending();
         if let Some(o) = self.outputs.iter().find(|o| o.temp.is_none()) {
             return Err(output_error(&o.shown, "was never written (internal error)"));

@@ -2,9 +2,9 @@
 
 use clap::{Args, CommandFactory, FromArgMatches, Parser, Subcommand};
 use indicatif::{ProgressBar, ProgressStyle};
+use rtow::output::{check_extension, Outputs};
 use rtow::plan::AccelChoice;
 use rtow::scene::{self, Scene};
-use rtow::output::{check_extension, Outputs};
 use rtow::{Error, KernelKind, RenderOptions, Result, Settings};
 use std::io::IsTerminal;
 use std::path::{Path, PathBuf};

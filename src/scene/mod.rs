@@ -312,7 +312,9 @@ fn point(field: &str, v: [f32; 3]) -> Result<()> {
     if v.iter().any(|x| x.abs() > m) {
         return Err(Error::invalid(
             field,
-            format!("coordinates must be within [-{m:e}, {m:e}] (the range rtow's f32 kernels are verified in), got {v:?}"),
+            format!(
+                "coordinates must be within [-{m:e}, {m:e}] (the range rtow's f32 kernels are verified in), got {v:?}"
+            ),
         ));
     }
     Ok(())
@@ -345,10 +347,23 @@ impl Scene {
                 ),
             ));
         }
+        if c.vfov_deg < crate::limits::MIN_VFOV_DEG {
+            return Err(Error::invalid(
+                "camera.vfov_deg",
+                format!(
+                    "must be at least {:e} degrees for the f32 camera, got {}",
+                    crate::limits::MIN_VFOV_DEG,
+                    c.vfov_deg
+                ),
+            ));
+        }
         let lr = c.lens_radius();
         if !(lr.is_finite() && lr <= MAX_LENS_RADIUS as f64) {
             let field = if c.aperture.is_some() { "camera.aperture" } else { "camera.defocus_angle_deg" };
-            return Err(Error::invalid(field, format!("the lens radius must be at most {MAX_LENS_RADIUS:e}, got {lr:e}")));
+            return Err(Error::invalid(
+                field,
+                format!("the lens radius must be at most {MAX_LENS_RADIUS:e}, got {lr:e}"),
+            ));
         }
         crate::camera::Camera::check(c)
     }
