@@ -199,14 +199,16 @@ impl Image {
             // Sizes are positive integers that fit the film, each named when it is not.
             let size = |what: &str, s: &str| -> Result<u32> {
                 match s.parse::<i64>() {
-                    Ok(v) if v >= 1 && v as u64 <= crate::plan::MAX_PIXELS => Ok(v as u32),
-                    Ok(v) => Err(bad(format!("PFM header: {what} {v} must be from 1 to {}", crate::plan::MAX_PIXELS))),
+                    Ok(v) if v >= 1 && v as u64 <= crate::limits::MAX_PIXELS => Ok(v as u32),
+                    Ok(v) => {
+                        Err(bad(format!("PFM header: {what} {v} must be from 1 to {}", crate::limits::MAX_PIXELS)))
+                    }
                     Err(_) => Err(bad(format!("PFM header: {what} '{s}' is not an integer"))),
                 }
             };
             let (w, h) = (size("width", ws)?, size("height", hs)?);
-            if w as u64 * h as u64 > crate::plan::MAX_PIXELS {
-                return Err(bad(format!("PFM header: {w}x{h} pixels, at most {}", crate::plan::MAX_PIXELS)));
+            if w as u64 * h as u64 > crate::limits::MAX_PIXELS {
+                return Err(bad(format!("PFM header: {w}x{h} pixels, at most {}", crate::limits::MAX_PIXELS)));
             }
             let scale = match ss.parse::<f64>() {
                 Ok(v) if v.is_finite() && v != 0.0 => v,
@@ -238,15 +240,15 @@ impl Image {
                 .map_err(|e| bad(e.to_string()))?;
             // The decoder's memory is bounded like the file: at most MAX_PIXELS RGBA f32 pixels.
             let mut limits = image::Limits::default();
-            limits.max_alloc = Some(crate::plan::MAX_PIXELS * 16 + (64 << 20));
+            limits.max_alloc = Some(crate::limits::MAX_PIXELS * 16 + (64 << 20));
             reader.limits(limits);
             let img = reader.decode().map_err(|e| bad(e.to_string()))?;
-            if img.width() as u64 * img.height() as u64 > crate::plan::MAX_PIXELS {
+            if img.width() as u64 * img.height() as u64 > crate::limits::MAX_PIXELS {
                 return Err(bad(format!(
                     "{}x{} pixels, at most {}",
                     img.width(),
                     img.height(),
-                    crate::plan::MAX_PIXELS
+                    crate::limits::MAX_PIXELS
                 )));
             }
             let img = img.into_rgb32f();

@@ -6,6 +6,13 @@
 
 use crate::error::{Error, Result};
 
+/// Most pixels an image may have (memory for the film and the 8-bit output:
+/// about 30 bytes a pixel, 4 GB at the limit).
+pub const MAX_PIXELS: u64 = 1 << 27;
+
+/// Largest tile edge in pixels: a tile's paths must fit one wavefront workspace.
+pub const MAX_TILE: u32 = 45;
+
 /// Largest JSON scene file read (bytes). serde_json parses it as a stream into
 /// the scene, so the memory a JSON scene needs is about its spheres (40 bytes
 /// each) plus the file itself.
@@ -23,7 +30,7 @@ pub const MAX_BASELINE_BYTES: u64 = 16 << 20;
 
 /// Largest float image read (`rtow converge --reference`, bytes): a PFM of
 /// `MAX_PIXELS` pixels fits with its header.
-pub const MAX_IMAGE_BYTES: u64 = crate::plan::MAX_PIXELS * 12 + 4096;
+pub const MAX_IMAGE_BYTES: u64 = MAX_PIXELS * 12 + 4096;
 
 /// Most spheres a scene may have, checked while the file is parsed (a JSON
 /// file stops being read at the first sphere over the limit): 1,048,576

@@ -34,6 +34,7 @@ fn rtow(dir: &Path, args: &[&str]) -> Run {
 fn fails(r: &Run, code: i32, needles: &[&str], what: &str) {
     assert!(!r.stderr.contains("panicked"), "{what}: panic: {}", r.stderr);
     assert_eq!(r.code, Some(code), "{what}: stderr {}", r.stderr);
+    assert!(r.stdout.is_empty(), "{what}: stdout {}", r.stdout);
     let lines: Vec<&str> = r.stderr.lines().collect();
     assert_eq!(lines.len(), 1, "{what}: stderr is not one line: {:?}", r.stderr);
     assert!(lines[0].starts_with("error: "), "{what}: {}", lines[0]);
@@ -286,7 +287,7 @@ fn class3_every_accepted_edge_camera_renders_finite_images_with_both_kernels() {
     for text in cases {
         let s =
             scene::scene_from_str(&text, Format::Json, Path::new("e.json")).unwrap_or_else(|e| panic!("{text}: {e}"));
-        for kernel in [rtow::KernelKind::Scalar, rtow::KernelKind::Simd] {
+        for kernel in [rtow::KernelChoice::Scalar, rtow::KernelChoice::Simd] {
             let st = rtow::Settings { width: 16, height: 9, spp: 2, max_depth: 4, seed: 1 };
             let opts = rtow::RenderOptions { kernel, threads: Some(1), ..Default::default() };
             let r = rtow::render(&s, st, opts, None).unwrap();
