@@ -4,8 +4,9 @@ use super::args::{kernel_parser, positive_f32, EstimatorArgs, ImageArgs};
 use super::{load, say};
 use clap::Args;
 use indicatif::{ProgressBar, ProgressStyle};
+use rtow::output::{check_extension, Outputs};
 use rtow::render::{render_counted, Progress};
-use rtow::{Error, KernelChoice, RenderOptions, Rendered, Result, Scene, Settings};
+use rtow::{KernelChoice, RenderOptions, Rendered, Result, Scene, Settings};
 use std::io::IsTerminal;
 use std::path::{Path, PathBuf};
 use std::time::Instant;
@@ -41,18 +42,6 @@ pub struct RenderArgs {
     /// No progress bar and no summary line.
     #[arg(short, long)]
     quiet: bool,
-}
-
-fn check_ext(path: &Path, allowed: &[&str], what: &str) -> Result<()> {
-    let ext = path.extension().and_then(|e| e.to_str()).map(|e| e.to_ascii_lowercase()).unwrap_or_default();
-    if allowed.contains(&ext.as_str()) {
-        Ok(())
-    } else {
-        Err(Error::Output {
-            path: path.to_path_buf(),
-            message: format!("{what} must end in .{}", allowed.join(" or .")),
-        })
-    }
 }
 
 fn progress_bar(quiet: bool) -> Option<ProgressBar> {
@@ -93,34 +82,43 @@ fn render_with_progress(
 }
 
 pub fn run(a: RenderArgs) -> Result<()> {
+    rtow::limits::check_threads(a.image.threads)?;
     let (scene, name) = load(&a.scene)?;
     let s = a.image.settings(&scene);
     let out = a.output.clone().unwrap_or_else(|| PathBuf::from(format!("{name}.png")));
-    check_ext(&out, &["png"], "the output image")?;
+    check_extension(&out, &["png"], "-o")?;
     if let Some(f) = &a.float {
-        check_ext(f, &["pfm", "exr"], "--float")?;
+        check_extension(f, &["pfm", "exr"], "--float")?;
     }
     // Bad input first (exit 2), then every output path, before the render:
     // a failure after it would waste the render and leave some outputs written.
     s.validate()?;
     let opts = a.estimator.options(a.kernel, &a.image, &scene)?;
     rtow::Kernel::resolve(opts.kernel)?;
-    for p in std::iter::once(&out).chain(&a.float).chain(&a.stats_json) {
-        rtow::output::check_writable(p)?;
+    // The outputs are one transaction (see `rtow::output`): checked now,
+    // written only when all of them are ready.
+    let mut outputs = Outputs::new();
+    if rtow::scene::preset(&a.scene).is_none() {
+        outputs.input(Path::new(&a.scene), "scene file");
     }
+    let png_id = outputs.add(&out, "-o")?;
+    let float_id = a.float.as_deref().map(|f| outputs.add(f, "--float")).transpose()?;
+    let stats_id = a.stats_json.as_deref().map(|j| outputs.add(j, "--stats-json")).transpose()?;
     if a.explain {
         say!("{}", rtow::prepare::plan(&scene, &s, opts.accel).explain());
     }
     let r = render_with_progress(&scene, s, opts, a.quiet, a.stats_json.is_some())?;
+    r.stats.check_finite()?;
     let gamma = a.gamma.unwrap_or(scene.mode.default_gamma());
-    r.image.save(&out, gamma)?;
-    if let Some(f) = &a.float {
-        r.image.save(f, 1.0)?;
+    outputs.stage(png_id, &rtow::output::image_bytes(&r.image, &out, gamma)?)?;
+    if let (Some(id), Some(f)) = (float_id, &a.float) {
+        outputs.stage(id, &rtow::output::image_bytes(&r.image, f, 1.0)?)?;
     }
-    if let Some(j) = &a.stats_json {
+    if let Some(id) = stats_id {
         let text = serde_json::to_string_pretty(&r.stats).expect("stats serialize") + "\n";
-        rtow::output::write_atomic(j, text.as_bytes())?;
+        outputs.stage(id, text.as_bytes())?;
     }
+    outputs.commit()?;
     if !a.quiet {
         let st = &r.stats;
         say!(
