@@ -2,7 +2,6 @@
 
 use crate::real::Real;
 use crate::sampling::{in_unit_disk, Stream};
-use crate::scene;
 use crate::vec3::V3;
 use glam::DVec3;
 
@@ -30,13 +29,24 @@ fn f3(v: DVec3) -> [f32; 3] {
     [v.x as f32, v.y as f32, v.z as f32]
 }
 
+/// Where the camera is and what it sees, in f64 (from the scene's camera).
+#[derive(Clone, Copy, Debug)]
+pub struct View {
+    pub look_from: DVec3,
+    pub look_at: DVec3,
+    pub vup: DVec3,
+    pub vfov_deg: f64,
+    /// Distance to the plane in focus.
+    pub focus_dist: f64,
+    /// Lens disk radius (0: pinhole).
+    pub lens_radius: f64,
+}
+
 impl Camera {
-    pub fn new(spec: &scene::Camera, width: u32, height: u32, jitter: bool) -> Self {
-        let from = DVec3::from_array(spec.look_from.map(f64::from));
-        let at = DVec3::from_array(spec.look_at.map(f64::from));
-        let vup = DVec3::from_array(spec.vup.map(f64::from));
-        let focus = spec.focus_distance();
-        let h = (spec.vfov_deg as f64).to_radians() / 2.0;
+    pub fn new(view: &View, width: u32, height: u32, jitter: bool) -> Self {
+        let (from, at, vup) = (view.look_from, view.look_at, view.vup);
+        let focus = view.focus_dist;
+        let h = view.vfov_deg.to_radians() / 2.0;
         let vh = 2.0 * h.tan() * focus;
         let vw = vh * width as f64 / height as f64;
         let w = (from - at).normalize();
@@ -46,7 +56,7 @@ impl Camera {
         let dv = -v * vh / height as f64;
         let upper_left = -(focus * w) - (u * vw) / 2.0 + (v * vh) / 2.0;
         let to00 = upper_left + 0.5 * (du + dv);
-        let lr = spec.lens_radius();
+        let lr = view.lens_radius;
         Camera {
             center: f3(from),
             to_pixel00: f3(to00),
@@ -90,8 +100,15 @@ mod tests {
 
     #[test]
     fn centre_pixel_looks_at_look_at() {
-        let spec = scene::Camera::looking([13.0, 2.0, 3.0], [0.0, 0.0, 0.0], 20.0);
-        let cam = Camera::new(&spec, 401, 201, false);
+        let view = View {
+            look_from: DVec3::new(13.0, 2.0, 3.0),
+            look_at: DVec3::ZERO,
+            vup: DVec3::Y,
+            vfov_deg: 20.0,
+            focus_dist: DVec3::new(13.0, 2.0, 3.0).length(),
+            lens_radius: 0.0,
+        };
+        let cam = Camera::new(&view, 401, 201, false);
         let mut rng = ScalarStream::for_path(0, 0, 0);
         let (o, d) = cam.ray(200.0f32, 100.0f32, &mut rng);
         let want = DVec3::new(-13.0, -2.0, -3.0).normalize();

@@ -1,48 +1,47 @@
 //! rtow: a data-oriented path tracer for the scenes of *Ray Tracing in One Weekend*.
 //!
-//! Data flow (see the README): [`scene::Scene`] (validated, from a preset or a
-//! file) -> [`plan::Prepared`] (SoA spheres, per-kind material tables, a
-//! [`plan::Plan`] of what the scene needs) -> [`render::render`] (tiles over
-//! rayon, the scalar reference kernel or the SIMD wavefront kernel) ->
-//! [`film::Image`] (linear f32, PNG / PFM / EXR) and [`render::Stats`].
+//! Data flow, one module each (the README's code map):
 //!
-//! The two kernels are one estimator: every formula is written once over
-//! [`real::Real`] and instantiated for `f32` and `wide::f32x8`, so for the same
-//! seed they produce bit-identical images.
-
+//! ```text
+//! scene (user-facing, validated) + settings (resolved once: scene + flags)
+//!   -> prepare -> plan::Prepared (a typed Plan, SoA spheres, material tables, camera, BVH)
+//!   -> render (tiles over rayon) -> kernel::scalar | kernel::wavefront<W> (8 or 16 lanes)
+//!        (geometry: intersection and BVH; material: scatter; sampling: random streams;
+//!         probe: what instruments see)
+//!   -> film (per-tile accumulators) -> Image -> output (PNG / PFM / EXR, atomic)
+//! ```
+//!
+//! The kernels are one estimator: every formula is written once over
+//! [`real::Real`] and instantiated for `f32`, `wide::f32x8` and `wide::f32x16`,
+//! so for the same seed they produce bit-identical images. The instruments in
+//! [`tools`] (bench, stress, converge) drive the real kernels through probes.
 pub mod camera;
-
 pub mod error;
 pub mod estimator;
 pub mod film;
 pub mod geometry;
 pub mod kernel;
+pub mod limits;
 pub mod material;
 pub mod output;
 pub mod plan;
+pub mod prepare;
+pub mod probe;
 pub mod real;
 pub mod render;
 pub mod sampling;
+pub mod settings;
 pub mod scene;
 pub mod tools;
 pub mod vec3;
 
 pub use error::{Error, Result};
 pub use film::Image;
-pub use kernel::KernelKind;
-pub use plan::Settings;
-pub use render::{isa, render, RenderOptions, Rendered, Stats};
+pub use render::{isa, render, Kernel, Rendered, Stats};
 pub use scene::Scene;
+pub use settings::{AccelChoice, KernelChoice, Overrides, RenderOptions, Settings};
 
-/// The settings a scene asks for (its `render` table, else the book's defaults),
-/// with `spp` etc. still overridable by the caller.
+/// The settings a scene asks for (its `render` table, else rtow's defaults).
 pub fn default_settings(scene: &Scene) -> Settings {
-    let r = scene.render;
-    Settings {
-        width: r.width.unwrap_or(400),
-        height: r.height.unwrap_or(225),
-        spp: r.samples_per_pixel.unwrap_or(32),
-        max_depth: r.max_depth.unwrap_or(50),
-        seed: r.seed.unwrap_or(0),
-    }
+    Settings::resolve(&scene.render, &Overrides::default())
 }

@@ -1,5 +1,6 @@
 //! Scatter functions of the book's three materials, for both widths, and the
-//! per-kind material tables.
+//! per-kind material tables, and the material kinds themselves (the kernels
+//! keep one queue and one scatter pass per kind).
 //!
 //! Physics as in the book (v4), not the seed's slips (SEED-NOTES.md): a true
 //! Lambertian (normal + uniform unit vector, falling back to the normal when the
@@ -9,8 +10,37 @@
 
 use crate::real::Real;
 use crate::sampling::{unit_vector, Stream};
-use crate::scene::{Kind, Material};
+use serde::Deserialize;
 use crate::vec3::V3;
+
+/// Material kinds, one wavefront queue each.
+#[derive(Clone, Copy, Debug, PartialEq, Eq, Hash, PartialOrd, Ord)]
+#[repr(u8)]
+pub enum Kind {
+    Lambertian = 0,
+    Metal = 1,
+    Dielectric = 2,
+}
+
+impl Kind {
+    pub const ALL: [Kind; 3] = [Kind::Lambertian, Kind::Metal, Kind::Dielectric];
+    pub fn name(self) -> &'static str {
+        match self {
+            Kind::Lambertian => "lambertian",
+            Kind::Metal => "metal",
+            Kind::Dielectric => "dielectric",
+        }
+    }
+}
+
+/// A material's `type`: a string naming the kind.
+impl<'de> Deserialize<'de> for Kind {
+    fn deserialize<D: serde::Deserializer<'de>>(d: D) -> std::result::Result<Self, D::Error> {
+        const NAMES: &[&str] = &["lambertian", "metal", "dielectric"];
+        let s = String::deserialize(d)?;
+        Kind::ALL.into_iter().find(|k| k.name() == s).ok_or_else(|| serde::de::Error::unknown_variant(&s, NAMES))
+    }
+}
 
 /// One table per material kind; a sphere's (kind, row) indexes them.
 #[derive(Clone, Debug, Default)]
@@ -22,30 +52,12 @@ pub struct MaterialTables {
 }
 
 impl MaterialTables {
-    /// Adds a material to its kind's table; returns (kind, row).
-    pub fn push(&mut self, m: &Material) -> (Kind, u32) {
-        match *m {
-            Material::Lambertian { albedo } => {
-                self.lambertian.push(albedo);
-                (Kind::Lambertian, self.lambertian.len() as u32 - 1)
-            }
-            Material::Metal { albedo, fuzz } => {
-                self.metal.push((albedo, fuzz));
-                (Kind::Metal, self.metal.len() as u32 - 1)
-            }
-            Material::Dielectric { ior } => {
-                self.dielectric.push(ior);
-                (Kind::Dielectric, self.dielectric.len() as u32 - 1)
-            }
-        }
-    }
-
     /// The colour of chapter 4's flat shading: the albedo, white for glass.
-    pub fn flat_colour(&self, kind: u8, row: u32) -> [f32; 3] {
+    pub fn flat_colour(&self, kind: Kind, row: u32) -> [f32; 3] {
         match kind {
-            k if k == Kind::Lambertian as u8 => self.lambertian[row as usize],
-            k if k == Kind::Metal as u8 => self.metal[row as usize].0,
-            _ => [1.0, 1.0, 1.0],
+            Kind::Lambertian => self.lambertian[row as usize],
+            Kind::Metal => self.metal[row as usize].0,
+            Kind::Dielectric => [1.0, 1.0, 1.0],
         }
     }
 }

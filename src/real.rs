@@ -12,9 +12,9 @@
 //! a `bool` and `select` a plain `if`, so the scalar kernel stays readable.
 
 use std::ops::{Add, BitAnd, BitOr, Div, Mul, Neg, Not, Sub};
-use wide::{f32x8, u32x8};
+use wide::{f32x16, f32x8, i32x16, i32x8, u32x16, u32x8};
 
-/// A lane mask: `bool` for one lane, an all-ones/all-zeros `f32x8` for eight.
+/// A lane mask: `bool` for one lane, an all-ones/all-zeros float vector for several.
 pub trait Mask: Copy + BitAnd<Output = Self> + BitOr<Output = Self> + Not<Output = Self> {
     fn any(self) -> bool;
     fn all(self) -> bool;
@@ -31,18 +31,24 @@ impl Mask for bool {
     }
 }
 
-impl Mask for f32x8 {
-    #[inline(always)]
-    fn any(self) -> bool {
-        f32x8::any(self)
-    }
-    #[inline(always)]
-    fn all(self) -> bool {
-        f32x8::all(self)
-    }
+macro_rules! impl_mask {
+    ($f:ident) => {
+        impl Mask for $f {
+            #[inline(always)]
+            fn any(self) -> bool {
+                $f::any(self)
+            }
+            #[inline(always)]
+            fn all(self) -> bool {
+                $f::all(self)
+            }
+        }
+    };
 }
+impl_mask!(f32x8);
+impl_mask!(f32x16);
 
-/// A real number, one lane (`f32`) or eight (`f32x8`).
+/// A real number: one lane (`f32`), eight (`f32x8`) or sixteen (`f32x16`).
 pub trait Real:
     Copy + Add<Output = Self> + Sub<Output = Self> + Mul<Output = Self> + Div<Output = Self> + Neg<Output = Self>
 {
@@ -76,6 +82,17 @@ pub trait Real:
     fn select(m: Self::Mask, a: Self, b: Self) -> Self;
     /// Uniform float in [0, 1) from 32 random bits: `(x >> 8) * 2^-24`.
     fn unit_from_bits(bits: Self::U32) -> Self;
+    fn u_splat(x: u32) -> Self::U32;
+    /// `a < b` per lane, as a mask of this width (closest-hit ties: lower index wins).
+    fn u_lt(a: Self::U32, b: Self::U32) -> Self::Mask;
+    fn u_select(m: Self::Mask, a: Self::U32, b: Self::U32) -> Self::U32;
+    /// Lane k as an `f32` (probes and tests; not for the hot path).
+    fn lane(self, k: usize) -> f32;
+    fn lane_u(x: Self::U32, k: usize) -> u32;
+    /// Bit k set where lane k of the mask is on.
+    fn mask_bits(m: Self::Mask) -> u32;
+    /// The value with `f(k)` in lane k.
+    fn from_fn(f: impl FnMut(usize) -> f32) -> Self;
 }
 
 impl Real for f32 {
@@ -159,82 +176,277 @@ impl Real for f32 {
     fn unit_from_bits(bits: u32) -> Self {
         (bits >> 8) as f32 * (1.0 / 16_777_216.0)
     }
-}
-
-impl Real for f32x8 {
-    type Mask = f32x8;
-    type U32 = u32x8;
-    const LANES: usize = 8;
-
     #[inline(always)]
-    fn splat(x: f32) -> Self {
-        f32x8::splat(x)
+    fn u_splat(x: u32) -> u32 {
+        x
     }
     #[inline(always)]
-    fn sqrt(self) -> Self {
-        f32x8::sqrt(self)
+    fn u_lt(a: u32, b: u32) -> bool {
+        a < b
     }
     #[inline(always)]
-    fn abs(self) -> Self {
-        f32x8::abs(self)
+    fn u_select(m: bool, a: u32, b: u32) -> u32 {
+        if m {
+            a
+        } else {
+            b
+        }
     }
     #[inline(always)]
-    fn min(self, o: Self) -> Self {
-        // Same rule as the scalar `min` above: take `o` only where `o < self`.
-        o.simd_lt(self).select(o, self)
+    fn lane(self, _k: usize) -> f32 {
+        self
     }
     #[inline(always)]
-    fn max(self, o: Self) -> Self {
-        o.simd_gt(self).select(o, self)
+    fn lane_u(x: u32, _k: usize) -> u32 {
+        x
     }
     #[inline(always)]
-    fn fast_min(self, o: Self) -> Self {
-        f32x8::fast_min(self, o)
+    fn mask_bits(m: bool) -> u32 {
+        m as u32
     }
     #[inline(always)]
-    fn fast_max(self, o: Self) -> Self {
-        f32x8::fast_max(self, o)
-    }
-    #[inline(always)]
-    fn copysign(self, sign: Self) -> Self {
-        let s = f32x8::splat(-0.0);
-        (self & !s) | (sign & s)
-    }
-    #[inline(always)]
-    fn lt(self, o: Self) -> f32x8 {
-        self.simd_lt(o)
-    }
-    #[inline(always)]
-    fn le(self, o: Self) -> f32x8 {
-        self.simd_le(o)
-    }
-    #[inline(always)]
-    fn gt(self, o: Self) -> f32x8 {
-        self.simd_gt(o)
-    }
-    #[inline(always)]
-    fn ge(self, o: Self) -> f32x8 {
-        self.simd_ge(o)
-    }
-    #[inline(always)]
-    fn eq(self, o: Self) -> f32x8 {
-        self.simd_eq(o)
-    }
-    #[inline(always)]
-    fn is_finite(self) -> f32x8 {
-        f32x8::is_finite(self)
-    }
-    #[inline(always)]
-    fn select(m: f32x8, a: Self, b: Self) -> Self {
-        m.select(a, b)
-    }
-    #[inline(always)]
-    fn unit_from_bits(bits: u32x8) -> Self {
-        // (bits >> 8) < 2^24, so the signed conversion is exact.
-        let i: wide::i32x8 = bytemuck::cast(bits >> 8);
-        f32x8::from_i32x8(i) * f32x8::splat(1.0 / 16_777_216.0)
+    fn from_fn(mut f: impl FnMut(usize) -> f32) -> Self {
+        f(0)
     }
 }
+
+/// The SIMD widths: `Real` plus what the wavefront kernel needs to move lanes
+/// in and out of its structure-of-arrays queues.
+pub trait Wide:
+    Real<Mask = Self, U32 = <Self as Wide>::U>
+    + Mask
+    + BitAnd<Output = Self>
+    + BitOr<Output = Self>
+    + Not<Output = Self>
+    + Send
+    + Sync
+    + 'static
+{
+    /// The matching unsigned lanes (same as `Real::U32`, with its arithmetic).
+    type U: Lanes32;
+    /// Lane indices of one packet (`[u32; LANES]`).
+    type Idx: Copy + Default + AsRef<[u32]> + AsMut<[u32]>;
+    /// Whole-vector load of `v[i..i + LANES]`.
+    fn load(v: &[f32], i: usize) -> Self;
+    fn store(self, v: &mut [f32], i: usize);
+    fn load_u(v: &[u32], i: usize) -> Self::U32;
+    fn store_u(x: Self::U32, v: &mut [u32], i: usize);
+    /// `v[idx[k]]` in lane k.
+    fn gather(v: &[f32], idx: &[u32]) -> Self;
+    fn gather_u(v: &[u32], idx: &[u32]) -> Self::U32;
+    fn u_from_fn(f: impl FnMut(usize) -> u32) -> Self::U32;
+    /// The mask with lane k on where bit k of `bits` is set.
+    fn mask_from_bits(bits: u32) -> Self;
+    /// The bits of every lane (for stores through the `u32` compaction).
+    fn to_bits(self) -> Self::U;
+    /// Stream compaction: stores the lanes of `x` whose bit is set in `keep`,
+    /// in lane order, at `v[at..]`. May write up to `LANES` values past the
+    /// kept ones (the arrays have `LANES` of slack); returns how many were kept.
+    fn compress_store_u(x: Self::U32, keep: u32, v: &mut [u32], at: usize) -> usize;
+}
+
+/// Unsigned 32-bit lanes: the random streams' arithmetic (wrapping, as u32).
+pub trait Lanes32:
+    Copy
+    + Add<Output = Self>
+    + BitAnd<Output = Self>
+    + BitOr<Output = Self>
+    + std::ops::BitXor<Output = Self>
+    + std::ops::Shl<u32, Output = Self>
+    + std::ops::Shr<u32, Output = Self>
+{
+}
+impl Lanes32 for u32x8 {}
+impl Lanes32 for u32x16 {}
+
+/// For each 8-bit lane mask, the indices of its set lanes first (stream compaction).
+static COMPRESS: [[u32; 8]; 256] = compress_table();
+
+const fn compress_table() -> [[u32; 8]; 256] {
+    let mut t = [[0u32; 8]; 256];
+    let mut m = 0;
+    while m < 256 {
+        let (mut k, mut n) = (0, 0);
+        while k < 8 {
+            if m & (1 << k) != 0 {
+                t[m][n] = k as u32;
+                n += 1;
+            }
+            k += 1;
+        }
+        m += 1;
+    }
+    t
+}
+
+/// Compaction of 8 lanes: the kept lanes permuted to the front by a table
+/// lookup and stored as one whole vector.
+#[inline(always)]
+fn compress8(x: u32x8, keep: u32, v: &mut [u32], at: usize) -> usize {
+    let packed = x.shuffle(u32x8::new(COMPRESS[(keep & 0xff) as usize]));
+    v[at..at + 8].copy_from_slice(&packed.to_array());
+    (keep & 0xff).count_ones() as usize
+}
+
+macro_rules! impl_wide {
+    ($f:ident, $u:ident, $i:ident, $n:literal, $from_int:ident) => {
+        impl Real for $f {
+            type Mask = $f;
+            type U32 = $u;
+            const LANES: usize = $n;
+
+            #[inline(always)]
+            fn splat(x: f32) -> Self {
+                $f::splat(x)
+            }
+            #[inline(always)]
+            fn sqrt(self) -> Self {
+                $f::sqrt(self)
+            }
+            #[inline(always)]
+            fn abs(self) -> Self {
+                $f::abs(self)
+            }
+            #[inline(always)]
+            fn min(self, o: Self) -> Self {
+                // Same rule as the scalar `min`: take `o` only where `o < self`.
+                o.simd_lt(self).select(o, self)
+            }
+            #[inline(always)]
+            fn max(self, o: Self) -> Self {
+                o.simd_gt(self).select(o, self)
+            }
+            #[inline(always)]
+            fn fast_min(self, o: Self) -> Self {
+                $f::fast_min(self, o)
+            }
+            #[inline(always)]
+            fn fast_max(self, o: Self) -> Self {
+                $f::fast_max(self, o)
+            }
+            #[inline(always)]
+            fn copysign(self, sign: Self) -> Self {
+                let s = $f::splat(-0.0);
+                (self & !s) | (sign & s)
+            }
+            #[inline(always)]
+            fn lt(self, o: Self) -> $f {
+                self.simd_lt(o)
+            }
+            #[inline(always)]
+            fn le(self, o: Self) -> $f {
+                self.simd_le(o)
+            }
+            #[inline(always)]
+            fn gt(self, o: Self) -> $f {
+                self.simd_gt(o)
+            }
+            #[inline(always)]
+            fn ge(self, o: Self) -> $f {
+                self.simd_ge(o)
+            }
+            #[inline(always)]
+            fn eq(self, o: Self) -> $f {
+                self.simd_eq(o)
+            }
+            #[inline(always)]
+            fn is_finite(self) -> $f {
+                $f::is_finite(self)
+            }
+            #[inline(always)]
+            fn select(m: $f, a: Self, b: Self) -> Self {
+                m.select(a, b)
+            }
+            #[inline(always)]
+            fn unit_from_bits(bits: $u) -> Self {
+                // (bits >> 8) < 2^24, so the signed conversion is exact.
+                let i: $i = bytemuck::cast(bits >> 8);
+                $f::$from_int(i) * $f::splat(1.0 / 16_777_216.0)
+            }
+            #[inline(always)]
+            fn u_splat(x: u32) -> $u {
+                $u::splat(x)
+            }
+            #[inline(always)]
+            fn u_lt(a: $u, b: $u) -> $f {
+                bytemuck::cast(a.simd_lt(b))
+            }
+            #[inline(always)]
+            fn u_select(m: $f, a: $u, b: $u) -> $u {
+                bytemuck::cast::<$f, $u>(m).select(a, b)
+            }
+            #[inline(always)]
+            fn lane(self, k: usize) -> f32 {
+                self.to_array()[k]
+            }
+            #[inline(always)]
+            fn lane_u(x: $u, k: usize) -> u32 {
+                x.to_array()[k]
+            }
+            #[inline(always)]
+            fn mask_bits(m: $f) -> u32 {
+                m.to_bitmask()
+            }
+            #[inline(always)]
+            fn from_fn(f: impl FnMut(usize) -> f32) -> Self {
+                $f::new(std::array::from_fn(f))
+            }
+        }
+
+        impl Wide for $f {
+            type U = $u;
+            type Idx = [u32; $n];
+            #[inline(always)]
+            fn load(v: &[f32], i: usize) -> Self {
+                $f::new(v[i..i + $n].try_into().unwrap())
+            }
+            #[inline(always)]
+            fn store(self, v: &mut [f32], i: usize) {
+                v[i..i + $n].copy_from_slice(&self.to_array());
+            }
+            #[inline(always)]
+            fn load_u(v: &[u32], i: usize) -> $u {
+                $u::new(v[i..i + $n].try_into().unwrap())
+            }
+            #[inline(always)]
+            fn store_u(x: $u, v: &mut [u32], i: usize) {
+                v[i..i + $n].copy_from_slice(&x.to_array());
+            }
+            #[inline(always)]
+            fn gather(v: &[f32], idx: &[u32]) -> Self {
+                $f::new(std::array::from_fn(|k| v[idx[k] as usize]))
+            }
+            #[inline(always)]
+            fn gather_u(v: &[u32], idx: &[u32]) -> $u {
+                $u::new(std::array::from_fn(|k| v[idx[k] as usize]))
+            }
+            #[inline(always)]
+            fn u_from_fn(f: impl FnMut(usize) -> u32) -> $u {
+                $u::new(std::array::from_fn(f))
+            }
+            #[inline(always)]
+            fn mask_from_bits(bits: u32) -> Self {
+                bytemuck::cast($u::new(std::array::from_fn(|k| 0u32.wrapping_sub((bits >> k) & 1))))
+            }
+            #[inline(always)]
+            fn to_bits(self) -> $u {
+                bytemuck::cast(self)
+            }
+            #[inline(always)]
+            fn compress_store_u(x: $u, keep: u32, v: &mut [u32], at: usize) -> usize {
+                let lanes: [u32x8; $n / 8] = bytemuck::cast(x);
+                let mut n = at;
+                for (c, half) in lanes.into_iter().enumerate() {
+                    n += compress8(half, keep >> (8 * c), v, n);
+                }
+                n - at
+            }
+        }
+    };
+}
+
+impl_wide!(f32x8, u32x8, i32x8, 8, from_i32x8);
+impl_wide!(f32x16, u32x16, i32x16, 16, from_i32x16);
 
 #[cfg(test)]
 mod tests {

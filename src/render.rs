@@ -1,46 +1,94 @@
-//! The render driver: tiles, threads, progress and statistics.
+//! The render driver: the kernel and lane width, tiles over threads, progress
+//! and statistics.
 
-use crate::error::Result;
+use crate::error::{Error, Result};
 use crate::estimator::{Adaptive, Estimator};
 use crate::film::{Image, TileFilm};
-use crate::kernel::{gradient, scalar, wavefront, Counters, KernelKind};
-use crate::plan::{AccelChoice, Plan, Prepared, Settings};
-use crate::scene::{Mode, Scene};
+use crate::kernel::{gradient, scalar, wavefront};
+use crate::plan::{Mode, Plan, Prepared};
+use crate::prepare::prepare;
+use crate::probe::{Probe, WorkCounters};
+use crate::real::Wide;
+use crate::scene::Scene;
+use crate::settings::{KernelChoice, RenderOptions, Settings};
 use rayon::prelude::*;
 use serde::Serialize;
 use std::sync::atomic::{AtomicU64, Ordering};
 use std::time::Instant;
+use wide::{f32x16, f32x8};
 
-/// How to render, beyond the image settings.
-#[derive(Clone, Copy, Debug)]
-pub struct RenderOptions {
-    pub kernel: KernelKind,
-    /// Worker threads; `None` = one per core.
-    pub threads: Option<usize>,
-    /// Tile edge in pixels (tiles are the unit of parallel work).
-    pub tile: u32,
-    /// Closest-hit search: brute force, BVH, or chosen by the plan.
-    pub accel: AccelChoice,
-    /// Russian roulette on the path throughput (unbiased; changes the noise).
-    pub rr: bool,
-    /// Roulette starts once a path has traced this many rays.
-    pub rr_after: u32,
-    /// Adaptive sampling: pixels stop once their relative error is low enough.
-    pub adaptive: Option<Adaptive>,
+/// The kernel that runs, after `simd` was resolved to a lane width.
+#[derive(Clone, Copy, Debug, PartialEq, Eq, Serialize)]
+#[serde(rename_all = "lowercase")]
+pub enum Kernel {
+    Scalar,
+    Simd8,
+    Simd16,
 }
 
-impl Default for RenderOptions {
-    fn default() -> Self {
-        RenderOptions {
-            kernel: KernelKind::Simd,
-            threads: None,
-            tile: 16,
-            accel: AccelChoice::Auto,
-            rr: false,
-            rr_after: crate::estimator::ROULETTE_AFTER_RAYS,
-            adaptive: None,
+impl Kernel {
+    pub fn name(self) -> &'static str {
+        match self {
+            Kernel::Scalar => "scalar",
+            Kernel::Simd8 => "simd8",
+            Kernel::Simd16 => "simd16",
         }
     }
+
+    pub fn lanes(self) -> u32 {
+        match self {
+            Kernel::Scalar => 1,
+            Kernel::Simd8 => 8,
+            Kernel::Simd16 => 16,
+        }
+    }
+
+    /// The kernel a choice runs on this build: `simd` is the widest the build
+    /// has; `simd16` needs a build with AVX-512 (`f32x16` in one register).
+    pub fn resolve(choice: KernelChoice) -> Result<Kernel> {
+        match choice {
+            KernelChoice::Scalar => Ok(Kernel::Scalar),
+            KernelChoice::Simd8 => Ok(Kernel::Simd8),
+            KernelChoice::Simd if HAS_SIMD16 => Ok(Kernel::Simd16),
+            KernelChoice::Simd => Ok(Kernel::Simd8),
+            KernelChoice::Simd16 if HAS_SIMD16 => Ok(Kernel::Simd16),
+            KernelChoice::Simd16 => Err(Error::invalid(
+                "kernel",
+                format!(
+                    "simd16 needs a build with AVX-512 (this one is built for {}); build with \
+                     RUSTFLAGS=\"-C target-cpu=x86-64-v4\" or use simd8",
+                    isa()
+                ),
+            )),
+        }
+    }
+}
+
+/// Whether this build has the 16-lane kernel (AVX-512F: `f32x16` is one register).
+pub const HAS_SIMD16: bool = cfg!(target_feature = "avx512f");
+
+/// The SIMD instruction set this binary was compiled for (`wide` picks its
+/// implementation at compile time).
+pub const fn isa() -> &'static str {
+    if cfg!(all(target_feature = "avx512f", target_feature = "avx512vl", target_feature = "avx512bw")) {
+        "AVX-512 (x86-64-v4)"
+    } else if cfg!(all(target_feature = "avx2", target_feature = "fma")) {
+        "AVX2+FMA (x86-64-v3)"
+    } else if cfg!(target_feature = "avx") {
+        "AVX"
+    } else if cfg!(target_feature = "sse4.1") {
+        "SSE4.1"
+    } else if cfg!(target_feature = "sse2") {
+        "SSE2"
+    } else {
+        "scalar fallback"
+    }
+}
+
+/// The widest kernel of this build, e.g. "simd16 (AVX-512 (x86-64-v4))", for `--version`.
+pub fn build_description() -> String {
+    let widest = if HAS_SIMD16 { "simd16 (f32x16)" } else { "simd8 (f32x8)" };
+    format!("SIMD: {}, widest kernel {widest}", isa())
 }
 
 /// Progress reported after each finished tile.
@@ -61,6 +109,8 @@ pub struct Stats {
     pub prepare_seconds: f64,
     pub mrays_per_s: f64,
     pub kernel: &'static str,
+    /// Lanes per packet: 1 (scalar), 8 or 16.
+    pub lanes: u32,
     pub threads: usize,
     pub isa: &'static str,
     pub width: u32,
@@ -73,9 +123,8 @@ pub struct Stats {
     pub adaptive: Option<Adaptive>,
     /// Samples with a NaN or infinite component, kept out of the image.
     pub rejected_samples: u64,
-    /// Active lanes / issued lanes in intersection and scatter (SIMD kernel; none for scalar).
-    pub isect_occupancy: Option<f64>,
-    pub scatter_occupancy: Option<f64>,
+    /// Exact work counters and lane occupancy, when the render counted them.
+    pub work: Option<WorkCounters>,
     pub image_hash: String,
     pub plan: Plan,
 }
@@ -83,22 +132,6 @@ pub struct Stats {
 pub struct Rendered {
     pub image: Image,
     pub stats: Stats,
-}
-
-/// The SIMD instruction set this binary was compiled for (`wide` picks its
-/// implementation at compile time).
-pub const fn isa() -> &'static str {
-    if cfg!(all(target_feature = "avx2", target_feature = "fma")) {
-        "AVX2+FMA (x86-64-v3)"
-    } else if cfg!(target_feature = "avx") {
-        "AVX"
-    } else if cfg!(target_feature = "sse4.1") {
-        "SSE4.1"
-    } else if cfg!(target_feature = "sse2") {
-        "SSE2"
-    } else {
-        "scalar fallback"
-    }
 }
 
 fn tiles(width: u32, height: u32, edge: u32, moments: bool) -> Vec<TileFilm> {
@@ -119,37 +152,55 @@ pub fn render(
     opts: RenderOptions,
     progress: Option<&(dyn Fn(Progress) + Sync)>,
 ) -> Result<Rendered> {
+    render_probed(scene, settings, opts, progress, &|| ()).map(|(r, _)| r)
+}
+
+/// Renders with the exact work counters on (`Stats::work`).
+pub fn render_counted(
+    scene: &Scene,
+    settings: Settings,
+    opts: RenderOptions,
+    progress: Option<&(dyn Fn(Progress) + Sync)>,
+) -> Result<Rendered> {
+    let (mut r, probes) = render_probed(scene, settings, opts, progress, &WorkCounters::default)?;
+    let mut w = WorkCounters::default();
+    probes.iter().for_each(|p| w.merge(p));
+    r.stats.work = Some(w);
+    Ok(r)
+}
+
+/// Renders with a probe per tile, made by `make`; returns the probes in tile order.
+pub fn render_probed<P: Probe + Send>(
+    scene: &Scene,
+    settings: Settings,
+    opts: RenderOptions,
+    progress: Option<&(dyn Fn(Progress) + Sync)>,
+    make: &(dyn Fn() -> P + Sync),
+) -> Result<(Rendered, Vec<P>)> {
     let t0 = Instant::now();
-    let mut prep = Prepared::new(scene, settings, opts.accel)?;
-    if !(1..=45).contains(&opts.tile) {
-        return Err(crate::error::Error::invalid("tile", "must be between 1 and 45 pixels"));
-    }
-    if let Some(a) = opts.adaptive {
-        Adaptive::new(a.threshold, a.min_spp)?;
-    }
-    if opts.rr {
-        crate::estimator::check_roulette_after(opts.rr_after)?;
-    }
+    opts.validate()?;
+    let kernel = Kernel::resolve(opts.kernel)?;
     let russian_roulette = opts.rr.then_some(opts.rr_after);
-    prep.estimator = Estimator { russian_roulette, adaptive: opts.adaptive };
+    let estimator = Estimator { russian_roulette, adaptive: opts.adaptive };
+    let prep = prepare(scene, settings, opts.accel, estimator)?;
     let prepare_seconds = t0.elapsed().as_secs_f64();
     let pool = rayon::ThreadPoolBuilder::new()
         .num_threads(opts.threads.unwrap_or(0))
         .build()
-        .map_err(|e| crate::error::Error::Input(format!("cannot start threads: {e}")))?;
+        .map_err(|e| Error::Input(format!("cannot start threads: {e}")))?;
     let threads = pool.current_num_threads();
     let t1 = Instant::now();
-    let (image, counters, rejected, traced) = pool.install(|| render_prepared(&prep, opts, progress));
+    let out = pool.install(|| render_prepared(&prep, kernel, opts.tile, progress, make));
     let seconds = t1.elapsed().as_secs_f64();
     let (w, h) = (settings.width, settings.height);
-    let occ = |a: u64, l: u64| (l > 0).then(|| a as f64 / l as f64);
     let stats = Stats {
-        rays: counters.rays,
-        samples: traced.unwrap_or(w as u64 * h as u64 * settings.spp as u64),
+        rays: out.rays,
+        samples: out.traced.unwrap_or(w as u64 * h as u64 * settings.spp as u64),
         seconds,
         prepare_seconds,
-        mrays_per_s: counters.rays as f64 / seconds / 1e6,
-        kernel: opts.kernel.name(),
+        mrays_per_s: out.rays as f64 / seconds / 1e6,
+        kernel: kernel.name(),
+        lanes: kernel.lanes(),
         threads,
         isa: isa(),
         width: w,
@@ -159,22 +210,30 @@ pub fn render(
         seed: settings.seed,
         russian_roulette,
         adaptive: opts.adaptive,
-        rejected_samples: rejected,
-        isect_occupancy: occ(counters.isect_active, counters.isect_lanes),
-        scatter_occupancy: occ(counters.scatter_active, counters.scatter_lanes),
-        image_hash: format!("{:016x}", image.hash()),
+        rejected_samples: out.rejected,
+        work: None,
+        image_hash: format!("{:016x}", out.image.hash()),
         plan: prep.plan.clone(),
     };
-    Ok(Rendered { image, stats })
+    Ok((Rendered { image: out.image, stats }, out.probes))
 }
 
-/// The image, the counters, the rejected samples and the samples traced (`None`
-/// when no sample is traced: the gradient).
-fn render_prepared(
+struct Output<P> {
+    image: Image,
+    rays: u64,
+    rejected: u64,
+    /// Samples traced (`None` when no sample is traced: the gradient).
+    traced: Option<u64>,
+    probes: Vec<P>,
+}
+
+fn render_prepared<P: Probe + Send>(
     prep: &Prepared,
-    opts: RenderOptions,
+    kernel: Kernel,
+    tile: u32,
     progress: Option<&(dyn Fn(Progress) + Sync)>,
-) -> (Image, Counters, u64, Option<u64>) {
+    make: &(dyn Fn() -> P + Sync),
+) -> Output<P> {
     let s = prep.settings;
     let mut image = Image::new(s.width, s.height);
     if prep.plan.mode == Mode::Gradient {
@@ -183,44 +242,31 @@ fn render_prepared(
                 image.data[(y * s.width + x) as usize] = gradient(x, y, s.width, s.height);
             }
         }
-        return (image, Counters::default(), 0, None);
+        return Output { image, rays: 0, rejected: 0, traced: None, probes: Vec::new() };
     }
-    let mut films = tiles(s.width, s.height, opts.tile, prep.estimator.adaptive.is_some());
+    let mut films = tiles(s.width, s.height, tile, prep.estimator.adaptive.is_some());
     let total = films.len() as u64;
     let done = AtomicU64::new(0);
     let rays = AtomicU64::new(0);
-    let report = |c: &Counters| {
+    let report = |n: u64| {
         let d = done.fetch_add(1, Ordering::Relaxed) + 1;
-        let r = rays.fetch_add(c.rays, Ordering::Relaxed) + c.rays;
+        let r = rays.fetch_add(n, Ordering::Relaxed) + n;
         if let Some(p) = progress {
             p(Progress { tiles_done: d, tiles_total: total, rays: r });
         }
     };
-    let counters: Counters = match opts.kernel {
-        KernelKind::Scalar => films
+    let samples = 0..s.spp;
+    let probes: Vec<P> = match kernel {
+        Kernel::Scalar => films
             .par_iter_mut()
             .map(|tile| {
-                let mut c = Counters::default();
-                scalar::render_tile(prep, tile, &mut c);
-                report(&c);
-                c
+                let mut probe = make();
+                report(scalar::render_tile(prep, tile, samples.clone(), &mut probe));
+                probe
             })
-            .reduce(Counters::default, |mut a, b| {
-                a.merge(&b);
-                a
-            }),
-        KernelKind::Simd => films
-            .par_iter_mut()
-            .map_init(wavefront::Workspace::default, |ws, tile| {
-                let mut c = Counters::default();
-                wavefront::render_tile(prep, ws, tile, &mut c);
-                report(&c);
-                c
-            })
-            .reduce(Counters::default, |mut a, b| {
-                a.merge(&b);
-                a
-            }),
+            .collect(),
+        Kernel::Simd8 => wide_tiles::<f32x8, P>(prep, &mut films, samples, &report, make),
+        Kernel::Simd16 => wide_tiles::<f32x16, P>(prep, &mut films, samples, &report, make),
     };
     let mut rejected = 0;
     let mut traced = 0;
@@ -229,5 +275,22 @@ fn render_prepared(
         rejected += t.rejected;
         traced += t.rejected + t.count.iter().map(|&c| c as u64).sum::<u64>();
     }
-    (image, counters, rejected, Some(traced))
+    Output { image, rays: rays.into_inner(), rejected, traced: Some(traced), probes }
+}
+
+fn wide_tiles<W: Wide, P: Probe + Send>(
+    prep: &Prepared,
+    films: &mut [TileFilm],
+    samples: std::ops::Range<u32>,
+    report: &(dyn Fn(u64) + Sync),
+    make: &(dyn Fn() -> P + Sync),
+) -> Vec<P> {
+    films
+        .par_iter_mut()
+        .map_init(wavefront::Workspace::default, |ws, tile| {
+            let mut probe = make();
+            report(wavefront::render_tile::<W, P>(prep, ws, tile, samples.clone(), &mut probe));
+            probe
+        })
+        .collect()
 }

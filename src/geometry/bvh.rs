@@ -22,12 +22,13 @@
 //!   "Robust BVH ray traversal") and a box is pruned only when its entry
 //!   exceeds `best * (1 + 2^-20)`.
 
-use super::intersect::{sphere_disc, sphere_t};
+use super::intersect::{sphere_disc, sphere_t, Closest};
 use super::spheres::{Spheres, MISS};
-use crate::real::Real;
+use crate::probe::{Probe, Work};
+use crate::real::{Real, Wide};
 use crate::vec3::V3;
 use std::mem::MaybeUninit;
-use wide::{f32x8, i32x8, u32x8};
+use wide::f32x8;
 
 const PAD: f32 = 1.0 / 524_288.0; // 2^-19
 /// 1 + 2 gamma_3 with gamma_3 = 3u / (1 - 3u), rounded up.
@@ -290,73 +291,73 @@ impl Bvh {
         self.nodes.len()
     }
 
+    /// Leaf-order slot `j` as a broadcast centre and squared radius.
+    #[inline(always)]
+    fn sphere<R: Real>(&self, j: usize) -> (V3<R>, R) {
+        (V3::new(R::splat(self.cx[j]), R::splat(self.cy[j]), R::splat(self.cz[j])), R::splat(self.r2[j]))
+    }
+
     /// The closest hit of one ray, one box and one sphere at a time (scalar kernel).
-    pub fn closest_hit_scalar(&self, o: V3<f32>, d: V3<f32>) -> (u32, f32) {
+    pub fn closest_hit_scalar<P: Probe>(&self, o: V3<f32>, d: V3<f32>, probe: &mut P) -> (u32, f32) {
         let inv = inv_dir(d);
-        let mut best_t = f32::INFINITY;
-        let mut best = MISS;
+        let mut best = Closest::<f32>::none();
         let mut stack = Stack::new();
         while let Some((ni, entry)) = stack.pop() {
-            if entry > best_t * PRUNE_SCALE {
+            if entry > best.t * PRUNE_SCALE {
                 continue;
             }
+            probe.work(Work::Node, 1);
             let node = &self.nodes[ni as usize];
             for k in 0..8 {
                 if node.count[k] == EMPTY {
                     continue;
                 }
+                probe.work(Work::Box, 1);
                 let (near, far) = slab(
                     V3::new(node.min[0][k], node.min[1][k], node.min[2][k]),
                     V3::new(node.max[0][k], node.max[1][k], node.max[2][k]),
                     o,
                     inv,
                 );
-                if !(near <= far * EXIT_SCALE && near <= best_t * PRUNE_SCALE) {
+                if !(near <= far * EXIT_SCALE && near <= best.t * PRUNE_SCALE) {
                     continue;
                 }
-                if node.count[k] == 0 {
-                    stack.push((node.child[k], near));
-                } else {
-                    let start = node.child[k] as usize;
-                    for j in start..start + node.count[k] as usize {
-                        let c = V3::new(self.cx[j], self.cy[j], self.cz[j]);
-                        let (disc, f, b) = sphere_disc(o, d, c, self.r2[j]);
-                        if disc < 0.0 {
-                            continue;
-                        }
-                        let (hit, t) = sphere_t(disc, f, b, self.r2[j]);
-                        let i = self.index[j];
-                        if hit && (t < best_t || (t == best_t && i < best)) {
-                            best_t = t;
-                            best = i;
+                match node.count[k] {
+                    0 => stack.push((node.child[k], near)),
+                    count => {
+                        let start = node.child[k] as usize;
+                        for j in start..start + count as usize {
+                            let (c, r2) = self.sphere(j);
+                            best.test(o, d, c, r2, self.index[j], probe);
                         }
                     }
                 }
             }
         }
-        (best, best_t)
+        (best.index, best.t)
     }
 
     /// The closest hit of one ray: 8 child boxes, or 8 leaf spheres, per `f32x8` test.
-    pub fn closest_hit_wide(&self, o: V3<f32>, d: V3<f32>) -> (u32, f32) {
+    pub fn closest_hit_wide<P: Probe>(&self, o: V3<f32>, d: V3<f32>, probe: &mut P) -> (u32, f32) {
         let inv = inv_dir(d);
         let (o8, d8) = (splat3(o), splat3(d));
         let inv8 = splat3(inv);
-        let mut best_t = f32::INFINITY;
-        let mut best = MISS;
+        let mut best = Closest::<f32>::none();
         let mut stack = Stack::new();
         while let Some((ni, entry)) = stack.pop() {
-            if entry > best_t * PRUNE_SCALE {
+            if entry > best.t * PRUNE_SCALE {
                 continue;
             }
+            probe.work(Work::Node, 1);
+            probe.work(Work::Box, 8);
             let node = &self.nodes[ni as usize];
             let bmin = V3::new(f32x8::new(node.min[0]), f32x8::new(node.min[1]), f32x8::new(node.min[2]));
             let bmax = V3::new(f32x8::new(node.max[0]), f32x8::new(node.max[1]), f32x8::new(node.max[2]));
             let (near, far) = slab(bmin, bmax, o8, inv8);
-            let ok = near.le(far * f32x8::splat(EXIT_SCALE)) & near.le(f32x8::splat(best_t * PRUNE_SCALE));
+            let ok = near.le(far * f32x8::splat(EXIT_SCALE)) & near.le(f32x8::splat(best.t * PRUNE_SCALE));
             let mut mask = ok.to_bitmask();
             let near = near.to_array();
-            // Leaves first (they tighten `best_t`), inner nodes pushed far-to-near.
+            // Leaves first (they tighten `best.t`), inner nodes pushed far-to-near.
             let mut inner: [(u32, f32); 8] = [(0, 0.0); 8];
             let mut ninner = 0;
             while mask != 0 {
@@ -368,7 +369,7 @@ impl Bvh {
                         inner[ninner] = (node.child[k], near[k]);
                         ninner += 1;
                     }
-                    cnt => self.leaf_wide(node.child[k] as usize, cnt as usize, o8, d8, &mut best_t, &mut best),
+                    cnt => self.leaf_wide(node.child[k] as usize, cnt as usize, o8, d8, &mut best, probe),
                 }
             }
             inner[..ninner].sort_unstable_by(|a, b| b.1.total_cmp(&a.1));
@@ -376,31 +377,53 @@ impl Bvh {
                 stack.push(e);
             }
         }
-        (best, best_t)
+        (best.index, best.t)
     }
 
-    /// The closest hits of 8 rays walking the tree together (packet traversal):
-    /// a child is entered when any live ray (bit k of `live`) enters its box;
-    /// a leaf's spheres are each broadcast against the 8 rays, as in brute force.
-    pub fn closest_hit_packet(&self, o: V3<f32x8>, d: V3<f32x8>, live: u32) -> (u32x8, f32x8) {
-        let inv = V3::new(inv_lanes(d.x), inv_lanes(d.y), inv_lanes(d.z));
-        let live_mask: f32x8 = bytemuck::cast(u32x8::new(std::array::from_fn(|k| 0u32.wrapping_sub((live >> k) & 1))));
-        let mut best_t = f32x8::splat(f32::INFINITY);
-        let mut best = i32x8::splat(MISS as i32);
+    /// The closest hits of a packet's rays, each walking the tree on its own
+    /// with [`Bvh::closest_hit_wide`] (`--accel bvh-ray`). Lanes not in `live` miss.
+    pub fn closest_hits_one_by_one<W: Wide, P: Probe>(
+        &self,
+        o: V3<W>,
+        d: V3<W>,
+        live: u32,
+        probe: &mut P,
+    ) -> (W::U32, W) {
+        let mut hit = [MISS; 16];
+        let mut t = [f32::INFINITY; 16];
+        let mut m = live;
+        while m != 0 {
+            let k = m.trailing_zeros() as usize;
+            m &= m - 1;
+            let lane = |v: V3<W>| V3::new(v.x.lane(k), v.y.lane(k), v.z.lane(k));
+            (hit[k], t[k]) = self.closest_hit_wide(lane(o), lane(d), probe);
+        }
+        (W::u_from_fn(|k| hit[k]), W::from_fn(|k| t[k]))
+    }
+
+    /// The closest hits of a packet of rays walking the tree together: a child
+    /// is entered when any live ray (bit k of `live`) enters its box; a leaf's
+    /// spheres are each broadcast against the packet, as in brute force.
+    pub fn closest_hit_packet<W: Wide, P: Probe>(&self, o: V3<W>, d: V3<W>, live: u32, probe: &mut P) -> (W::U32, W) {
+        let inv = inv_dir(d);
+        let live_mask = W::mask_from_bits(live);
+        let mut best = Closest::<W>::none();
         let mut stack = Stack::new();
-        let exit = f32x8::splat(EXIT_SCALE);
-        let prune = f32x8::splat(PRUNE_SCALE);
+        let exit = W::splat(EXIT_SCALE);
+        let prune = W::splat(PRUNE_SCALE);
         while let Some((ni, _)) = stack.pop() {
+            probe.work(Work::Node, 1);
             let node = &self.nodes[ni as usize];
             for k in 0..8 {
                 let count = node.count[k];
                 if count == EMPTY {
                     continue;
                 }
+                probe.work(Work::Box, 1);
                 let bmin = V3::new(node.min[0][k], node.min[1][k], node.min[2][k]);
                 let bmax = V3::new(node.max[0][k], node.max[1][k], node.max[2][k]);
-                let (near, far) = slab(splat3(bmin), splat3(bmax), o, inv);
-                let enter = near.le(far * exit) & near.le(best_t * prune) & live_mask;
+                let (near, far) = slab(V3::splat3(bmin.to_array()), V3::splat3(bmax.to_array()), o, inv);
+                let enter = near.le(far * exit) & near.le(best.t * prune) & live_mask;
                 if !enter.any() {
                     continue;
                 }
@@ -410,26 +433,27 @@ impl Bvh {
                 }
                 let start = node.child[k] as usize;
                 for j in start..start + count as usize {
-                    let c = V3::new(f32x8::splat(self.cx[j]), f32x8::splat(self.cy[j]), f32x8::splat(self.cz[j]));
-                    let r2 = f32x8::splat(self.r2[j]);
-                    let (disc, f, b) = sphere_disc(o, d, c, r2);
-                    if !disc.ge(f32x8::splat(0.0)).any() {
-                        continue;
-                    }
-                    let (hit, t) = sphere_t(disc, f, b, r2);
-                    let i = i32x8::splat(self.index[j] as i32);
-                    let tie: f32x8 = bytemuck::cast(i.simd_lt(best));
-                    let closer = hit & (t.lt(best_t) | (t.eq(best_t) & tie));
-                    best_t = closer.select(t, best_t);
-                    best = bytemuck::cast::<f32x8, i32x8>(closer).select(i, best);
+                    let (c, r2) = self.sphere(j);
+                    best.test(o, d, c, r2, self.index[j], probe);
                 }
             }
         }
-        (bytemuck::cast(best), best_t)
+        (best.index, best.t)
     }
 
+    /// One ray against the up-to-8 spheres of a leaf at once (`f32x8` lanes are
+    /// spheres here); hits are offered to `best` in lane order.
     #[inline(always)]
-    fn leaf_wide(&self, start: usize, cnt: usize, o: V3<f32x8>, d: V3<f32x8>, best_t: &mut f32, best: &mut u32) {
+    fn leaf_wide<P: Probe>(
+        &self,
+        start: usize,
+        cnt: usize,
+        o: V3<f32x8>,
+        d: V3<f32x8>,
+        best: &mut Closest<f32>,
+        probe: &mut P,
+    ) {
+        probe.work(Work::Sphere, cnt as u32);
         let ld = |v: &[f32]| f32x8::new(v[start..start + 8].try_into().unwrap());
         let c = V3::new(ld(&self.cx), ld(&self.cy), ld(&self.cz));
         let r2 = ld(&self.r2);
@@ -438,17 +462,14 @@ impl Bvh {
         if disc.ge(f32x8::splat(0.0)).to_bitmask() & live == 0 {
             return;
         }
+        probe.work(Work::Root, 1);
         let (hit, t) = sphere_t(disc, f, b, r2);
         let mut m = hit.to_bitmask() & live;
         let t = t.to_array();
         while m != 0 {
             let k = m.trailing_zeros() as usize;
             m &= m - 1;
-            let i = self.index[start + k];
-            if t[k] < *best_t || (t[k] == *best_t && i < *best) {
-                *best_t = t[k];
-                *best = i;
-            }
+            best.offer(true, t[k], self.index[start + k]);
         }
     }
 }
@@ -488,17 +509,17 @@ fn splat3(v: V3<f32>) -> V3<f32x8> {
     V3::new(f32x8::splat(v.x), f32x8::splat(v.y), f32x8::splat(v.z))
 }
 
-/// `1 / d` per lane, with the same tiny-component rule as [`inv_dir`].
+/// `1 / x` per lane; components smaller than `TINY_DIR` are replaced by it
+/// (with their sign), so the slab test never computes `0 * inf`.
 #[inline(always)]
-fn inv_lanes(x: f32x8) -> f32x8 {
-    let tiny = f32x8::splat(TINY_DIR);
-    f32x8::splat(1.0) / x.abs().lt(tiny).select(tiny.copysign(x), x)
+fn inv_lanes<R: Real>(x: R) -> R {
+    let tiny = R::splat(TINY_DIR);
+    R::splat(1.0) / R::select(x.abs().lt(tiny), tiny.copysign(x), x)
 }
 
 #[inline(always)]
-fn inv_dir(d: V3<f32>) -> V3<f32> {
-    let f = |x: f32| 1.0 / if x.abs() < TINY_DIR { TINY_DIR.copysign(x) } else { x };
-    V3::new(f(d.x), f(d.y), f(d.z))
+fn inv_dir<R: Real>(d: V3<R>) -> V3<R> {
+    V3::new(inv_lanes(d.x), inv_lanes(d.y), inv_lanes(d.z))
 }
 
 /// Entry and exit distances of the ray `o + t d` (given `1/d`) through boxes,

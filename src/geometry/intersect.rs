@@ -18,7 +18,7 @@
 //! `u = 2^-24` (f32 unit roundoff). For one ray and one sphere let `h` be the
 //! distance of the centre from the ray's line, `disc = r^2 - h^2`, and
 //! `eta = ||d| - 1|` (a few `u` for directions from `normalize`). First-order
-//! bounds, term by term (their f64 implementations are `stress::Truth`, which
+//! bounds, term by term (their f64 implementations are `tools::stress::Truth`, which
 //! `rtow stress` checks on every ray it traces):
 //!
 //! * **Discriminant.** The computed `l = f - (f.d) d` is within
@@ -50,9 +50,9 @@
 //!   origin off the surface by more than the bound on `c'`.
 
 use super::spheres::{Spheres, MISS};
+use crate::probe::{Probe, Work};
 use crate::real::{Mask, Real};
 use crate::vec3::V3;
-use wide::{f32x8, u32x8};
 
 /// First half of the sphere test: `(disc, f, b)`; the ray misses when `disc < 0`.
 #[inline(always)]
@@ -77,51 +77,59 @@ pub fn sphere_t<R: Real>(disc: R, f: V3<R>, b: R, r2: R) -> (R::Mask, R) {
     (disc.ge(zero) & t.gt(zero), t)
 }
 
-/// The closest hit of one ray against every sphere (brute force), the scalar
-/// reference. Ties go to the lowest sphere index. Returns `(MISS, inf)` on a miss.
-#[inline]
-pub fn closest_hit_scalar(s: &Spheres, o: V3<f32>, d: V3<f32>) -> (u32, f32) {
-    let mut best_t = f32::INFINITY;
-    let mut best = MISS;
-    for i in 0..s.len {
-        let c = V3::new(s.cx[i], s.cy[i], s.cz[i]);
-        let (disc, f, b) = sphere_disc(o, d, c, s.r2[i]);
-        if disc < 0.0 {
-            continue;
-        }
-        let (hit, t) = sphere_t(disc, f, b, s.r2[i]);
-        if hit && t < best_t {
-            best_t = t;
-            best = i as u32;
-        }
-    }
-    (best, best_t)
+/// The closest hit found so far by a group of rays (one, or a packet), and
+/// the rule every traversal uses to replace it: a hit is taken when it is
+/// closer, or equally close on a sphere of lower index. With this rule the
+/// answer does not depend on the order in which spheres are tested, so brute
+/// force and every BVH walk find the same sphere, bit for bit.
+#[derive(Clone, Copy, Debug)]
+pub struct Closest<R: Real> {
+    pub t: R,
+    pub index: R::U32,
 }
 
-/// The closest hits of 8 rays against every sphere: each sphere is broadcast
-/// against the 8 rays. Same formulas and tie rule as [`closest_hit_scalar`],
-/// so every lane gets the bits the scalar kernel gets.
-#[inline]
-pub fn closest_hit_x8(s: &Spheres, o: V3<f32x8>, d: V3<f32x8>) -> (u32x8, f32x8) {
-    let mut best_t = f32x8::splat(f32::INFINITY);
-    let mut best = u32x8::splat(MISS);
-    for i in 0..s.len {
-        let c = V3::new(f32x8::splat(s.cx[i]), f32x8::splat(s.cy[i]), f32x8::splat(s.cz[i]));
-        let r2 = f32x8::splat(s.r2[i]);
-        let (disc, f, b) = sphere_disc(o, d, c, r2);
-        // Most spheres miss all 8 rays: skip the sqrt and divide for them
-        // (one branch per packet, not per lane).
-        let any = disc.ge(f32x8::splat(0.0));
-        if !Mask::any(any) {
-            continue;
-        }
-        let (hit, t) = sphere_t(disc, f, b, r2);
-        let closer = hit & t.lt(best_t);
-        best_t = closer.select(t, best_t);
-        let m: u32x8 = bytemuck::cast(closer);
-        best = m.select(u32x8::splat(i as u32), best);
+impl<R: Real> Closest<R> {
+    #[inline(always)]
+    pub fn none() -> Self {
+        Closest { t: R::splat(f32::INFINITY), index: R::u_splat(MISS) }
     }
-    (best, best_t)
+
+    /// Takes the lanes of `hit` whose `t` beats the current one (ties: lower index).
+    #[inline(always)]
+    pub fn offer(&mut self, hit: R::Mask, t: R, index: R::U32) {
+        let closer = hit & (t.lt(self.t) | (t.eq(self.t) & R::u_lt(index, self.index)));
+        self.t = R::select(closer, t, self.t);
+        self.index = R::u_select(closer, index, self.index);
+    }
+
+    /// Sphere `index` (centre `c`, squared radius `r2`, both broadcast) against
+    /// the rays `o + t d`: the leaf test of brute force and of every BVH walk.
+    /// Most spheres miss every ray: their square root and divide are skipped
+    /// (one branch per group of rays, not per lane).
+    #[inline(always)]
+    pub fn test<P: Probe>(&mut self, o: V3<R>, d: V3<R>, c: V3<R>, r2: R, index: u32, probe: &mut P) {
+        probe.work(Work::Sphere, 1);
+        let (disc, f, b) = sphere_disc(o, d, c, r2);
+        if !disc.ge(R::splat(0.0)).any() {
+            return;
+        }
+        probe.work(Work::Root, 1);
+        let (hit, t) = sphere_t(disc, f, b, r2);
+        self.offer(hit, t, R::u_splat(index));
+    }
+}
+
+/// The closest hits of a group of rays (one ray: the scalar kernel; a packet:
+/// the wavefront) against every sphere (brute force): each sphere broadcast
+/// against the rays. Returns `(MISS, inf)` in lanes that miss.
+#[inline]
+pub fn closest_hit<R: Real, P: Probe>(s: &Spheres, o: V3<R>, d: V3<R>, probe: &mut P) -> (R::U32, R) {
+    let mut best = Closest::none();
+    for i in 0..s.len {
+        let c = V3::new(R::splat(s.cx[i]), R::splat(s.cy[i]), R::splat(s.cz[i]));
+        best.test(o, d, c, R::splat(s.r2[i]), i as u32, probe);
+    }
+    (best.index, best.t)
 }
 
 /// What the shading needs to know about a hit.
@@ -138,7 +146,7 @@ pub struct Surface<R: Real> {
 }
 
 /// `2^-20`: sixteen units of roundoff (`u = 2^-24`).
-const OFFSET_ULPS: f32 = 1.0 / 1_048_576.0;
+pub const OFFSET_ULPS: f32 = 1.0 / 1_048_576.0;
 
 /// The surface at distance `t` along `o + t d` on the sphere `(c, r)`.
 ///

@@ -5,5 +5,5 @@ pub mod intersect;
 pub mod spheres;
 
 pub use bvh::Bvh;
-pub use intersect::{closest_hit_scalar, closest_hit_x8, spawn, sphere_disc, sphere_t, surface, Surface};
+pub use intersect::{closest_hit, spawn, sphere_disc, sphere_t, surface, Closest, Surface, OFFSET_ULPS};
 pub use spheres::{Spheres, MISS};

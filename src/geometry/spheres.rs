@@ -1,6 +1,6 @@
 //! Spheres as structure-of-arrays, padded to a multiple of 8.
 
-use crate::scene::{Kind, Sphere};
+use crate::material::Kind;
 
 /// The sphere index of "no hit".
 pub const MISS: u32 = u32::MAX;
@@ -14,8 +14,8 @@ pub struct Spheres {
     pub r: Vec<f32>,
     /// `r * r`; padding has -1, which no ray can hit (disc = -1 - |l|^2 < 0).
     pub r2: Vec<f32>,
-    /// Material kind of each sphere (`Kind as u8`).
-    pub kind: Vec<u8>,
+    /// Material kind of each sphere.
+    pub kind: Vec<Kind>,
     /// Row of the sphere's material in its kind's table.
     pub row: Vec<u32>,
     /// Number of real spheres; the arrays are longer (padding).
@@ -23,40 +23,41 @@ pub struct Spheres {
 }
 
 impl Spheres {
-    /// Lays out `spheres`, given each one's (kind, row) in the material tables.
-    pub fn new(spheres: &[Sphere], material_of: impl Fn(usize) -> (Kind, u32)) -> Self {
-        let n = spheres.len();
-        let padded = n.div_ceil(8) * 8;
-        let mut s = Spheres {
-            cx: Vec::with_capacity(padded),
-            cy: Vec::with_capacity(padded),
-            cz: Vec::with_capacity(padded),
-            r: Vec::with_capacity(padded),
-            r2: Vec::with_capacity(padded),
-            kind: Vec::with_capacity(padded),
-            row: Vec::with_capacity(padded),
-            len: n,
-        };
-        for (i, sp) in spheres.iter().enumerate() {
-            let (kind, row) = material_of(i);
-            s.cx.push(sp.center[0]);
-            s.cy.push(sp.center[1]);
-            s.cz.push(sp.center[2]);
-            s.r.push(sp.radius);
-            s.r2.push(sp.radius * sp.radius);
-            s.kind.push(kind as u8);
-            s.row.push(row);
+    /// Appends a sphere: centre, signed radius, and its material's (kind, row).
+    pub fn push(&mut self, center: [f32; 3], radius: f32, kind: Kind, row: u32) {
+        self.cx.push(center[0]);
+        self.cy.push(center[1]);
+        self.cz.push(center[2]);
+        self.r.push(radius);
+        self.r2.push(radius * radius);
+        self.kind.push(kind);
+        self.row.push(row);
+        self.len += 1;
+    }
+
+    /// Pads the arrays to a multiple of 8 with spheres no ray can hit.
+    pub fn pad(&mut self) {
+        while self.cx.len() % 8 != 0 {
+            let n = self.len;
+            self.push([0.0; 3], 0.0, Kind::Lambertian, 0);
+            self.r2[n] = -1.0;
+            self.len = n;
         }
-        for _ in n..padded {
-            s.cx.push(0.0);
-            s.cy.push(0.0);
-            s.cz.push(0.0);
-            s.r.push(0.0);
-            s.r2.push(-1.0);
-            s.kind.push(Kind::Lambertian as u8);
-            s.row.push(0);
-        }
+    }
+
+    /// One sphere (tests and the stress sweeps).
+    pub fn one(center: [f32; 3], radius: f32) -> Spheres {
+        let mut s = Spheres::default();
+        s.push(center, radius, Kind::Lambertian, 0);
+        s.pad();
         s
+    }
+
+    /// Moves sphere `i` (tests and the stress sweeps).
+    pub fn set(&mut self, i: usize, center: [f32; 3], radius: f32) {
+        (self.cx[i], self.cy[i], self.cz[i]) = (center[0], center[1], center[2]);
+        self.r[i] = radius;
+        self.r2[i] = radius * radius;
     }
 
     pub fn is_empty(&self) -> bool {

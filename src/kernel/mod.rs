@@ -1,5 +1,6 @@
-//! The two kernels, and what they share: shading of misses and debug modes,
-//! and the counters every kernel keeps the same way.
+//! The kernels: the scalar reference (one path at a time) and the wavefront
+//! (queues of paths, packets of `W::LANES` rays, generic over the lane width),
+//! and what they share: the sky, the debug shadings, path ids for probes.
 
 pub mod scalar;
 pub mod wavefront;
@@ -7,48 +8,6 @@ pub mod wavefront;
 use crate::plan::SkyColours;
 use crate::real::Real;
 use crate::vec3::V3;
-use serde::Serialize;
-
-/// Which kernel renders.
-#[derive(Clone, Copy, Debug, PartialEq, Eq, Serialize, clap::ValueEnum)]
-#[serde(rename_all = "lowercase")]
-pub enum KernelKind {
-    /// One path at a time: the reference.
-    Scalar,
-    /// The wavefront kernel: 8-wide packets and a queue per material kind.
-    Simd,
-}
-
-impl KernelKind {
-    pub fn name(self) -> &'static str {
-        match self {
-            KernelKind::Scalar => "scalar",
-            KernelKind::Simd => "simd",
-        }
-    }
-}
-
-/// Work counters; one ray = one closest-hit query against the scene.
-#[derive(Clone, Copy, Debug, Default, PartialEq, Eq)]
-pub struct Counters {
-    pub rays: u64,
-    /// SIMD lanes doing real work / lanes issued, in intersection.
-    pub isect_active: u64,
-    pub isect_lanes: u64,
-    /// The same in the scatter passes.
-    pub scatter_active: u64,
-    pub scatter_lanes: u64,
-}
-
-impl Counters {
-    pub fn merge(&mut self, o: &Counters) {
-        self.rays += o.rays;
-        self.isect_active += o.isect_active;
-        self.isect_lanes += o.isect_lanes;
-        self.scatter_active += o.scatter_active;
-        self.scatter_lanes += o.scatter_lanes;
-    }
-}
 
 /// The sky seen in unit direction `d`: horizon to zenith by `0.5 (d.y + 1)`.
 #[inline(always)]

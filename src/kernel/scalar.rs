@@ -1,86 +1,103 @@
 //! The reference path tracer: one path at a time, iterative, straightforward.
 //! Every formula comes from the width-generic modules, instantiated at `f32`.
 
-use super::{normal_colour, sky, Counters};
+use super::{normal_colour, sky};
 use crate::estimator::{roulette, roulette_applies};
 use crate::film::TileFilm;
 use crate::geometry::{spawn, surface, MISS};
-use crate::material::{dielectric, lambertian, metal};
-use crate::plan::Prepared;
+use crate::material::{dielectric, lambertian, metal, Kind};
+use crate::plan::{Mode, Prepared};
+use crate::probe::{PathId, Probe};
 use crate::sampling::ScalarStream;
-use crate::scene::{Kind, Mode};
 use crate::vec3::V3;
+use std::ops::Range;
 
-/// Renders every sample of every pixel of `tile`, in sample order. With
-/// adaptive sampling a pixel stops at the first decision point where its
-/// error estimate is low enough.
-pub fn render_tile(prep: &Prepared, tile: &mut TileFilm, counters: &mut Counters) {
+/// Renders samples `samples` of every pixel of `tile`, in sample order; returns
+/// the rays traced. With adaptive sampling a pixel stops at the first decision
+/// point where its error estimate is low enough.
+pub fn render_tile<P: Probe>(prep: &Prepared, tile: &mut TileFilm, samples: Range<u32>, probe: &mut P) -> u64 {
     let s = &prep.settings;
     let est = &prep.estimator;
+    let mut rays = 0;
     for local in 0..tile.sum.len() {
         let (x, y) = tile.pixel_of(local);
-        let pixel = y as u64 * s.width as u64 + x as u64;
-        let mut done = 0;
-        while done < s.spp {
-            let end = est.round_end(done, s.spp);
+        let pixel = y * s.width + x;
+        let mut done = samples.start;
+        while done < samples.end {
+            let end = est.round_end(done, samples.end);
             for sample in done..end {
-                let mut rng = ScalarStream::for_path(s.seed, pixel, sample as u64);
-                let c = trace(prep, x, y, &mut rng, counters);
+                let mut rng = ScalarStream::for_path(s.seed, pixel as u64, sample as u64);
+                let (c, n) = trace(prep, x, y, PathId { pixel, sample }, &mut rng, probe);
+                rays += n as u64;
                 tile.add(local, c);
             }
             done = end;
-            if done < s.spp && est.adaptive.is_some_and(|a| a.converged(tile, local)) {
+            if done < samples.end && est.adaptive.is_some_and(|a| a.converged(tile, local)) {
                 break;
             }
         }
     }
+    rays
 }
 
-/// The radiance of one path through pixel (x, y).
-pub fn trace(prep: &Prepared, x: u32, y: u32, rng: &mut ScalarStream, counters: &mut Counters) -> [f32; 3] {
+/// The radiance of one path through pixel (x, y), and the rays it traced.
+pub fn trace<P: Probe>(
+    prep: &Prepared,
+    x: u32,
+    y: u32,
+    id: PathId<f32>,
+    rng: &mut ScalarStream,
+    probe: &mut P,
+) -> ([f32; 3], u32) {
     let sp = &prep.spheres;
-    let (mut o, mut d) = prep.camera.ray(x as f32, y as f32, rng);
+    let (o, mut d) = prep.camera.ray(x as f32, y as f32, rng);
+    let mut o = if P::PATHS { probe.camera(id, o, d, 1) } else { o };
     let mut thr = V3::new(1.0f32, 1.0, 1.0);
     for depth in 0..prep.settings.max_depth {
-        counters.rays += 1;
-        let (hit, t) = prep.closest_hit(o, d);
+        let rays = depth + 1;
+        let (hit, t) = prep.closest_hit(o, d, probe);
+        if P::PATHS {
+            probe.traced(id, o, d, hit, t, 1);
+        }
         if hit == MISS {
-            return thr.mul_elem(sky(&prep.sky, d)).to_array();
+            return (thr.mul_elem(sky(&prep.sky, d)).to_array(), rays);
         }
         let i = hit as usize;
         let srf = surface(o, d, t, V3::new(sp.cx[i], sp.cy[i], sp.cz[i]), sp.r[i]);
-        let row = sp.row[i] as usize;
-        match prep.plan.mode {
-            Mode::Normals => return normal_colour(srf.n).to_array(),
-            Mode::Flat => return prep.materials.flat_colour(sp.kind[i], sp.row[i]),
-            _ => {}
+        if P::PATHS {
+            probe.shaded(id, hit, sp.r[i], srf.n, srf.front, 1);
         }
+        let (kind, row) = (sp.kind[i], sp.row[i] as usize);
         let m = &prep.materials;
-        let (dir, atten) = match sp.kind[i] {
-            k if k == Kind::Lambertian as u8 => (lambertian(srf.n, rng), m.lambertian[row]),
-            k if k == Kind::Metal as u8 => {
-                let (albedo, fuzz) = m.metal[row];
-                let (dir, alive) = metal(d, srf.n, fuzz, rng);
-                if !alive {
-                    return [0.0; 3];
+        let (dir, atten) = match prep.plan.mode {
+            Mode::Normals => return (normal_colour(srf.n).to_array(), rays),
+            Mode::Flat | Mode::Gradient => return (m.flat_colour(kind, row as u32), rays),
+            Mode::Path => match kind {
+                Kind::Lambertian => (lambertian(srf.n, rng), m.lambertian[row]),
+                Kind::Metal => {
+                    let (albedo, fuzz) = m.metal[row];
+                    let (dir, alive) = metal(d, srf.n, fuzz, rng);
+                    if !alive {
+                        return ([0.0; 3], rays);
+                    }
+                    (dir, albedo)
                 }
-                (dir, albedo)
-            }
-            _ => (dielectric(d, srf.n, srf.front, m.dielectric[row], rng), [1.0; 3]),
+                Kind::Dielectric => (dielectric(d, srf.n, srf.front, m.dielectric[row], rng), [1.0; 3]),
+            },
         };
         thr = thr.mul_elem(V3::from_array(atten));
         if thr.x == 0.0 && thr.y == 0.0 && thr.z == 0.0 {
-            return [0.0; 3];
+            return ([0.0; 3], rays);
         }
-        if roulette_applies(&prep.estimator, depth + 1) {
+        if roulette_applies(&prep.estimator, rays) {
             let (t, survives) = roulette(thr, rng);
             if !survives {
-                return [0.0; 3];
+                return ([0.0; 3], rays);
             }
             thr = t;
         }
         o = spawn(&srf, dir);
         d = dir;
     }
-    [0.0; 3]
+    ([0.0; 3], prep.settings.max_depth)
 }

@@ -11,7 +11,7 @@
 //! the same number of values per event on both widths: camera jitter 2, lens 2,
 //! lambertian 2, metal 2, dielectric 1.
 
-use crate::real::Real;
+use crate::real::{Lanes32, Real, Wide};
 use crate::vec3::V3;
 use rand_core::{Rng, SeedableRng};
 use rand_xoshiro::Xoshiro128Plus;
@@ -63,16 +63,19 @@ impl Stream<f32> for ScalarStream {
     }
 }
 
-/// Eight xoshiro128+ generators side by side, one per lane.
+/// xoshiro128+ generators side by side, one per lane (8 in `u32x8`, 16 in `u32x16`).
 #[derive(Clone, Copy, Debug)]
-pub struct Xoshiro128PlusX8 {
-    pub s: [u32x8; 4],
+pub struct XoshiroLanes<U> {
+    pub s: [U; 4],
 }
 
-impl Xoshiro128PlusX8 {
+/// Eight lanes, as the tests and the 8-wide kernel name them.
+pub type Xoshiro128PlusX8 = XoshiroLanes<u32x8>;
+
+impl<U: Lanes32> XoshiroLanes<U> {
     /// The next 32 bits of every lane: exactly `Xoshiro128Plus::next_u32`.
     #[inline(always)]
-    pub fn next_u32(&mut self) -> u32x8 {
+    pub fn next_u32(&mut self) -> U {
         let [s0, s1, s2, s3] = self.s;
         let result = s0 + s3; // wrapping, as in rand_xoshiro
         let t = s1 << 9;
@@ -87,10 +90,10 @@ impl Xoshiro128PlusX8 {
     }
 }
 
-impl Stream<wide::f32x8> for Xoshiro128PlusX8 {
+impl<W: Wide> Stream<W> for XoshiroLanes<W::U> {
     #[inline(always)]
-    fn next(&mut self) -> wide::f32x8 {
-        wide::f32x8::unit_from_bits(self.next_u32())
+    fn next(&mut self) -> W {
+        W::unit_from_bits(self.next_u32())
     }
 }
 

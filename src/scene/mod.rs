@@ -10,32 +10,11 @@ pub use file::{load_scene, save_scene, scene_from_str, scene_to_string, Format};
 pub use presets::{final_scene, preset, presets, Preset};
 
 use crate::error::{Error, Result};
+pub use crate::material::Kind;
+pub use crate::plan::Mode;
+pub use crate::settings::RenderDefaults;
+use crate::limits::MAX_SPHERES;
 use serde::{Deserialize, Serialize};
-
-/// What the renderer computes for each camera ray.
-#[derive(Serialize, Deserialize, Clone, Copy, Debug, PartialEq, Eq, Default)]
-#[serde(rename_all = "lowercase")]
-pub enum Mode {
-    /// Chapter 1: no rays; r = x / width, g = (rows from the bottom) / height, b = 0.2.
-    Gradient,
-    /// Chapters 3-4: the sky where a camera ray misses, the hit material's colour where it hits.
-    Flat,
-    /// Chapters 5-6: 0.5 * (n + 1) of the outward normal where a camera ray hits.
-    Normals,
-    /// Chapter 7 on: the path tracer.
-    #[default]
-    Path,
-}
-
-impl Mode {
-    /// The book writes the debug images without gamma and the path traced ones with gamma 2.
-    pub fn default_gamma(self) -> f32 {
-        match self {
-            Mode::Path => 2.0,
-            _ => 1.0,
-        }
-    }
-}
 
 /// Written as `{"type": "<kind>", ...fields}`. Read through [`MaterialFields`]:
 /// serde reads an internally tagged enum through a buffer, and errors inside it
@@ -83,35 +62,6 @@ impl TryFrom<MaterialFields> for Material {
             )),
             None => Ok(material),
         }
-    }
-}
-
-/// Material kinds, one wavefront queue each.
-#[derive(Clone, Copy, Debug, PartialEq, Eq, Hash, PartialOrd, Ord)]
-#[repr(u8)]
-pub enum Kind {
-    Lambertian = 0,
-    Metal = 1,
-    Dielectric = 2,
-}
-
-impl Kind {
-    pub const ALL: [Kind; 3] = [Kind::Lambertian, Kind::Metal, Kind::Dielectric];
-    pub fn name(self) -> &'static str {
-        match self {
-            Kind::Lambertian => "lambertian",
-            Kind::Metal => "metal",
-            Kind::Dielectric => "dielectric",
-        }
-    }
-}
-
-/// A material's `type`: a string naming the kind.
-impl<'de> Deserialize<'de> for Kind {
-    fn deserialize<D: serde::Deserializer<'de>>(d: D) -> std::result::Result<Self, D::Error> {
-        const NAMES: &[&str] = &["lambertian", "metal", "dielectric"];
-        let s = String::deserialize(d)?;
-        Kind::ALL.into_iter().find(|k| k.name() == s).ok_or_else(|| serde::de::Error::unknown_variant(&s, NAMES))
     }
 }
 
@@ -214,49 +164,6 @@ impl Sky {
     }
 }
 
-/// Render settings a scene may carry; command-line flags override them.
-#[derive(Serialize, Deserialize, Clone, Copy, Debug, PartialEq, Default)]
-#[serde(deny_unknown_fields)]
-pub struct RenderDefaults {
-    #[serde(default, skip_serializing_if = "Option::is_none")]
-    pub width: Option<u32>,
-    #[serde(default, skip_serializing_if = "Option::is_none")]
-    pub height: Option<u32>,
-    #[serde(default, skip_serializing_if = "Option::is_none")]
-    pub samples_per_pixel: Option<u32>,
-    #[serde(default, skip_serializing_if = "Option::is_none")]
-    pub max_depth: Option<u32>,
-    #[serde(default, skip_serializing_if = "Option::is_none")]
-    pub seed: Option<u64>,
-}
-
-impl RenderDefaults {
-    /// The same limits as `plan::Settings::validate`, naming the scene's fields
-    /// (a CLI flag may override a value, but a file that asks for 0 is wrong).
-    pub fn validate(&self) -> Result<()> {
-        for (name, v) in [
-            ("render.width", self.width),
-            ("render.height", self.height),
-            ("render.samples_per_pixel", self.samples_per_pixel),
-            ("render.max_depth", self.max_depth),
-        ] {
-            if v == Some(0) {
-                return Err(Error::invalid(name, "must be at least 1"));
-            }
-        }
-        if let (Some(w), Some(h)) = (self.width, self.height) {
-            let px = w as u64 * h as u64;
-            if px > crate::plan::MAX_PIXELS {
-                return Err(Error::invalid(
-                    "render.width x render.height",
-                    format!("{w}x{h} = {px} pixels; at most {} fit in memory", crate::plan::MAX_PIXELS),
-                ));
-            }
-        }
-        Ok(())
-    }
-}
-
 fn is_default<T: Default + PartialEq>(v: &T) -> bool {
     *v == T::default()
 }
@@ -274,9 +181,6 @@ pub struct Scene {
     #[serde(default, skip_serializing_if = "is_default")]
     pub render: RenderDefaults,
 }
-
-/// Most spheres a scene may have (the SoA index is a u32 and memory is finite).
-pub const MAX_SPHERES: usize = 1 << 24;
 
 fn finite3(field: &str, v: [f32; 3]) -> Result<()> {
     if v.iter().all(|x| x.is_finite()) {

@@ -1,23 +1,80 @@
-//! `rtow bench`: render one scene with each kernel, measure rays per second,
-//! and compare against a saved baseline (throughput and image hash), so that
-//! a speedup can be regression-tested: faster, and the same image.
+//! `rtow bench`: render one scene with each kernel, measure rays per second and
+//! the exact work per ray, and compare against a saved baseline (throughput,
+//! work and image hash), so that a speedup can be regression-tested: faster,
+//! the same image, and no more work.
+//!
+//! Timed renders run with the probe off (`()`); one more render per kernel runs
+//! with [`WorkCounters`] on. The counters are deterministic for a seed and the
+//! settings, so a change in them is a change in the algorithm, whatever the
+//! machine's load; a change in time alone is labelled as such.
 
 use crate::error::{Error, Result};
-use crate::kernel::KernelKind;
-use crate::plan::{AccelChoice, Settings};
-use crate::render::{render, RenderOptions, Stats};
+use crate::probe::WorkCounters;
+use crate::render::{render, render_counted, Kernel, Stats};
 use crate::scene::Scene;
+use crate::settings::{AccelChoice, KernelChoice, RenderOptions, Settings};
 use serde::{Deserialize, Serialize};
 use std::path::Path;
 
-/// One kernel's measurement: the median run's stats plus the speedup over scalar.
+/// What to measure.
+#[derive(Clone, Debug)]
+pub struct Config {
+    pub settings: Settings,
+    pub kernels: Vec<KernelChoice>,
+    pub threads: Option<usize>,
+    pub accel: AccelChoice,
+    /// Timed renders per kernel; the median one is reported.
+    pub repeat: usize,
+}
+
+impl Config {
+    /// Checks everything before any render: settings, kernels this build has, repeat.
+    pub fn validate(&self) -> Result<()> {
+        self.settings.validate()?;
+        if self.repeat == 0 {
+            return Err(Error::invalid("repeat", "must be at least 1"));
+        }
+        if self.kernels.is_empty() {
+            return Err(Error::invalid("kernels", "name at least one kernel"));
+        }
+        for &k in &self.kernels {
+            Kernel::resolve(k)?;
+        }
+        Ok(())
+    }
+}
+
+/// Work per ray, from exact counters.
+#[derive(Clone, Copy, Debug, Serialize, Deserialize, PartialEq)]
+pub struct PerRay {
+    pub nodes: f64,
+    pub box_tests: f64,
+    pub sphere_tests: f64,
+    pub roots: f64,
+}
+
+impl PerRay {
+    pub fn new(w: &WorkCounters, rays: u64) -> PerRay {
+        let r = rays.max(1) as f64;
+        PerRay {
+            nodes: w.nodes as f64 / r,
+            box_tests: w.box_tests as f64 / r,
+            sphere_tests: w.sphere_tests as f64 / r,
+            roots: w.roots as f64 / r,
+        }
+    }
+}
+
+/// One kernel's measurement: the median run's stats, the exact work, and the
+/// speedup over scalar.
 #[derive(Clone, Debug, Serialize)]
 pub struct BenchEntry {
     #[serde(flatten)]
     pub stats: Stats,
+    pub work_per_ray: PerRay,
     /// Mrays/s divided by the scalar kernel's in the same run (absent without scalar).
     pub speedup: Option<f64>,
-    /// Seconds of every repetition, in run order.
+    /// Seconds of every timed repetition, in run order.
     pub runs_seconds: Vec<f64>,
 }
 
@@ -28,41 +85,38 @@ pub struct BenchReport {
     pub kernels: Vec<BenchEntry>,
 }
 
-/// Renders `scene` `repeat` times with each kernel; keeps the median-time run.
-pub fn run(
-    scene: &Scene,
-    name: &str,
-    settings: Settings,
-    kernels: &[KernelKind],
-    threads: Option<usize>,
-    accel: AccelChoice,
-    repeat: usize,
-    mut on_run: impl FnMut(KernelKind, usize, &Stats),
-) -> Result<BenchReport> {
-    if repeat == 0 {
-        return Err(Error::invalid("repeat", "must be at least 1"));
-    }
+/// Renders `scene` `repeat` times with each kernel (median kept), then once
+/// more with the work counters on.
+pub fn run(scene: &Scene, name: &str, cfg: &Config, mut on_run: impl FnMut(Kernel, usize, &Stats)) -> Result<BenchReport> {
+    cfg.validate()?;
     let mut entries = Vec::new();
-    for &kernel in kernels {
-        let opts = RenderOptions { kernel, threads, accel, ..RenderOptions::default() };
+    for &choice in &cfg.kernels {
+        let kernel = Kernel::resolve(choice)?;
+        let opts = RenderOptions { kernel: choice, threads: cfg.threads, accel: cfg.accel, ..Default::default() };
         let mut runs = Vec::new();
-        for i in 0..repeat {
-            let r = render(scene, settings, opts, None)?;
+        for i in 0..cfg.repeat {
+            let r = render(scene, cfg.settings, opts, None)?;
             on_run(kernel, i, &r.stats);
             runs.push(r.stats);
         }
+        let counted = render_counted(scene, cfg.settings, opts, None)?.stats;
         let runs_seconds: Vec<f64> = runs.iter().map(|s| s.seconds).collect();
-        if let Some(s) = runs.iter().find(|s| s.image_hash != runs[0].image_hash) {
-            return Err(Error::Input(format!(
-                "{} kernel: image changed between repetitions ({} vs {}): the render is not deterministic",
-                kernel.name(),
-                runs[0].image_hash,
-                s.image_hash
-            )));
+        for s in runs.iter().chain([&counted]) {
+            if s.image_hash != runs[0].image_hash || s.rays != runs[0].rays {
+                return Err(Error::Input(format!(
+                    "{} kernel: image changed between repetitions ({} vs {}): the render is not deterministic",
+                    kernel.name(),
+                    runs[0].image_hash,
+                    s.image_hash
+                )));
+            }
         }
         runs.sort_by(|a, b| a.seconds.total_cmp(&b.seconds));
-        let median = runs.swap_remove(runs.len() / 2);
-        entries.push(BenchEntry { stats: median, speedup: None, runs_seconds });
+        let mut median = runs.swap_remove(runs.len() / 2);
+        let work = counted.work.expect("a counted render has counters");
+        median.work = Some(work);
+        let work_per_ray = PerRay::new(&work, median.rays);
+        entries.push(BenchEntry { stats: median, work_per_ray, speedup: None, runs_seconds });
     }
     let scalar = entries.iter().find(|e| e.stats.kernel == "scalar").map(|e| e.stats.mrays_per_s);
     if let Some(base) = scalar {
@@ -70,30 +124,48 @@ pub fn run(
             e.speedup = Some(e.stats.mrays_per_s / base);
         }
     }
-    Ok(BenchReport { scene: name.to_string(), repeat, kernels: entries })
+    Ok(BenchReport { scene: name.to_string(), repeat: cfg.repeat, kernels: entries })
 }
 
 impl BenchReport {
     /// The table `rtow bench` prints.
     pub fn table(&self) -> String {
         let mut t = format!(
-            "{:<7} {:>12} {:>9} {:>9} {:>8} {:>7} {:>7}  {}\n",
-            "kernel", "rays", "seconds", "Mrays/s", "speedup", "isect%", "scat%", "image hash"
+            "{:<7} {:>12} {:>9} {:>9} {:>8} {:>7} {:>7} {:>7} {:>7} {:>7} {:>7}  {}\n",
+            "kernel",
+            "rays",
+            "seconds",
+            "Mrays/s",
+            "speedup",
+            "isect%",
+            "scat%",
+            "nodes",
+            "boxes",
+            "spheres",
+            "roots",
+            "image hash"
         );
         for e in &self.kernels {
             let s = &e.stats;
+            let (isect, scatter) = s.work.map_or((None, None), |w| w.occupancy());
+            let w = &e.work_per_ray;
             t += &format!(
-                "{:<7} {:>12} {:>9.3} {:>9.2} {:>8} {:>7} {:>7}  {}\n",
+                "{:<7} {:>12} {:>9.3} {:>9.2} {:>8} {:>7} {:>7} {:>7.2} {:>7.2} {:>7.2} {:>7.2}  {}\n",
                 s.kernel,
                 s.rays,
                 s.seconds,
                 s.mrays_per_s,
                 e.speedup.map_or("-".to_string(), |x| format!("{x:.2}x")),
-                pct(s.isect_occupancy),
-                pct(s.scatter_occupancy),
+                pct(isect),
+                pct(scatter),
+                w.nodes,
+                w.box_tests,
+                w.sphere_tests,
+                w.roots,
                 s.image_hash
             );
         }
+        t += "(work per ray: node visits, box tests, sphere tests and square roots, per packet or per ray as the kernel issues them)\n";
         t
     }
 
@@ -117,6 +189,9 @@ pub struct BaselineEntry {
     pub spp: u32,
     pub max_depth: u32,
     pub seed: u64,
+    /// Exact work counters (absent in baselines saved before they existed).
+    #[serde(default)]
+    pub work: Option<WorkCounters>,
 }
 
 #[derive(Clone, Debug, Deserialize)]
@@ -132,6 +207,45 @@ impl Baseline {
         serde_json::from_str(&text)
             .map_err(|e| Error::Parse { path: path.to_path_buf(), message: format!("not a rtow bench baseline: {e}") })
     }
+
+    /// Checks, before anything is measured, that this baseline measured the same
+    /// scene and settings and has at least one of `kernels`.
+    pub fn check(&self, scene: &str, s: &Settings, kernels: &[KernelChoice]) -> Result<()> {
+        if self.scene != scene {
+            return Err(Error::Input(format!("baseline is of scene '{}', this run of '{scene}'", self.scene)));
+        }
+        for b in &self.kernels {
+            if (b.width, b.height, b.spp, b.max_depth, b.seed) != (s.width, s.height, s.spp, s.max_depth, s.seed) {
+                return Err(Error::Input(format!(
+                    "baseline settings {}x{} {} spp depth {} seed {} differ from this run's {}x{} {} spp depth {} seed {}",
+                    b.width, b.height, b.spp, b.max_depth, b.seed, s.width, s.height, s.spp, s.max_depth, s.seed
+                )));
+            }
+        }
+        let names: Vec<&str> = kernels.iter().filter_map(|&k| Kernel::resolve(k).ok()).map(Kernel::name).collect();
+        if !self.kernels.iter().any(|b| names.contains(&b.kernel.as_str())) {
+            return Err(Error::Input(format!(
+                "the baseline has none of the kernels measured ({}; it has {})",
+                names.join(", "),
+                self.kernels.iter().map(|b| b.kernel.as_str()).collect::<Vec<_>>().join(", ")
+            )));
+        }
+        Ok(())
+    }
+}
+
+/// What changed against the baseline, for one kernel.
+#[derive(Clone, Copy, Debug, PartialEq, Eq)]
+pub enum Verdict {
+    /// Same image, same work, throughput within the tolerance.
+    Same,
+    /// Same image and work, throughput beyond the tolerance: a timing change
+    /// only (load, machine, code generation), not the algorithm.
+    TimingOnly,
+    /// The work per ray changed: the algorithm did more (a regression) or less.
+    Work,
+    /// The image changed.
+    Image,
 }
 
 /// The verdict of one kernel against the baseline.
@@ -143,39 +257,54 @@ pub struct Comparison {
     /// Relative change in throughput, percent (negative: slower).
     pub change_percent: f64,
     pub image_same: bool,
+    /// Relative change of the total traversal work (nodes + box + sphere tests),
+    /// percent; `None` when the baseline has no counters.
+    pub work_change_percent: Option<f64>,
+    pub verdict: Verdict,
+    /// Exit status 1: the image changed, the work grew, or throughput fell beyond the tolerance.
     pub regressed: bool,
 }
 
-/// Compares a fresh report with a baseline. An error if they measured different things.
-pub fn compare(report: &BenchReport, base: &Baseline, tolerance_percent: f64) -> Result<Vec<Comparison>> {
-    if report.scene != base.scene {
-        return Err(Error::Input(format!("baseline is of scene '{}', this run of '{}'", base.scene, report.scene)));
-    }
+fn total(w: &WorkCounters) -> u64 {
+    w.nodes + w.box_tests + w.sphere_tests + w.roots
+}
+
+/// Compares a fresh report with a baseline (checked with [`Baseline::check`]).
+pub fn compare(report: &BenchReport, base: &Baseline, tolerance_percent: f64) -> Vec<Comparison> {
     let mut out = Vec::new();
     for e in &report.kernels {
         let s = &e.stats;
         let Some(b) = base.kernels.iter().find(|b| b.kernel == s.kernel) else {
             continue;
         };
-        if (b.width, b.height, b.spp, b.max_depth, b.seed) != (s.width, s.height, s.spp, s.max_depth, s.seed) {
-            return Err(Error::Input(format!(
-                "baseline settings {}x{} {} spp depth {} seed {} differ from this run's {}x{} {} spp depth {} seed {}",
-                b.width, b.height, b.spp, b.max_depth, b.seed, s.width, s.height, s.spp, s.max_depth, s.seed
-            )));
-        }
         let change = 100.0 * (s.mrays_per_s / b.mrays_per_s - 1.0);
         let image_same = b.image_hash == s.image_hash;
+        let work = match (b.work, s.work) {
+            (Some(bw), Some(sw)) if bw != sw => Some(100.0 * (total(&sw) as f64 / total(&bw).max(1) as f64 - 1.0)),
+            (Some(_), Some(_)) => Some(0.0),
+            _ => None,
+        };
+        let work_changed = matches!((b.work, s.work), (Some(bw), Some(sw)) if bw != sw);
+        let slower = change < -tolerance_percent;
+        let verdict = if !image_same {
+            Verdict::Image
+        } else if work_changed {
+            Verdict::Work
+        } else if change.abs() > tolerance_percent {
+            Verdict::TimingOnly
+        } else {
+            Verdict::Same
+        };
         out.push(Comparison {
             kernel: s.kernel.to_string(),
             baseline_mrays: b.mrays_per_s,
             mrays: s.mrays_per_s,
             change_percent: change,
             image_same,
-            regressed: change < -tolerance_percent || !image_same,
+            work_change_percent: work,
+            verdict,
+            regressed: !image_same || work.is_some_and(|w| w > 0.0) || slower,
         });
     }
-    if out.is_empty() {
-        return Err(Error::Input("the baseline has none of the kernels measured".into()));
-    }
-    Ok(out)
+    out
 }

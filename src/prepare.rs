@@ -1,0 +1,145 @@
+//! From a validated scene and settings to what the kernels read: the [`Plan`]
+//! (what the scene needs), SoA spheres, per-kind material tables, the camera
+//! and, when the plan chose it, the BVH.
+
+use crate::camera::{Camera, View};
+use crate::error::Result;
+use crate::estimator::Estimator;
+use crate::geometry::{Bvh, Spheres};
+use crate::material::{Kind, MaterialTables};
+use crate::plan::{Accel, KindSet, Mode, Plan, Prepared, SkyColours, BVH_CROSSOVER};
+use crate::scene::{Material, Scene};
+use crate::settings::{AccelChoice, Settings};
+use glam::DVec3;
+
+/// The closest-hit search for `spheres` spheres: brute force below the
+/// crossover (and where no ray is traced), the BVH above it, or as forced.
+pub fn choose_accel(choice: AccelChoice, spheres: usize, mode: Mode) -> Accel {
+    if spheres == 0 || mode == Mode::Gradient {
+        return Accel::Brute;
+    }
+    match choice {
+        AccelChoice::Brute => Accel::Brute,
+        AccelChoice::Bvh => Accel::BvhPackets,
+        AccelChoice::BvhRay => Accel::BvhRays,
+        AccelChoice::Auto if spheres >= BVH_CROSSOVER => Accel::BvhPackets,
+        AccelChoice::Auto => Accel::Brute,
+    }
+}
+
+/// The plan alone (cheap: no BVH is built), e.g. for `rtow render --explain`.
+pub fn plan(scene: &Scene, settings: &Settings, accel: AccelChoice) -> Plan {
+    let kinds: KindSet = match scene.mode {
+        Mode::Path => scene.spheres.iter().map(|s| s.material.kind()).collect(),
+        Mode::Gradient | Mode::Flat | Mode::Normals => KindSet::default(),
+    };
+    Plan {
+        mode: scene.mode,
+        kinds,
+        lens: scene.camera.lens_radius() > 0.0 && scene.mode != Mode::Gradient,
+        jitter: settings.spp > 1,
+        accel: choose_accel(accel, scene.spheres.len(), scene.mode),
+    }
+}
+
+/// The scene's camera in f64.
+pub fn view(c: &crate::scene::Camera) -> View {
+    let v = |a: [f32; 3]| DVec3::from_array(a.map(f64::from));
+    View {
+        look_from: v(c.look_from),
+        look_at: v(c.look_at),
+        vup: v(c.vup),
+        vfov_deg: c.vfov_deg as f64,
+        focus_dist: c.focus_distance(),
+        lens_radius: c.lens_radius(),
+    }
+}
+
+/// Validates `scene` and `settings`, decides the plan and lays the scene out.
+pub fn prepare(scene: &Scene, settings: Settings, accel: AccelChoice, estimator: Estimator) -> Result<Prepared> {
+    scene.validate()?;
+    settings.validate()?;
+    let plan = plan(scene, &settings, accel);
+    let mut materials = MaterialTables::default();
+    let mut spheres = Spheres::default();
+    for s in &scene.spheres {
+        let (kind, row) = match s.material {
+            Material::Lambertian { albedo } => (Kind::Lambertian, push(&mut materials.lambertian, albedo)),
+            Material::Metal { albedo, fuzz } => (Kind::Metal, push(&mut materials.metal, (albedo, fuzz))),
+            Material::Dielectric { ior } => (Kind::Dielectric, push(&mut materials.dielectric, ior)),
+        };
+        spheres.push(s.center, s.radius, kind, row);
+    }
+    spheres.pad();
+    let view = view(&scene.camera);
+    let camera = Camera { lens: plan.lens, ..Camera::new(&view, settings.width, settings.height, plan.jitter) };
+    let bvh = (plan.accel != Accel::Brute).then(|| {
+        // Ray origins lie within the camera's lens of the eye.
+        let extent = scene.camera.look_from.iter().fold(0.0f32, |m, x| m.max(x.abs())) + view.lens_radius as f32;
+        Bvh::build(&spheres, extent)
+    });
+    Ok(Prepared {
+        plan,
+        settings,
+        spheres,
+        materials,
+        camera,
+        sky: SkyColours { horizon: scene.sky.horizon, zenith: scene.sky.zenith },
+        bvh,
+        estimator,
+    })
+}
+
+/// Appends to a material table; returns the row.
+fn push<T>(table: &mut Vec<T>, v: T) -> u32 {
+    table.push(v);
+    table.len() as u32 - 1
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+    use crate::scene::preset;
+
+    fn settings(spp: u32) -> Settings {
+        Settings { width: 40, height: 20, spp, max_depth: 5, seed: 0 }
+    }
+
+    #[test]
+    fn the_plan_takes_only_the_kinds_a_scene_uses() {
+        let ch07 = preset("ch07-diffuse").unwrap();
+        let p = plan(&ch07, &settings(4), AccelChoice::Auto);
+        assert_eq!(p.kinds.iter().collect::<Vec<_>>(), [Kind::Lambertian]);
+        let fin = preset("final").unwrap();
+        let p = plan(&fin, &settings(4), AccelChoice::Auto);
+        assert_eq!(p.kinds.iter().collect::<Vec<_>>(), Kind::ALL);
+        let normals = preset("ch05-normals").unwrap();
+        assert!(plan(&normals, &settings(4), AccelChoice::Auto).kinds.is_empty());
+    }
+
+    #[test]
+    fn pinhole_or_lens_and_jitter_follow_the_scene() {
+        let fin = preset("final").unwrap();
+        assert!(plan(&fin, &settings(4), AccelChoice::Auto).lens);
+        let ch10 = preset("ch10-wide-fov").unwrap();
+        let p = plan(&ch10, &settings(1), AccelChoice::Auto);
+        assert!(!p.lens && !p.jitter);
+        assert!(plan(&ch10, &settings(2), AccelChoice::Auto).jitter);
+    }
+
+    #[test]
+    fn brute_force_below_the_crossover_bvh_above_it() {
+        assert_eq!(choose_accel(AccelChoice::Auto, BVH_CROSSOVER - 1, Mode::Path), Accel::Brute);
+        assert_eq!(choose_accel(AccelChoice::Auto, BVH_CROSSOVER, Mode::Path), Accel::BvhPackets);
+        assert_eq!(choose_accel(AccelChoice::Bvh, 1, Mode::Path), Accel::BvhPackets);
+        assert_eq!(choose_accel(AccelChoice::BvhRay, 1, Mode::Path), Accel::BvhRays);
+        assert_eq!(choose_accel(AccelChoice::Brute, 1000, Mode::Path), Accel::Brute);
+        assert_eq!(choose_accel(AccelChoice::Bvh, 0, Mode::Path), Accel::Brute);
+        assert_eq!(choose_accel(AccelChoice::Bvh, 100, Mode::Gradient), Accel::Brute);
+        let fin = preset("final").unwrap();
+        let prep = prepare(&fin, settings(2), AccelChoice::Auto, Estimator::default()).unwrap();
+        assert!(prep.bvh.is_some());
+        let prep = prepare(&fin, settings(2), AccelChoice::Brute, Estimator::default()).unwrap();
+        assert!(prep.bvh.is_none());
+    }
+}

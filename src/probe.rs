@@ -1,0 +1,132 @@
+//! Probes: observers that the kernels and the traversals take as a type
+//! parameter. Every method has an empty inlined default, so a render with the
+//! probe `()` compiles to the uninstrumented code (`rtow bench` shows it costs
+//! nothing). Tools that need to see inside a kernel (lane occupancy, work
+//! counters, `rtow stress`'s oracle) implement a probe; none copies a kernel.
+//!
+//! The kernels call the path events with the lanes they hold: one lane for the
+//! scalar kernel (`R = f32`), 8 or 16 for the wavefront (`live` says which
+//! lanes are real paths). A path is named by its pixel (`y * width + x`) and
+//! sample index, which do not depend on kernel, tile or thread.
+
+use crate::real::Real;
+use crate::vec3::V3;
+
+/// Which (pixel, sample) each lane holds.
+#[derive(Clone, Copy, Debug)]
+pub struct PathId<R: Real> {
+    pub pixel: R::U32,
+    pub sample: R::U32,
+}
+
+/// What is counted: traversal work, in the units the traversal issues it (one
+/// packet-node visit, one box or sphere test of a packet, one square root of a
+/// packet; for the scalar kernel and `bvh-ray`, of one ray).
+#[derive(Clone, Copy, Debug, PartialEq, Eq)]
+pub enum Work {
+    /// A BVH node whose children are tested.
+    Node,
+    /// A child box tested (the slab test).
+    Box,
+    /// A sphere tested (the discriminant).
+    Sphere,
+    /// A sphere test that reached the square root (some lane's discriminant >= 0).
+    Root,
+}
+
+/// The kernel stages whose SIMD lane occupancy is measured.
+#[derive(Clone, Copy, Debug, PartialEq, Eq)]
+pub enum Stage {
+    Intersect,
+    Scatter,
+}
+
+pub trait Probe {
+    /// Whether the kernels must compute path ids for [`Probe::camera`],
+    /// [`Probe::traced`] and [`Probe::shaded`] (false: the events are not called).
+    const PATHS: bool = false;
+
+    /// A camera ray was generated; returns its origin (a probe may move it
+    /// along the ray, as `rtow stress`'s far-camera check does).
+    #[inline(always)]
+    fn camera<R: Real>(&mut self, _id: PathId<R>, o: V3<R>, _d: V3<R>, _live: u32) -> V3<R> {
+        o
+    }
+
+    /// A ray's closest hit was found (`hit` is the sphere index or `MISS`).
+    #[inline(always)]
+    fn traced<R: Real>(&mut self, _id: PathId<R>, _o: V3<R>, _d: V3<R>, _hit: R::U32, _t: R, _live: u32) {}
+
+    /// A hit was shaded: the sphere's signed radius, the normal facing the ray
+    /// and whether the ray hit the front face.
+    #[inline(always)]
+    fn shaded<R: Real>(&mut self, _id: PathId<R>, _sphere: R::U32, _radius: R, _n: V3<R>, _front: R::Mask, _live: u32) {
+    }
+
+    /// `n` units of traversal work.
+    #[inline(always)]
+    fn work(&mut self, _w: Work, _n: u32) {}
+
+    /// A SIMD pass over `issued` lanes of which `active` were real paths.
+    #[inline(always)]
+    fn lanes(&mut self, _stage: Stage, _active: u32, _issued: u32) {}
+}
+
+/// No instrumentation: what normal renders use.
+impl Probe for () {}
+
+/// Exact work counters and lane occupancy: deterministic for a seed and the
+/// settings, whatever the threads, tiles or timing.
+#[derive(Clone, Copy, Debug, Default, PartialEq, Eq, serde::Serialize, serde::Deserialize)]
+pub struct WorkCounters {
+    pub nodes: u64,
+    pub box_tests: u64,
+    pub sphere_tests: u64,
+    pub roots: u64,
+    pub isect_active: u64,
+    pub isect_lanes: u64,
+    pub scatter_active: u64,
+    pub scatter_lanes: u64,
+}
+
+impl WorkCounters {
+    pub fn merge(&mut self, o: &WorkCounters) {
+        self.nodes += o.nodes;
+        self.box_tests += o.box_tests;
+        self.sphere_tests += o.sphere_tests;
+        self.roots += o.roots;
+        self.isect_active += o.isect_active;
+        self.isect_lanes += o.isect_lanes;
+        self.scatter_active += o.scatter_active;
+        self.scatter_lanes += o.scatter_lanes;
+    }
+
+    /// Active / issued lanes in intersection and scatter (`None` when no SIMD lanes ran).
+    pub fn occupancy(&self) -> (Option<f64>, Option<f64>) {
+        let occ = |a: u64, l: u64| (l > 0).then(|| a as f64 / l as f64);
+        (occ(self.isect_active, self.isect_lanes), occ(self.scatter_active, self.scatter_lanes))
+    }
+}
+
+impl Probe for WorkCounters {
+    #[inline(always)]
+    fn work(&mut self, w: Work, n: u32) {
+        let c = match w {
+            Work::Node => &mut self.nodes,
+            Work::Box => &mut self.box_tests,
+            Work::Sphere => &mut self.sphere_tests,
+            Work::Root => &mut self.roots,
+        };
+        *c += n as u64;
+    }
+
+    #[inline(always)]
+    fn lanes(&mut self, stage: Stage, active: u32, issued: u32) {
+        let (a, l) = match stage {
+            Stage::Intersect => (&mut self.isect_active, &mut self.isect_lanes),
+            Stage::Scatter => (&mut self.scatter_active, &mut self.scatter_lanes),
+        };
+        *a += active as u64;
+        *l += issued as u64;
+    }
+}

@@ -1,0 +1,476 @@
+//! Run time against error: render a scene at a list of sample counts with each
+//! kernel and estimator variant, measure the error of each image against a
+//! reference, and compare the configurations at equal time and equal error.
+//!
+//! - The reference is rendered with a seed derived from (and different to) the
+//!   measured renders' seed ([`reference_seed`]), or loaded from a float image.
+//!   With the same seed the error of a measured image would be correlated with
+//!   the reference's and come out too low.
+//! - Error: RMSE over every channel of every pixel of the linear image, and
+//!   relMSE, the mean of `(x - r)^2 / (r^2 + 0.01)` (Rousselle et al. 2011; the
+//!   0.01 keeps black reference pixels from dominating). Efficiency is
+//!   `1 / (MSE x seconds)`: for an unbiased estimator it is roughly constant
+//!   along a curve, and the ratio of two efficiencies is a speedup.
+//! - Comparisons interpolate each curve linearly in log-log (log seconds against
+//!   log RMSE, between consecutive sample counts).
+
+
+mod curve;
+mod metrics;
+#[cfg(feature = "plot")]
+mod plot;
+mod report;
+mod variant;
+
+pub use curve::{compare, Comparison, Cost, Curve};
+pub use metrics::{error_metrics, Metrics, Row, RELMSE_EPSILON, SIGNED_EPSILON};
+pub use variant::{Variant, DEFAULT_ADAPTIVE_THRESHOLD};
+
+use crate::error::{Error, Result};
+use crate::estimator::{Adaptive, ROULETTE_AFTER_RAYS};
+use crate::film::Image;
+use crate::render::render;
+use crate::sampling::mix64;
+use crate::scene::Scene;
+use crate::settings::{KernelChoice, RenderOptions, Settings};
+use std::path::PathBuf;
+
+/// Where the reference image comes from.
+#[derive(Clone, Debug, PartialEq)]
+pub enum Reference {
+    /// A linear float image (.exr or .pfm) of the same size.
+    File(PathBuf),
+    /// Rendered here with this many samples per pixel (SIMD kernel, plain).
+    Spp(u32),
+}
+
+/// What `rtow converge` measures.
+#[derive(Clone, Debug)]
+pub struct Config {
+    /// Image size, depth and seed of the measured renders (`spp` is ignored).
+    pub settings: Settings,
+    pub kernels: Vec<KernelChoice>,
+    pub variants: Vec<Variant>,
+    pub spp_list: Vec<u32>,
+    pub reference: Reference,
+    pub threads: Option<usize>,
+    pub tile: u32,
+    /// Passes over every measurement; the fastest time counts (the image is the same every time).
+    pub repeat: u32,
+    /// First adaptive decision point.
+    pub adaptive_min: u32,
+    /// Also compare every configuration at the error the baseline reaches at
+    /// this sample count (one of `spp_list`).
+    pub at_spp: Option<u32>,
+}
+
+impl Config {
+    pub fn validate(&self) -> Result<()> {
+        if self.kernels.is_empty() {
+            return Err(Error::invalid("--kernels", "name at least one kernel (scalar, simd)"));
+        }
+        if self.variants.is_empty() {
+            return Err(Error::invalid("--variants", "name at least one variant"));
+        }
+        for (i, v) in self.variants.iter().enumerate() {
+            if self.variants[..i].contains(v) {
+                return Err(Error::invalid("--variants", format!("'{}' is listed twice", v.name())));
+            }
+        }
+        for (i, k) in self.kernels.iter().enumerate() {
+            if self.kernels[..i].contains(k) {
+                return Err(Error::invalid("--kernels", format!("'{}' is listed twice", k.name())));
+            }
+        }
+        if self.spp_list.is_empty() {
+            return Err(Error::invalid("--spp-list", "give at least one sample count"));
+        }
+        if self.spp_list.contains(&0) {
+            return Err(Error::invalid("--spp-list", "sample counts must be at least 1"));
+        }
+        if self.spp_list.windows(2).any(|w| w[0] >= w[1]) {
+            return Err(Error::invalid("--spp-list", "sample counts must increase strictly"));
+        }
+        if let Some(n) = self.at_spp {
+            if !self.spp_list.contains(&n) {
+                return Err(Error::invalid("--at-spp", format!("{n} is not one of --spp-list")));
+            }
+        }
+        if self.repeat == 0 {
+            return Err(Error::invalid("--repeat", "must be at least 1"));
+        }
+        if let Reference::Spp(0) = self.reference {
+            return Err(Error::invalid("--reference-spp", "must be at least 1"));
+        }
+        if self.variants.iter().any(|v| v.adaptive.is_some()) {
+            Adaptive::new(DEFAULT_ADAPTIVE_THRESHOLD, self.adaptive_min).map_err(|e| match e {
+                Error::Invalid { message, .. } => Error::invalid("--adaptive-min", message),
+                e => e,
+            })?;
+        }
+        for &spp in self.spp_list.iter().chain(match &self.reference {
+            Reference::Spp(n) => std::slice::from_ref(n),
+            _ => &[],
+        }) {
+            Settings { spp, ..self.settings }.validate()?;
+        }
+        Ok(())
+    }
+}
+
+/// The seed of the reference render: a different stream family from `seed`'s.
+pub fn reference_seed(seed: u64) -> u64 {
+    let r = mix64(seed ^ 0x5245_4645_5245_4E43);
+    if r == seed {
+        r ^ 1
+    } else {
+        r
+    }
+}
+
+/// Error of an image against the reference.
+/// Everything a converge run measured.
+#[derive(Clone, Debug)]
+pub struct Report {
+    pub scene: String,
+    pub width: u32,
+    pub height: u32,
+    pub max_depth: u32,
+    pub seed: u64,
+    /// How the reference was made (for the outputs).
+    pub reference: String,
+    /// Renders per measurement (the fastest counts) and worker threads.
+    pub repeat: u32,
+    pub threads: usize,
+    /// See [`Config::at_spp`].
+    pub at_spp: Option<u32>,
+    /// The reference, when this run rendered it (written out for reuse with `--reference`).
+    pub rendered_reference: Option<Image>,
+    pub rows: Vec<Row>,
+}
+
+/// What a run tells its caller as it goes.
+pub enum Event<'a> {
+    ReferenceStart(u32),
+    ReferenceDone { seconds: f64 },
+    Measured(&'a Row),
+}
+
+/// Renders (or loads) the reference, then measures every kernel, variant and
+/// sample count, in that order.
+pub fn run(scene: &Scene, name: &str, cfg: &Config, mut on: impl FnMut(Event)) -> Result<Report> {
+    cfg.validate()?;
+    let s = cfg.settings;
+    let base =
+        RenderOptions { kernel: KernelChoice::Simd, threads: cfg.threads, tile: cfg.tile, ..RenderOptions::default() };
+    let (reference, ref_text, rendered) = match &cfg.reference {
+        Reference::File(path) => {
+            let img = Image::load_float(path).map_err(|e| Error::invalid("--reference", e.to_string()))?;
+            if (img.width, img.height) != (s.width, s.height) {
+                return Err(Error::invalid(
+                    "--reference",
+                    format!(
+                        "{} is {}x{} but the renders are {}x{} (set --width/--height to match)",
+                        path.display(),
+                        img.width,
+                        img.height,
+                        s.width,
+                        s.height
+                    ),
+                ));
+            }
+            if img.data.iter().flatten().any(|v| !v.is_finite()) {
+                return Err(Error::invalid("--reference", format!("{} has NaN or infinite values", path.display())));
+            }
+            (img, format!("{}", path.display()), false)
+        }
+        Reference::Spp(n) => {
+            on(Event::ReferenceStart(*n));
+            let seed = reference_seed(s.seed);
+            let r = render(scene, Settings { spp: *n, seed, ..s }, base, None)?;
+            on(Event::ReferenceDone { seconds: r.stats.seconds });
+            (r.image, format!("{n} spp, seed {seed} (simd kernel, plain)"), true)
+        }
+    };
+    // Every measurement once per pass, `repeat` passes: a change of load on
+    // the machine then falls on every configuration alike instead of on
+    // whichever ran at the time. The fastest time counts; the image (and so
+    // the error) is the same in every pass.
+    let mut plan = Vec::new();
+    for &kernel in &cfg.kernels {
+        for &variant in &cfg.variants {
+            for &spp in &cfg.spp_list {
+                let adaptive = match variant.adaptive {
+                    Some(t) => Some(Adaptive::new(t, cfg.adaptive_min).map_err(|e| match e {
+                        Error::Invalid { message, .. } => Error::invalid("--variants", message),
+                        e => e,
+                    })?),
+                    None => None,
+                };
+                let opts = RenderOptions {
+                    kernel,
+                    rr: variant.rr.is_some(),
+                    rr_after: variant.rr.unwrap_or(ROULETTE_AFTER_RAYS),
+                    adaptive,
+                    ..base
+                };
+                plan.push((kernel, variant, spp, opts));
+            }
+        }
+    }
+    let mut rows: Vec<Row> = Vec::with_capacity(plan.len());
+    let mut threads = 0;
+    for pass in 0..cfg.repeat {
+        for (i, &(kernel, variant, spp, opts)) in plan.iter().enumerate() {
+            let r = render(scene, Settings { spp, ..s }, opts, None)?;
+            threads = r.stats.threads;
+            if pass == 0 {
+                let m = error_metrics(&r.image, &reference);
+                rows.push(Row {
+                    kernel,
+                    variant,
+                    spp,
+                    seconds: r.stats.seconds,
+                    rays: r.stats.rays,
+                    samples: r.stats.samples,
+                    rmse: m.rmse,
+                    relmse: m.relmse,
+                    mean_rel_error: m.mean_rel_error,
+                    image_hash: r.stats.image_hash,
+                });
+            } else {
+                let row = &mut rows[i];
+                if row.image_hash != r.stats.image_hash {
+                    return Err(Error::Input(format!(
+                        "{} at {spp} spp rendered a different image on pass {}: renders must be deterministic",
+                        row.label(),
+                        pass + 1
+                    )));
+                }
+                row.seconds = row.seconds.min(r.stats.seconds);
+            }
+            if pass + 1 == cfg.repeat {
+                on(Event::Measured(&rows[i]));
+            }
+        }
+    }
+    Ok(Report {
+        scene: name.to_string(),
+        width: s.width,
+        height: s.height,
+        max_depth: s.max_depth,
+        seed: s.seed,
+        reference: ref_text,
+        repeat: cfg.repeat,
+        threads,
+        at_spp: cfg.at_spp,
+        rendered_reference: rendered.then_some(reference),
+        rows,
+    })
+}
+
+/// Axis ticks of a log scale: 1, 2 and 5 times the powers of ten in `lo..=hi`.
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    fn curve(label: &str, c: f64, times: &[f64]) -> Curve {
+        // An unbiased estimator: MSE = c / t.
+        Curve { label: label.into(), points: times.iter().map(|&t| (t, (c / t).sqrt())).collect() }
+    }
+
+    #[test]
+    fn variants_parse_and_name() {
+        assert_eq!(Variant::parse("plain").unwrap(), Variant::PLAIN);
+        assert_eq!(Variant::parse("rr").unwrap().name(), "rr");
+        assert_eq!(Variant::parse("adaptive").unwrap().adaptive, Some(DEFAULT_ADAPTIVE_THRESHOLD));
+        let v = Variant::parse("rr+adaptive:0.05").unwrap();
+        assert_eq!((v.rr, v.adaptive), (Some(ROULETTE_AFTER_RAYS), Some(0.05)));
+        assert_eq!(Variant::parse(&v.name()).unwrap(), v);
+        let v = Variant::parse("adaptive:0.1+rr:3").unwrap();
+        assert_eq!((v.rr, v.adaptive), (Some(3), Some(0.1)));
+        assert_eq!(v.name(), "rr:3+adaptive:0.1");
+        assert_eq!(Variant::parse(&v.name()).unwrap(), v);
+        for bad in [
+            "",
+            "fast",
+            "rr+rr",
+            "adaptive:x",
+            "adaptive:0",
+            "adaptive:-1",
+            "adaptive:nan",
+            "adaptive:inf",
+            "plain+rr",
+            "rr:0",
+            "rr:x",
+            "rr:-2",
+            "adaptive:",
+            "rr+adaptive+adaptive",
+        ] {
+            let e = Variant::parse(bad).unwrap_err().to_string();
+            assert!(e.starts_with("--variants:"), "{bad}: {e}");
+        }
+    }
+
+    #[test]
+    fn speedups_of_known_curves() {
+        // `fast` reaches every error in half the time: 2x at equal error, and
+        // at equal time its MSE is half the other's.
+        let slow = curve("slow", 1e-3, &[0.1, 0.2, 0.4, 0.8, 1.6]);
+        let fast = curve("fast", 0.5e-3, &[0.07, 0.13, 0.29, 0.55, 1.1]);
+        let c = compare(&slow, &fast);
+        let (e, x) = c.equal_error.unwrap();
+        assert!((x - 2.0).abs() < 1e-9, "{x}");
+        assert!((e - (1e-3f64 / 1.6).sqrt()).abs() < 1e-12);
+        let (t, m) = c.equal_time.unwrap();
+        assert!((t - 1.1).abs() < 1e-12);
+        assert!((m - 2.0).abs() < 1e-9, "{m}");
+        let back = compare(&fast, &slow);
+        assert!((back.equal_error.unwrap().1 - 0.5).abs() < 1e-9);
+        // Disjoint time ranges: no equal-time comparison.
+        let later = curve("later", 1e-3, &[10.0, 20.0]);
+        assert_eq!(compare(&slow, &later).equal_time, None);
+    }
+
+    #[test]
+    fn report_compares_in_seconds_and_in_rays() {
+        // `simd/rr` traces half the rays for the same errors but takes as long.
+        let row = |variant: Variant, spp: u32, rays: u64, rmse: f64| Row {
+            kernel: KernelChoice::Simd,
+            variant,
+            spp,
+            seconds: spp as f64,
+            rays,
+            samples: 0,
+            rmse,
+            relmse: 0.0,
+            mean_rel_error: 0.0,
+            image_hash: String::new(),
+        };
+        let rr = Variant::parse("rr").unwrap();
+        let rows = vec![
+            row(Variant::PLAIN, 4, 400, 0.5),
+            row(Variant::PLAIN, 16, 1600, 0.25),
+            row(rr, 4, 200, 0.5),
+            row(rr, 16, 800, 0.25),
+        ];
+        let report = Report {
+            scene: "s".into(),
+            width: 1,
+            height: 1,
+            max_depth: 1,
+            seed: 0,
+            reference: String::new(),
+            repeat: 1,
+            threads: 1,
+            at_spp: Some(16),
+            rendered_reference: None,
+            rows,
+        };
+        let t = report.comparisons_by(Cost::Seconds);
+        let r = report.comparisons_by(Cost::Rays);
+        assert_eq!((t.len(), r.len()), (1, 1));
+        assert_eq!((t[0].base.as_str(), t[0].other.as_str()), ("simd/plain", "simd/rr"));
+        assert!((t[0].equal_error.unwrap().1 - 1.0).abs() < 1e-12);
+        assert!((r[0].equal_error.unwrap().1 - 2.0).abs() < 1e-12);
+        let line = &report.comparison_lines()[0];
+        assert!(line.contains("1.00x in time") && line.contains("2.00x in rays"), "{line}");
+        // At the baseline's 16-spp error, rr takes the same time and half the rays.
+        let reach = report.reach_lines();
+        assert!(reach[0].contains("simd/plain at 16 spp (0.25000"), "{reach:?}");
+        assert!(reach[1].contains("1.00x the time") && reach[1].contains("0.50x the rays"), "{reach:?}");
+        assert!(report.markdown().contains("- simd/rr: 16.000 s"), "{}", report.markdown());
+        assert!(report.svg().unwrap().contains("simd/rr"));
+        assert_eq!(report.csv().lines().count(), 5);
+    }
+
+    #[test]
+    fn interpolation_is_log_log() {
+        let c = Curve { label: "c".into(), points: vec![(1.0, 1.0), (100.0, 0.01)] };
+        assert!((c.error_at(10.0).unwrap() - 0.1).abs() < 1e-12);
+        assert!((c.time_at(0.1).unwrap() - 10.0).abs() < 1e-9);
+        assert_eq!(c.error_at(1000.0), None);
+        assert_eq!(c.time_at(0.001), None);
+        // A curve that flattens (adaptive sampling at its threshold) is read
+        // at its first crossing.
+        let flat = Curve { label: "f".into(), points: vec![(1.0, 1.0), (2.0, 0.5), (4.0, 0.6), (8.0, 0.4)] };
+        assert_eq!(flat.time_at(0.5), Some(2.0));
+        assert!(flat.time_at(0.55).unwrap() < 2.0);
+    }
+
+    #[test]
+    fn metrics_of_known_images() {
+        let r = Image { width: 2, height: 1, data: vec![[0.0, 0.0, 0.0], [1.0, 1.0, 1.0]] };
+        let x = Image { width: 2, height: 1, data: vec![[0.1, 0.1, 0.1], [1.0, 1.0, 1.3]] };
+        let m = error_metrics(&x, &r);
+        let want = ((3.0 * 0.01 + 0.09) / 6.0f64).sqrt();
+        assert!((m.rmse - want).abs() < 1e-6);
+        let want_rel = (3.0 * 0.01 / 0.01 + 0.09 / 1.01) / 6.0;
+        assert!((m.relmse - want_rel).abs() < 1e-5);
+        let want_signed = (3.0 * 0.1 / 0.01 + 0.3 / 1.01) / 6.0;
+        assert!((m.mean_rel_error - want_signed).abs() < 1e-5);
+        let zero = error_metrics(&r, &r);
+        assert_eq!((zero.rmse, zero.relmse, zero.mean_rel_error), (0.0, 0.0, 0.0));
+    }
+
+    #[test]
+    fn log_ticks() {
+        assert_eq!(ticks(0.003, 0.06), vec![0.005, 0.01, 0.02, 0.05]);
+        assert_eq!(ticks(0.9, 25.0), vec![1.0, 2.0, 5.0, 10.0, 20.0]);
+        assert!(ticks(0.0, 1.0).is_empty());
+        assert_eq!(ticks(0.003, 0.0045), vec![0.003, 0.0045]);
+        let labels: Vec<String> = [0.005, 0.02, 1.0, 20.0].iter().map(|&v| tick_label(v)).collect();
+        assert_eq!(labels, ["0.005", "0.02", "1", "20"]);
+    }
+
+    #[test]
+    fn reference_seed_differs() {
+        for s in [0u64, 1, 42, u64::MAX] {
+            assert_ne!(reference_seed(s), s);
+        }
+    }
+
+    #[test]
+    fn bad_configs_name_their_flag() {
+        let good = Config {
+            settings: Settings { width: 8, height: 4, spp: 1, max_depth: 5, seed: 0 },
+            kernels: vec![KernelChoice::Simd],
+            variants: vec![Variant::PLAIN],
+            spp_list: vec![1, 2],
+            reference: Reference::Spp(4),
+            threads: Some(1),
+            tile: 16,
+            repeat: 1,
+            adaptive_min: 16,
+            at_spp: None,
+        };
+        good.validate().unwrap();
+        type Break = Box<dyn Fn(&mut Config)>;
+        let cases: Vec<(&str, Break)> = vec![
+            ("--kernels", Box::new(|c| c.kernels.clear())),
+            ("--kernels", Box::new(|c| c.kernels = vec![KernelChoice::Simd, KernelChoice::Simd])),
+            ("--variants", Box::new(|c| c.variants.clear())),
+            ("--variants", Box::new(|c| c.variants = vec![Variant::PLAIN, Variant::PLAIN])),
+            ("--spp-list", Box::new(|c| c.spp_list.clear())),
+            ("--spp-list", Box::new(|c| c.spp_list = vec![0, 1])),
+            ("--spp-list", Box::new(|c| c.spp_list = vec![4, 2])),
+            ("--reference-spp", Box::new(|c| c.reference = Reference::Spp(0))),
+            ("--repeat", Box::new(|c| c.repeat = 0)),
+            ("--at-spp", Box::new(|c| c.at_spp = Some(3))),
+            (
+                "--adaptive-min",
+                Box::new(|c| {
+                    c.variants = vec![Variant::parse("adaptive").unwrap()];
+                    c.adaptive_min = 1;
+                }),
+            ),
+        ];
+        for (flag, f) in cases {
+            let mut c = good.clone();
+            f(&mut c);
+            let e = c.validate().unwrap_err().to_string();
+            assert!(e.starts_with(&format!("{flag}:")), "{flag}: {e}");
+        }
+    }
+}
+

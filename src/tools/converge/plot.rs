@@ -1,0 +1,119 @@
+//! The log-log SVG plot of `rtow converge` (the `plot` feature: plotters).
+
+use super::Report;
+use crate::error::{Error, Result};
+
+fn ticks(lo: f64, hi: f64) -> Vec<f64> {
+    let mut out = Vec::new();
+    if !(lo > 0.0 && hi >= lo && hi.is_finite()) {
+        return out;
+    }
+    let mut d = lo.log10().floor() as i32;
+    while d <= hi.log10().ceil() as i32 {
+        for m in [1.0, 2.0, 5.0] {
+            let v = m * 10f64.powi(d);
+            if v >= lo && v <= hi {
+                out.push(v);
+            }
+        }
+        d += 1;
+    }
+    if out.len() < 2 {
+        out = vec![lo, hi];
+    }
+    out
+}
+
+/// A tick value with as many decimals as it needs (0.005, 0.02, 1, 20).
+fn tick_label(v: f64) -> String {
+    let decimals = if v > 0.0 { (-v.log10().floor()).max(0.0) as usize } else { 0 };
+    format!("{v:.decimals$}")
+}
+
+/// A configuration's measurements as (seconds, RMSE) points, in sample-count order.
+impl Report {
+
+    /// The log-log plot of RMSE against seconds, as SVG text.
+    pub fn svg(&self) -> Result<String> {
+        use plotters::prelude::*;
+        let curves = self.curves();
+        let mut pts: Vec<(f64, f64)> = curves.iter().flat_map(|c| c.usable()).collect();
+        let empty = pts.is_empty();
+        if empty {
+            // Nothing to draw (e.g. a scene without noise: every error is 0);
+            // still write a plot that says so rather than fail after measuring.
+            pts = vec![(1e-3, 1e-3), (1.0, 1.0)];
+        }
+        let bound = |f: fn(&(f64, f64)) -> f64, lo: bool| {
+            let v = pts.iter().map(f);
+            if lo {
+                v.reduce(f64::min).unwrap_or(1.0)
+            } else {
+                v.reduce(f64::max).unwrap_or(1.0)
+            }
+        };
+        let (t0, t1) = (bound(|p| p.0, true) / 1.3, bound(|p| p.0, false) * 1.3);
+        let (e0, e1) = (bound(|p| p.1, true) / 1.3, bound(|p| p.1, false) * 1.3);
+        let mut svg = String::new();
+        {
+            let root = SVGBackend::with_string(&mut svg, (820, 560)).into_drawing_area();
+            let plot_err = |e: &dyn std::fmt::Display| Error::Input(format!("plot: {e}"));
+            root.fill(&WHITE).map_err(|e| plot_err(&e))?;
+            let title = format!(
+                "{} {}x{}: RMSE against render time (log-log){}",
+                self.scene,
+                self.width,
+                self.height,
+                if empty { ": no measurement has a positive error" } else { "" }
+            );
+            let mut chart = ChartBuilder::on(&root)
+                .caption(title, ("sans-serif", 20))
+                .margin(12)
+                .x_label_area_size(44)
+                .y_label_area_size(70)
+                .build_cartesian_2d(
+                    (t0..t1).log_scale().with_key_points(ticks(t0, t1)),
+                    (e0..e1).log_scale().with_key_points(ticks(e0, e1)),
+                )
+                .map_err(|e| plot_err(&e))?;
+            chart
+                .configure_mesh()
+                .x_desc("render time (s)")
+                .y_desc("RMSE vs reference")
+                .x_label_formatter(&|v| tick_label(*v))
+                .y_label_formatter(&|v| tick_label(*v))
+                .draw()
+                .map_err(|e| plot_err(&e))?;
+            let palette = [
+                RGBColor(31, 119, 180),
+                RGBColor(255, 127, 14),
+                RGBColor(44, 160, 44),
+                RGBColor(214, 39, 40),
+                RGBColor(148, 103, 189),
+                RGBColor(140, 86, 75),
+                RGBColor(227, 119, 194),
+                RGBColor(127, 127, 127),
+            ];
+            for (i, c) in curves.iter().enumerate() {
+                let col = palette[i % palette.len()];
+                let p = c.usable();
+                chart
+                    .draw_series(LineSeries::new(p.clone(), col.stroke_width(2)))
+                    .map_err(|e| plot_err(&e))?
+                    .label(c.label.clone())
+                    .legend(move |(x, y)| PathElement::new(vec![(x, y), (x + 20, y)], col.stroke_width(2)));
+                chart.draw_series(p.iter().map(|&q| Circle::new(q, 3, col.filled()))).map_err(|e| plot_err(&e))?;
+            }
+            chart
+                .configure_series_labels()
+                .background_style(WHITE.mix(0.85))
+                .border_style(BLACK)
+                .position(SeriesLabelPosition::UpperRight)
+                .draw()
+                .map_err(|e| plot_err(&e))?;
+            root.present().map_err(|e| plot_err(&e))?;
+        }
+        Ok(svg)
+    }
+
+}

@@ -1,0 +1,238 @@
+//! The outputs of `rtow converge`: CSV, markdown, the comparison lines, files.
+
+use super::curve::{compare, Comparison, Cost, Curve};
+use super::Report;
+use crate::error::{Error, Result};
+use crate::settings::KernelChoice;
+use std::fmt::Write as _;
+use std::path::{Path, PathBuf};
+
+impl Report {
+    /// One curve per (kernel, variant), in the order measured.
+    pub fn curves(&self) -> Vec<Curve> {
+        self.curves_by(Cost::Seconds)
+    }
+
+    /// One curve per (kernel, variant) with `cost` on the horizontal axis.
+    pub fn curves_by(&self, cost: Cost) -> Vec<Curve> {
+        let mut out: Vec<Curve> = Vec::new();
+        for r in &self.rows {
+            let label = r.label();
+            let x = match cost {
+                Cost::Seconds => r.seconds,
+                Cost::Rays => r.rays as f64,
+            };
+            match out.iter_mut().find(|c| c.label == label) {
+                Some(c) => c.points.push((x, r.rmse)),
+                None => out.push(Curve { label, points: vec![(x, r.rmse)] }),
+            }
+        }
+        out
+    }
+
+    /// Every configuration against the first one, and, for every other kernel,
+    /// its variants against its own first variant.
+    pub fn comparisons(&self) -> Vec<Comparison> {
+        self.comparisons_by(Cost::Seconds)
+    }
+
+    /// [`Report::comparisons`] with `cost` in place of seconds.
+    pub fn comparisons_by(&self, cost: Cost) -> Vec<Comparison> {
+        let curves = self.curves_by(cost);
+        let mut out = Vec::new();
+        let Some(first) = curves.first() else {
+            return out;
+        };
+        for c in &curves[1..] {
+            out.push(compare(first, c));
+        }
+        let mut kernels: Vec<KernelChoice> = Vec::new();
+        for r in &self.rows {
+            if !kernels.contains(&r.kernel) {
+                kernels.push(r.kernel);
+            }
+        }
+        for k in kernels.iter().skip(1) {
+            let prefix = format!("{}/", k.name());
+            let own: Vec<&Curve> = curves.iter().filter(|c| c.label.starts_with(&prefix)).collect();
+            for c in own.iter().skip(1) {
+                out.push(compare(own[0], c));
+            }
+        }
+        out
+    }
+
+    pub fn csv(&self) -> String {
+        let mut s = String::from(
+            "scene,width,height,kernel,variant,spp,seconds,rays,samples,mrays_per_s,rmse,relmse,mean_rel_error,efficiency,image_hash\n",
+        );
+        for r in &self.rows {
+            let _ = writeln!(
+                s,
+                "{},{},{},{},{},{},{:.6},{},{},{:.4},{:.6e},{:.6e},{:.6e},{:.6e},{}",
+                self.scene,
+                self.width,
+                self.height,
+                r.kernel.name(),
+                r.variant.name(),
+                r.spp,
+                r.seconds,
+                r.rays,
+                r.samples,
+                r.rays as f64 / r.seconds / 1e6,
+                r.rmse,
+                r.relmse,
+                r.mean_rel_error,
+                r.efficiency(),
+                r.image_hash
+            );
+        }
+        s
+    }
+
+    /// Lines describing the comparisons, for the terminal and the markdown file.
+    pub fn comparison_lines(&self) -> Vec<String> {
+        let by_rays = self.comparisons_by(Cost::Rays);
+        self.comparisons()
+            .iter()
+            .zip(&by_rays)
+            .map(|(c, r)| {
+                let ee = match c.equal_error {
+                    Some((e, x)) => format!("equal error (RMSE {e:.4}): {x:.2}x in time"),
+                    None => "equal error: curves do not overlap in time".into(),
+                };
+                let er = match r.equal_error {
+                    Some((e, x)) => format!("{x:.2}x in rays (RMSE {e:.4})"),
+                    None => "curves do not overlap in rays".into(),
+                };
+                let et = match c.equal_time {
+                    Some((t, x)) => format!("equal time ({t:.3} s): MSE ratio {x:.2}x"),
+                    None => "equal time: time ranges do not overlap".into(),
+                };
+                format!("{} vs {}: {ee}, {er}; {et}", c.other, c.base)
+            })
+            .collect()
+    }
+
+    /// With `at_spp` set: what every other configuration needs to reach the
+    /// RMSE that the baseline (the first configuration) measured at `at_spp`.
+    pub fn reach_lines(&self) -> Vec<String> {
+        let Some(n) = self.at_spp else {
+            return vec![];
+        };
+        let (by_time, by_rays) = (self.curves(), self.curves_by(Cost::Rays));
+        let Some(base) = by_time.first() else {
+            return vec![];
+        };
+        let Some(b) = self.rows.iter().find(|r| r.label() == base.label && r.spp == n) else {
+            return vec![];
+        };
+        let mut out = vec![format!(
+            "to reach the RMSE of {} at {n} spp ({:.5}, {:.3} s, {:.2}M rays):",
+            b.label(),
+            b.rmse,
+            b.seconds,
+            b.rays as f64 / 1e6
+        )];
+        for (ct, cr) in by_time.iter().zip(&by_rays).skip(1) {
+            out.push(match (ct.time_at(b.rmse), cr.time_at(b.rmse)) {
+                (Some(t), Some(r)) => format!(
+                    "  {}: {t:.3} s ({:.2}x the time), {:.2}M rays ({:.2}x the rays)",
+                    ct.label,
+                    t / b.seconds,
+                    r / 1e6,
+                    r / b.rays as f64
+                ),
+                _ => format!("  {}: does not reach it at the measured sample counts", ct.label),
+            });
+        }
+        out
+    }
+
+    /// Kernels that rendered the same variant and spp to different images
+    /// (they must not: both kernels are one estimator).
+    pub fn kernel_mismatches(&self) -> Vec<String> {
+        let mut out = Vec::new();
+        for (i, a) in self.rows.iter().enumerate() {
+            for b in &self.rows[i + 1..] {
+                if a.kernel != b.kernel && a.variant == b.variant && a.spp == b.spp && a.image_hash != b.image_hash {
+                    out.push(format!("{} and {} differ at {} spp ({})", a.label(), b.label(), a.spp, a.variant.name()));
+                }
+            }
+        }
+        out
+    }
+
+    pub fn markdown(&self) -> String {
+        let mut s = format!(
+            "# Run time against error: {} ({}x{}, depth {}, seed {})\n\nReference: {}. Seconds: wall time of the render \
+             (scene preparation apart), the fastest of {} run(s), {} thread(s). Error against the reference: RMSE and relMSE \
+             of the linear image; mean signed rel. error = mean of (x - r) / (r + 0.01), zero in expectation without bias.\n\n",
+            self.scene, self.width, self.height, self.max_depth, self.seed, self.reference, self.repeat, self.threads
+        );
+        s += "| kernel | variant | spp | seconds | Mrays/s | samples/px | RMSE | relMSE | mean signed rel. error | efficiency 1/(MSE s) |\n";
+        s += "|---|---|---:|---:|---:|---:|---:|---:|---:|---:|\n";
+        let px = (self.width as f64 * self.height as f64).max(1.0);
+        for r in &self.rows {
+            let _ = writeln!(
+                s,
+                "| {} | {} | {} | {:.3} | {:.2} | {:.1} | {:.5} | {:.3e} | {:+.5} | {:.4e} |",
+                r.kernel.name(),
+                r.variant.name(),
+                r.spp,
+                r.seconds,
+                r.rays as f64 / r.seconds / 1e6,
+                r.samples as f64 / px,
+                r.rmse,
+                r.relmse,
+                r.mean_rel_error,
+                r.efficiency()
+            );
+        }
+        let reach = self.reach_lines();
+        if let Some((head, rest)) = reach.split_first() {
+            let _ = writeln!(s, "\n{}\n", head.replace("to reach", "To reach"));
+            for l in rest {
+                let _ = writeln!(s, "- {}", l.trim_start());
+            }
+        }
+        let lines = self.comparison_lines();
+        if !lines.is_empty() {
+            s +=
+                "\nSpeedups (log-log interpolation between measured sample counts; in rays: the same with rays traced \
+                  in place of seconds):\n\n";
+            for l in lines {
+                let _ = writeln!(s, "- {l}");
+            }
+        }
+        s
+    }
+    /// Writes `<scene>.csv`, `<scene>.md` and (with the `plot` feature) `<scene>.svg` into `dir` (created
+    /// if missing), and `<scene>-reference.exr` if the run rendered its
+    /// reference; returns their paths.
+    pub fn write(&self, dir: &Path) -> Result<Vec<PathBuf>> {
+        std::fs::create_dir_all(dir)
+            .map_err(|e| Error::Output { path: dir.to_path_buf(), message: format!("--out: {e}") })?;
+        let stem: String = self
+            .scene
+            .chars()
+            .map(|c| if c.is_ascii_alphanumeric() || c == '-' || c == '_' { c } else { '_' })
+            .collect();
+        let mut files = vec![("csv", self.csv()), ("md", self.markdown())];
+        #[cfg(feature = "plot")]
+        files.push(("svg", self.svg()?));
+        let mut paths = Vec::new();
+        for (ext, text) in files {
+            let p = dir.join(format!("{stem}.{ext}"));
+            crate::output::write_atomic(&p, text.as_bytes())?;
+            paths.push(p);
+        }
+        if let Some(img) = &self.rendered_reference {
+            let p = dir.join(format!("{stem}-reference.exr"));
+            img.save(&p, 1.0)?;
+            paths.push(p);
+        }
+        Ok(paths)
+    }
+}
+

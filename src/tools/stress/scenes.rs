@@ -1,0 +1,398 @@
+//! The scene checks: stress presets rendered by the real renderer (every
+//! kernel and accelerator, with Russian roulette and adaptive sampling too)
+//! under [`StressProbe`], every ray judged by the f64 oracle against every
+//! sphere; and image comparisons (scaled scenes against the unscaled one, the
+//! horizon against its analytic colour, the far camera against the same rays
+//! started near the scene).
+
+use super::oracle::*;
+use super::report::Tally;
+use super::sweeps::{add, classify_spawn};
+use super::{dir32, finite3, v32, v64, Fnv};
+use crate::error::{Error, Result};
+use crate::film::Image;
+use crate::geometry::{Spheres, MISS};
+use crate::plan::Prepared;
+use crate::probe::{PathId, Probe};
+use crate::real::Real;
+use crate::render::{render, render_probed};
+use crate::scene::{self, Material, Scene};
+use crate::settings::{KernelChoice, RenderOptions, Settings};
+use crate::vec3::V3;
+use glam::DVec3;
+use std::collections::HashMap;
+
+/// The sphere a ray just left: its index and the outward unit normal the kernel used.
+#[derive(Clone, Copy, Debug)]
+struct Leaving {
+    sphere: u32,
+    m: DVec3,
+    r_abs: f64,
+}
+
+impl Leaving {
+    fn new(sphere: u32, n: V3<f32>, r: f32, front: bool) -> Self {
+        let sigma = r.signum() as f64 * if front { 1.0 } else { -1.0 };
+        Leaving { sphere, m: (v64(n) * sigma).normalize(), r_abs: r.abs() as f64 }
+    }
+}
+
+/// Judges every ray of a scene against every sphere in f64.
+pub(super) struct SceneOracle {
+    c: Vec<DVec3>,
+    r: Vec<f64>,
+}
+
+impl SceneOracle {
+    pub(super) fn new(s: &Spheres) -> Self {
+        SceneOracle {
+            c: (0..s.len).map(|i| DVec3::new(s.cx[i] as f64, s.cy[i] as f64, s.cz[i] as f64)).collect(),
+            r: (0..s.len).map(|i| s.r[i] as f64).collect(),
+        }
+    }
+
+    /// Checks one traced ray: `hit`/`t` is the kernel's closest hit, `front` its
+    /// front/back face there, `prev` the surface the ray left.
+    fn check(&self, t: &mut Tally, o: V3<f32>, d: V3<f32>, hit: u32, th: f32, front: bool, prev: Option<Leaving>) {
+        if !finite3(o) || !finite3(d) || (hit != MISS && !th.is_finite()) {
+            t.nan += 1;
+            return;
+        }
+        t.rays += 1;
+        if let Some(lv) = prev {
+            if hit == lv.sphere {
+                let mut probe = Tally::default();
+                classify_spawn(&mut probe, lv.m, lv.r_abs, d, true, th);
+                if probe.rehits > 0 || probe.wrong > 0 {
+                    t.rehits += probe.rehits;
+                    t.wrong += probe.wrong;
+                    return;
+                }
+            }
+        }
+        let ray = RayF64::new(o, d);
+        let th64 = th as f64;
+        let mut verdict_k = Verdict::Wrong;
+        let mut tol_k = 0.0;
+        let mut truth_k = None;
+        let (mut best, mut best_tol) = (f64::INFINITY, 0.0);
+        let mut any_in_band = false;
+        for j in 0..self.c.len() {
+            let tr = Truth::new(&ray, self.c[j], self.r[j]);
+            if j as u32 == hit {
+                verdict_k = tr.judge(true, th64);
+                tol_k = tr.t_tol(th64);
+                truth_k = Some(tr);
+            } else if tr.grazing() {
+                any_in_band = true;
+            } else if let Some(tj) = tr.required {
+                if tj < best {
+                    best = tj;
+                    best_tol = tr.t_tol(tj);
+                }
+            }
+        }
+        let verdict = if hit == MISS {
+            if best.is_finite() {
+                Verdict::Wrong
+            } else if any_in_band {
+                Verdict::InBand
+            } else {
+                Verdict::Right
+            }
+        } else if verdict_k == Verdict::Wrong || best < th64 - (tol_k + best_tol) {
+            Verdict::Wrong
+        } else {
+            verdict_k
+        };
+        match verdict {
+            Verdict::Wrong => t.wrong += 1,
+            Verdict::InBand => t.in_band += 1,
+            Verdict::Right => {}
+        }
+        if let Some(tr) = truth_k {
+            let c = self.c[hit as usize];
+            let dist = ((ray.at(th64) - c).length() - tr.r).abs();
+            t.err(dist, tr.r, Some(tr.dist_bound(th64)), verdict == Verdict::InBand);
+            if verdict_k == Verdict::Right {
+                if let Some(fo) = tr.nearest(th64).and_then(|i| tr.front_at(&ray, c, i)) {
+                    if fo != front {
+                        t.faces += 1;
+                    }
+                }
+            }
+        }
+    }
+}
+
+/// The state of one path between its probe events.
+#[derive(Default)]
+struct PathLog {
+    /// The surface the path's current ray left.
+    prev: Option<Leaving>,
+    /// A hit waiting for its shading (front face) to be judged.
+    pending: Option<(V3<f32>, V3<f32>, u32, f32)>,
+    /// Hash of every ray of the path (origin, direction, hit, t).
+    hash: Fnv,
+}
+
+/// `rtow stress`'s probe: judges every ray a real render traces against the
+/// f64 oracle, checks every spawned ray for a re-hit of the surface it left,
+/// and hashes every ray path by path (so kernels and accelerators can be
+/// compared ray for ray). Optionally moves camera rays along themselves (the
+/// far camera's reference).
+pub(super) struct StressProbe<'a> {
+    oracle: &'a SceneOracle,
+    shift: Option<&'a (dyn Fn(V3<f32>, V3<f32>) -> V3<f32> + Sync)>,
+    paths: HashMap<(u32, u32), PathLog>,
+    tally: Tally,
+}
+
+impl<'a> StressProbe<'a> {
+    pub(super) fn new(oracle: &'a SceneOracle, shift: Option<&'a (dyn Fn(V3<f32>, V3<f32>) -> V3<f32> + Sync)>) -> Self {
+        StressProbe { oracle, shift, paths: HashMap::new(), tally: Tally::default() }
+    }
+}
+
+fn lanes<R: Real>(live: u32) -> impl Iterator<Item = usize> {
+    (0..R::LANES).filter(move |k| live & (1 << k) != 0)
+}
+
+fn lane3<R: Real>(v: V3<R>, k: usize) -> V3<f32> {
+    V3::new(v.x.lane(k), v.y.lane(k), v.z.lane(k))
+}
+
+impl Probe for StressProbe<'_> {
+    const PATHS: bool = true;
+
+    fn camera<R: Real>(&mut self, _id: PathId<R>, o: V3<R>, d: V3<R>, _live: u32) -> V3<R> {
+        match self.shift {
+            None => o,
+            Some(f) => {
+                let moved: Vec<V3<f32>> = (0..R::LANES).map(|k| f(lane3(o, k), lane3(d, k))).collect();
+                V3::new(R::from_fn(|k| moved[k].x), R::from_fn(|k| moved[k].y), R::from_fn(|k| moved[k].z))
+            }
+        }
+    }
+
+    fn traced<R: Real>(&mut self, id: PathId<R>, o: V3<R>, d: V3<R>, hit: R::U32, t: R, live: u32) {
+        for k in lanes::<R>(live) {
+            let key = (R::lane_u(id.pixel, k), R::lane_u(id.sample, k));
+            let (o, d, hit, t) = (lane3(o, k), lane3(d, k), R::lane_u(hit, k), t.lane(k));
+            let log = self.paths.entry(key).or_default();
+            log.hash.v(o);
+            log.hash.v(d);
+            log.hash.u32(hit);
+            log.hash.f(t);
+            if hit == MISS {
+                self.oracle.check(&mut self.tally, o, d, hit, t, false, log.prev);
+            } else {
+                log.pending = Some((o, d, hit, t));
+            }
+        }
+    }
+
+    fn shaded<R: Real>(&mut self, id: PathId<R>, _sphere: R::U32, radius: R, n: V3<R>, front: R::Mask, live: u32) {
+        let front = R::mask_bits(front);
+        for k in lanes::<R>(live) {
+            let key = (R::lane_u(id.pixel, k), R::lane_u(id.sample, k));
+            let log = self.paths.entry(key).or_default();
+            let Some((o, d, hit, t)) = log.pending.take() else {
+                self.tally.wrong += 1; // a shading without its ray: the probe's events are out of order
+                continue;
+            };
+            let f = front & (1 << k) != 0;
+            self.oracle.check(&mut self.tally, o, d, hit, t, f, log.prev);
+            log.prev = Some(Leaving::new(hit, lane3(n, k), radius.lane(k), f));
+        }
+    }
+}
+
+/// What a probed render of a scene found.
+pub(super) struct Traced {
+    pub image: Image,
+    pub tally: Tally,
+    /// Hash of every ray, path by path in (pixel, sample) order.
+    pub hash: u64,
+    pub rays: u64,
+    pub rejected: u64,
+}
+
+/// Renders `scene` with the real renderer and the stress probe.
+pub(super) fn trace(
+    scene: &Scene,
+    s: Settings,
+    opts: RenderOptions,
+    oracle: &SceneOracle,
+    shift: Option<&(dyn Fn(V3<f32>, V3<f32>) -> V3<f32> + Sync)>,
+) -> Result<Traced> {
+    let (r, probes) = render_probed(scene, s, opts, None, &|| StressProbe::new(oracle, shift))?;
+    let mut tally = Tally::default();
+    let mut paths: Vec<((u32, u32), u64)> = Vec::new();
+    for p in probes {
+        add(&mut tally, &p.tally);
+        paths.extend(p.paths.into_iter().map(|(k, v)| (k, v.hash.0)));
+    }
+    paths.sort_unstable();
+    let mut h = Fnv::new();
+    for (_, ph) in paths {
+        h.u32((ph >> 32) as u32);
+        h.u32(ph as u32);
+    }
+    Ok(Traced { image: r.image, tally, hash: h.0, rays: r.stats.rays, rejected: r.stats.rejected_samples })
+}
+
+/// Differences below this (linear colour, about 1/40 of an 8-bit step at mid
+/// grey) pass an image comparison whatever their z: renders with the same seed
+/// share their random numbers, so the rounding of scaled coordinates (~1e-6
+/// here) is "significant" without being visible.
+pub const COLOUR_FLOOR: f64 = 1e-4;
+
+/// Max z of the difference `a - b` (per channel), over the whole image and over
+/// blocks of `block` x `block` pixels, after the floor: `(|mean| - COLOUR_FLOOR)+ / se`.
+/// Pixels are independent (each has its own random streams), so under "same
+/// expected image" the mean difference over n pixels has standard error sd / sqrt(n).
+pub(super) fn compare(a: &Image, b: &Image, block: u32) -> (f64, f64) {
+    fn z(v: &[f64]) -> f64 {
+        let n = v.len() as f64;
+        if v.len() < 2 {
+            return 0.0;
+        }
+        let mean = v.iter().sum::<f64>() / n;
+        let excess = (mean.abs() - COLOUR_FLOOR).max(0.0);
+        let var = v.iter().map(|x| (x - mean) * (x - mean)).sum::<f64>() / (n - 1.0);
+        if var == 0.0 {
+            return if excess == 0.0 { 0.0 } else { f64::INFINITY };
+        }
+        excess / (var / n).sqrt()
+    }
+    let (w, h) = (a.width, a.height);
+    let diff = |x: u32, y: u32, ch: usize| a.get(x, y)[ch] as f64 - b.get(x, y)[ch] as f64;
+    let mut global: f64 = 0.0;
+    let mut blocks: f64 = 0.0;
+    for ch in 0..3 {
+        let all: Vec<f64> = (0..h).flat_map(|y| (0..w).map(move |x| (x, y))).map(|(x, y)| diff(x, y, ch)).collect();
+        global = global.max(z(&all));
+        for by in (0..h).step_by(block as usize) {
+            for bx in (0..w).step_by(block as usize) {
+                let v: Vec<f64> = (by..(by + block).min(h))
+                    .flat_map(|y| (bx..(bx + block).min(w)).map(move |x| (x, y)))
+                    .map(|(x, y)| diff(x, y, ch))
+                    .collect();
+                if v.len() >= 16 {
+                    blocks = blocks.max(z(&v));
+                }
+            }
+        }
+    }
+    (global, blocks)
+}
+
+pub(super) fn mean_colour(img: &Image) -> [f64; 3] {
+    let n = img.data.len().max(1) as f64;
+    let mut m = [0.0; 3];
+    for p in &img.data {
+        for c in 0..3 {
+            m[c] += p[c] as f64 / n;
+        }
+    }
+    m
+}
+
+pub(super) fn preset(name: &str) -> Result<Scene> {
+    scene::preset(name).ok_or_else(|| Error::Input(format!("stress: preset '{name}' is missing")))
+}
+
+pub(super) fn settings(scene: &Scene, w: u32, h: u32, spp: u32, seed: u64) -> Settings {
+    let mut s = crate::default_settings(scene);
+    s.width = w;
+    s.height = h;
+    s.spp = spp;
+    s.seed = seed;
+    s
+}
+
+pub(super) fn render_with(scene: &Scene, s: Settings, kernel: KernelChoice, threads: Option<usize>) -> Result<crate::Rendered> {
+    render(scene, s, RenderOptions { kernel, threads, tile: 16, ..RenderOptions::default() }, None)
+}
+
+/// The horizon scene's ground against its analytic colour: a lambertian
+/// sphere seen from just above is a plane to the camera, and every point of a
+/// convex diffuse surface under this sky has the expected colour
+/// `albedo (horizon (1 - a) + zenith a)`, `a = 1/2 + n.y / 3` (the cosine-weighted
+/// mean of `d.y` is `2/3 n.y`; scattered rays leave a convex sphere for good).
+/// Returns max |z| over the ground pixels, whole and in three row bands.
+pub(super) fn horizon_check(scene: &Scene, prep: &Prepared, img: &Image) -> Result<(f64, usize, [f64; 3], [f64; 3])> {
+    let sph = scene.spheres.first().ok_or_else(|| Error::Input("stress-horizon has no sphere".into()))?;
+    let albedo = match sph.material {
+        Material::Lambertian { albedo } => albedo,
+        _ => return Err(Error::Input("stress-horizon's ground must be lambertian".into())),
+    };
+    let c = DVec3::from_array(sph.center.map(f64::from));
+    let r = sph.radius as f64;
+    let cam = &prep.camera;
+    let e = DVec3::from_array(cam.center.map(f64::from));
+    let to00 = DVec3::from_array(cam.to_pixel00.map(f64::from));
+    let du = DVec3::from_array(cam.du.map(f64::from));
+    let dv = DVec3::from_array(cam.dv.map(f64::from));
+    // A pixel is ground when every ray through it (and through the pixel above) hits the sphere clearly.
+    // "Clearly" = outside the kernel's rounding band (4x), for the f32 ray the camera makes.
+    let clear_hit = |x: f64, y: f64| {
+        let ray = RayF64::new(v32(e), dir32(to00 + du * x + dv * y));
+        let tr = Truth::new(&ray, c, r);
+        tr.required.is_some() && tr.disc > 4.0 * tr.e_disc
+    };
+    let sky = prep.sky;
+    let a = 0.5 + 1.0 / 3.0;
+    let want: [f64; 3] =
+        std::array::from_fn(|ch| albedo[ch] as f64 * (sky.horizon[ch] as f64 * (1.0 - a) + sky.zenith[ch] as f64 * a));
+    let mut rows: Vec<(u32, Vec<[f32; 3]>)> = Vec::new();
+    for y in 0..img.height {
+        let v: Vec<[f32; 3]> = (0..img.width)
+            .filter(|&x| {
+                let (x, y) = (x as f64, y as f64);
+                [(-0.5, -1.5), (0.5, -1.5), (-0.5, 0.5), (0.5, 0.5)].iter().all(|(sx, sy)| clear_hit(x + sx, y + sy))
+            })
+            .map(|x| img.get(x, y))
+            .collect();
+        if !v.is_empty() {
+            rows.push((y, v));
+        }
+    }
+    let z = |px: &[[f32; 3]]| -> f64 {
+        let n = px.len() as f64;
+        if px.len() < 8 {
+            return 0.0;
+        }
+        (0..3)
+            .map(|ch| {
+                let mean = px.iter().map(|p| p[ch] as f64).sum::<f64>() / n;
+                let var = px.iter().map(|p| (p[ch] as f64 - mean).powi(2)).sum::<f64>() / (n - 1.0);
+                let se = (var / n).sqrt();
+                if se == 0.0 {
+                    // Every pixel the same (a channel the sky does not vary in): equal up to summation rounding.
+                    if (mean - want[ch]).abs() <= 1e-6 * want[ch].abs() {
+                        0.0
+                    } else {
+                        f64::INFINITY
+                    }
+                } else {
+                    ((mean - want[ch]) / se).abs()
+                }
+            })
+            .fold(0.0, f64::max)
+    };
+    let all: Vec<[f32; 3]> = rows.iter().flat_map(|(_, v)| v.iter().copied()).collect();
+    if all.len() < 32 {
+        return Err(Error::Input("stress-horizon: too few ground pixels to test".into()));
+    }
+    let mut zmax = z(&all);
+    let nb = rows.len().div_ceil(3).max(1);
+    for band in rows.chunks(nb) {
+        let v: Vec<[f32; 3]> = band.iter().flat_map(|(_, v)| v.iter().copied()).collect();
+        zmax = zmax.max(z(&v));
+    }
+    let n = all.len() as f64;
+    let mean: [f64; 3] = std::array::from_fn(|ch| all.iter().map(|p| p[ch] as f64).sum::<f64>() / n);
+    Ok((zmax, all.len(), mean, want))
+}
