@@ -30,8 +30,9 @@ pub mod probe;
 pub mod real;
 pub mod render;
 pub mod sampling;
-pub mod settings;
 pub mod scene;
+pub mod settings;
+pub mod shard;
 pub mod tools;
 pub mod vec3;
 

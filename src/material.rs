@@ -10,8 +10,8 @@
 
 use crate::real::Real;
 use crate::sampling::{unit_vector, Stream};
-use serde::Deserialize;
 use crate::vec3::V3;
+use serde::Deserialize;
 
 /// Material kinds, one wavefront queue each.
 #[derive(Clone, Copy, Debug, PartialEq, Eq, Hash, PartialOrd, Ord)]

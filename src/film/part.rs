@@ -133,7 +133,8 @@ impl Split {
         }
     }
 
-    fn describe(&self) -> String {
+    /// E.g. "shard 2/4 by rows".
+    pub fn describe(&self) -> String {
         match self.kind {
             SplitKind::None => "a whole render".into(),
             SplitKind::Samples => format!("shard {}/{} by samples", self.shard, self.of),
@@ -447,6 +448,37 @@ impl Part {
     }
 }
 
+/// Refuses (naming `p`) a part whose image is not `h0`'s (from `p0`): another
+/// scene, size, rtow version or setting. The sample count is not compared.
+pub fn same_image(p: &Path, h: &Header, p0: &Path, h0: &Header) -> Result<()> {
+    let a = p0.display();
+    let refuse =
+        |what: String| Error::Input(format!("{}: {what}; parts of different renders cannot be merged", p.display()));
+    if h.rtow != h0.rtow {
+        return Err(refuse(format!("written by rtow {}, {a} by rtow {}", h.rtow, h0.rtow)));
+    }
+    if h.scene_hash != h0.scene_hash {
+        return Err(refuse(format!(
+            "renders a different scene than {a} (scene hash {} against {})",
+            h.scene_hash, h0.scene_hash
+        )));
+    }
+    if (h.width, h.height) != (h0.width, h0.height) {
+        return Err(refuse(format!("is {}x{}, {a} is {}x{}", h.width, h.height, h0.width, h0.height)));
+    }
+    for name in h.settings.keys().chain(h0.settings.keys()) {
+        let (v, v0) = (h.settings.get(name), h0.settings.get(name));
+        if v != v0 {
+            let show = |v: Option<&String>| v.cloned().unwrap_or_else(|| "(unset)".into());
+            return Err(refuse(format!("rendered with {name} = {}, {a} with {name} = {}", show(v), show(v0))));
+        }
+    }
+    if h.key != h0.key {
+        return Err(refuse(format!("its image key {} differs from {a}'s {}", h.key, h0.key)));
+    }
+    Ok(())
+}
+
 /// Merges parts (with the paths they were read from, for messages) into the
 /// whole render's film. Refuses, naming the files: parts of different scenes
 /// or settings, parts of different splits, duplicate shards, and missing
@@ -459,36 +491,17 @@ pub fn merge(parts: &[(PathBuf, Part)]) -> Result<Part> {
     let h0 = &first.header;
     for (p, part) in &parts[1..] {
         let h = &part.header;
-        let a = p0.display();
-        let refuse = |what: String| {
-            Error::Input(format!("{}: {what}; parts of different renders cannot be merged", p.display()))
-        };
-        if h.rtow != h0.rtow {
-            return Err(refuse(format!("written by rtow {}, {a} by rtow {}", h.rtow, h0.rtow)));
-        }
-        if h.scene_hash != h0.scene_hash {
-            return Err(refuse(format!(
-                "renders a different scene than {a} (scene hash {} against {})",
-                h.scene_hash, h0.scene_hash
+        same_image(p, h, p0, h0)?;
+        if h.spp != h0.spp {
+            return Err(Error::Input(format!(
+                "{}: has {} samples per pixel, {} has {}; parts of different renders cannot be merged",
+                p.display(),
+                h.spp,
+                p0.display(),
+                h0.spp
             )));
         }
-        if (h.width, h.height) != (h0.width, h0.height) {
-            return Err(refuse(format!("is {}x{}, {a} is {}x{}", h.width, h.height, h0.width, h0.height)));
-        }
-        if h.spp != h0.spp {
-            return Err(refuse(format!("has {} samples per pixel, {a} has {}", h.spp, h0.spp)));
-        }
-        for name in h.settings.keys().chain(h0.settings.keys()) {
-            let (v, v0) = (h.settings.get(name), h0.settings.get(name));
-            if v != v0 {
-                let show = |v: Option<&String>| v.cloned().unwrap_or_else(|| "(unset)".into());
-                return Err(refuse(format!("rendered with {name} = {}, {a} with {name} = {}", show(v), show(v0))));
-            }
-        }
-        if h.key != h0.key {
-            return Err(refuse(format!("its image key {} differs from {a}'s {}", h.key, h0.key)));
-        }
-        let b = p.display();
+        let (a, b) = (p0.display(), p.display());
         if (h.split.kind, h.split.of) != (h0.split.kind, h0.split.of) {
             return Err(Error::Input(format!(
                 "{b} is {} but {a} is {}: parts of different splits overlap or leave gaps",

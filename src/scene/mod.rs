@@ -10,10 +10,10 @@ pub use file::{load_scene, save_scene, scene_from_str, scene_to_string, Format};
 pub use presets::{final_scene, preset, presets, Preset};
 
 use crate::error::{Error, Result};
+use crate::limits::MAX_SPHERES;
 pub use crate::material::Kind;
 pub use crate::plan::Mode;
 pub use crate::settings::RenderDefaults;
-use crate::limits::MAX_SPHERES;
 use serde::{Deserialize, Serialize};
 
 /// Written as `{"type": "<kind>", ...fields}`. Read through [`MaterialFields`]:

@@ -87,7 +87,12 @@ pub struct BenchReport {
 
 /// Renders `scene` `repeat` times with each kernel (median kept), then once
 /// more with the work counters on.
-pub fn run(scene: &Scene, name: &str, cfg: &Config, mut on_run: impl FnMut(Kernel, usize, &Stats)) -> Result<BenchReport> {
+pub fn run(
+    scene: &Scene,
+    name: &str,
+    cfg: &Config,
+    mut on_run: impl FnMut(Kernel, usize, &Stats),
+) -> Result<BenchReport> {
     cfg.validate()?;
     let mut entries = Vec::new();
     for &choice in &cfg.kernels {

@@ -101,4 +101,3 @@ pub fn compare(base: &Curve, other: &Curve) -> Comparison {
     };
     Comparison { base: base.label.clone(), other: other.label.clone(), equal_error, equal_time }
 }
-

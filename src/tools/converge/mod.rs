@@ -14,7 +14,6 @@
 //! - Comparisons interpolate each curve linearly in log-log (log seconds against
 //!   log RMSE, between consecutive sample counts).
 
-
 mod curve;
 mod metrics;
 #[cfg(feature = "plot")]
@@ -473,4 +472,3 @@ mod tests {
         }
     }
 }
-

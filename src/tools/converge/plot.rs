@@ -32,7 +32,6 @@ fn tick_label(v: f64) -> String {
 
 /// A configuration's measurements as (seconds, RMSE) points, in sample-count order.
 impl Report {
-
     /// The log-log plot of RMSE against seconds, as SVG text.
     pub fn svg(&self) -> Result<String> {
         use plotters::prelude::*;
@@ -115,5 +114,4 @@ impl Report {
         }
         Ok(svg)
     }
-
 }

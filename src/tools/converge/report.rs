@@ -235,4 +235,3 @@ impl Report {
         Ok(paths)
     }
 }
-

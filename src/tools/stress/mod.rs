@@ -44,8 +44,8 @@ use crate::estimator::{Adaptive, Estimator};
 use crate::film::Image;
 use crate::plan::Mode;
 use crate::prepare::prepare;
-use crate::scene;
 use crate::sampling::mix64;
+use crate::scene;
 use crate::settings::{AccelChoice, KernelChoice, RenderOptions};
 use crate::vec3::V3;
 use glam::DVec3;
@@ -54,7 +54,6 @@ use rand_xoshiro::Xoshiro256PlusPlus;
 use scenes::{compare, horizon_check, mean_colour, preset, render_with, settings, trace, SceneOracle};
 use std::time::Instant;
 use sweeps::{add, isect_sweep, self_sweep, Impl, OffsetRule};
-
 
 pub(super) fn v64(v: V3<f32>) -> DVec3 {
     DVec3::new(v.x as f64, v.y as f64, v.z as f64)
@@ -73,12 +72,6 @@ pub(super) fn dir32(v: DVec3) -> V3<f32> {
 pub(super) fn finite3(v: V3<f32>) -> bool {
     v.x.is_finite() && v.y.is_finite() && v.z.is_finite()
 }
-
-
-
-
-
-
 
 /// FNV-1a, to compare long streams of results between kernels.
 #[derive(Clone, Copy)]
@@ -199,7 +192,6 @@ impl Config {
         }
     }
 }
-
 
 /// Runs every sweep and scene; `progress` gets a line per finished part.
 pub fn run(cfg: &Config, progress: &mut dyn FnMut(&str)) -> Result<Report> {

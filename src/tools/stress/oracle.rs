@@ -7,7 +7,6 @@ use super::v64;
 use crate::vec3::V3;
 use glam::DVec3;
 
-
 pub const U: f64 = 1.0 / 16_777_216.0;
 
 /// Every first-order bound below is multiplied by this, for the higher-order
@@ -26,7 +25,6 @@ pub const TEXTBOOK_T_MIN: f32 = 0.001;
 /// comparison may show. Under the null hypothesis (same expected image) a
 /// |z| above 5 has a probability below 1e-5 per statistic.
 pub const Z_LIMIT: f64 = 5.0;
-
 
 /// A ray as f64, exactly the f32 values the kernel was given.
 #[derive(Clone, Copy, Debug)]

@@ -149,7 +149,10 @@ pub(super) struct StressProbe<'a> {
 }
 
 impl<'a> StressProbe<'a> {
-    pub(super) fn new(oracle: &'a SceneOracle, shift: Option<&'a (dyn Fn(V3<f32>, V3<f32>) -> V3<f32> + Sync)>) -> Self {
+    pub(super) fn new(
+        oracle: &'a SceneOracle,
+        shift: Option<&'a (dyn Fn(V3<f32>, V3<f32>) -> V3<f32> + Sync)>,
+    ) -> Self {
         StressProbe { oracle, shift, paths: HashMap::new(), tally: Tally::default() }
     }
 }
@@ -312,7 +315,12 @@ pub(super) fn settings(scene: &Scene, w: u32, h: u32, spp: u32, seed: u64) -> Se
     s
 }
 
-pub(super) fn render_with(scene: &Scene, s: Settings, kernel: KernelChoice, threads: Option<usize>) -> Result<crate::Rendered> {
+pub(super) fn render_with(
+    scene: &Scene,
+    s: Settings,
+    kernel: KernelChoice,
+    threads: Option<usize>,
+) -> Result<crate::Rendered> {
     render(scene, s, RenderOptions { kernel, threads, tile: 16, ..RenderOptions::default() }, None)
 }
 

@@ -27,7 +27,6 @@ fn pack8(v: &[V3<f32>; 8]) -> V3<f32x8> {
     V3::new(f32x8::new(v.map(|a| a.x)), f32x8::new(v.map(|a| a.y)), f32x8::new(v.map(|a| a.z)))
 }
 
-
 /// The configurations of the intersection sweep.
 #[derive(Clone, Copy, Debug, PartialEq, Eq)]
 pub enum IsectCase {
