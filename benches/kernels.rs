@@ -1,27 +1,34 @@
-//! criterion benchmarks: the scalar reference against the SIMD path.
+//! criterion benchmarks: the scalar reference against the SIMD path, at every
+//! lane width this build has (8; and 16 on AVX-512 builds).
 //!
-//! `cargo bench` (about two minutes on 2 cores). Groups:
+//! `cargo bench` (a few minutes on 2 cores). Groups:
 //! - `intersect`: closest hit over the final scene's spheres (brute force), one
-//!   fixed batch of rays, scalar one ray at a time against 8-wide packets;
+//!   fixed batch of rays, scalar one ray at a time against packets of 8 (and 16);
 //! - `render`: one 32x32 tile of the final scene at 2 spp, depth 50, per kernel
 //!   (brute force);
-//! - `accel`: the same tile, brute force against the BVH, for both kernels.
-//! Throughput is in rays (criterion's "elements").
+//! - `accel`: the same tile, brute force against the BVH (packets, and one ray
+//!   at a time), for every kernel.
+//! Throughput is in rays (criterion's "elements"). Renders run with the probe off (`()`).
 
-use criterion::{criterion_group, criterion_main, Criterion, Throughput};
+use criterion::{criterion_group, criterion_main, BenchmarkGroup, Criterion, Throughput};
+use rtow::estimator::Estimator;
 use rtow::film::TileFilm;
-use rtow::geometry::{closest_hit_scalar, closest_hit_x8};
-use rtow::kernel::{scalar, wavefront, Counters};
-use rtow::plan::{AccelChoice, Prepared, Settings};
+use rtow::geometry::closest_hit;
+use rtow::kernel::{scalar, wavefront};
+use rtow::plan::Prepared;
+use rtow::prepare::prepare;
+use rtow::real::Wide;
 use rtow::sampling::ScalarStream;
 use rtow::vec3::V3;
+use rtow::{AccelChoice, Settings};
 use std::hint::black_box;
 use std::time::Duration;
-use wide::f32x8;
+use wide::{f32x16, f32x8};
 
 fn prepared(spp: u32, accel: AccelChoice) -> Prepared {
     let scene = rtow::scene::final_scene();
-    Prepared::new(&scene, Settings { width: 400, height: 225, spp, max_depth: 50, seed: 1 }, accel).unwrap()
+    let s = Settings { width: 400, height: 225, spp, max_depth: 50, seed: 1 };
+    prepare(&scene, s, accel, Estimator::default()).unwrap()
 }
 
 /// 4096 camera rays of the final scene (jittered, through the lens), SoA.
@@ -38,6 +45,26 @@ fn rays(prep: &Prepared) -> [Vec<f32>; 6] {
     v
 }
 
+fn intersect_wide<W: Wide>(
+    g: &mut BenchmarkGroup<criterion::measurement::WallTime>,
+    prep: &Prepared,
+    r: &[Vec<f32>; 6],
+) {
+    let n = r[0].len();
+    g.bench_function(format!("simd{}", W::LANES), |b| {
+        b.iter(|| {
+            let mut acc = 0u32;
+            for i in (0..n).step_by(W::LANES) {
+                let o = V3::new(W::load(&r[0], i), W::load(&r[1], i), W::load(&r[2], i));
+                let d = V3::new(W::load(&r[3], i), W::load(&r[4], i), W::load(&r[5], i));
+                let (hit, _) = closest_hit::<W, ()>(&prep.spheres, o, d, &mut ());
+                acc = acc.wrapping_add(W::lane_u(hit, 0));
+            }
+            black_box(acc)
+        })
+    });
+}
+
 fn intersect(c: &mut Criterion) {
     let prep = prepared(1, AccelChoice::Brute);
     let r = rays(&prep);
@@ -50,79 +77,71 @@ fn intersect(c: &mut Criterion) {
             for i in 0..n {
                 let o = V3::new(r[0][i], r[1][i], r[2][i]);
                 let d = V3::new(r[3][i], r[4][i], r[5][i]);
-                acc = acc.wrapping_add(closest_hit_scalar(&prep.spheres, o, d).0);
+                acc = acc.wrapping_add(closest_hit(&prep.spheres, o, d, &mut ()).0);
             }
             black_box(acc)
         })
     });
-    g.bench_function("simd8", |b| {
-        let ld = |k: usize, i: usize| f32x8::new(r[k][i..i + 8].try_into().unwrap());
-        b.iter(|| {
-            let mut acc = wide::u32x8::splat(0);
-            for i in (0..n).step_by(8) {
-                let o = V3::new(ld(0, i), ld(1, i), ld(2, i));
-                let d = V3::new(ld(3, i), ld(4, i), ld(5, i));
-                acc += closest_hit_x8(&prep.spheres, o, d).0;
-            }
-            black_box(acc)
-        })
-    });
+    intersect_wide::<f32x8>(&mut g, &prep, &r);
+    if rtow::render::HAS_SIMD16 {
+        intersect_wide::<f32x16>(&mut g, &prep, &r);
+    }
     g.finish();
+}
+
+fn tile() -> TileFilm {
+    TileFilm::new(160, 96, 32, 32)
+}
+
+/// Benchmarks every kernel on the tile; `prefix` names the group's row.
+fn kernels(g: &mut BenchmarkGroup<criterion::measurement::WallTime>, prep: &Prepared, prefix: &str, scalar_too: bool) {
+    if scalar_too {
+        g.bench_function(format!("scalar{prefix}"), |b| {
+            b.iter(|| {
+                let mut t = tile();
+                scalar::render_tile(prep, &mut t, 0..prep.settings.spp, &mut ());
+                black_box(t.sum[0])
+            })
+        });
+    }
+    wide_kernel::<f32x8>(g, prep, prefix);
+    if rtow::render::HAS_SIMD16 {
+        wide_kernel::<f32x16>(g, prep, prefix);
+    }
+}
+
+fn wide_kernel<W: Wide>(g: &mut BenchmarkGroup<criterion::measurement::WallTime>, prep: &Prepared, prefix: &str) {
+    let mut ws = wavefront::Workspace::default();
+    g.bench_function(format!("simd{}{prefix}", W::LANES), |b| {
+        b.iter(|| {
+            let mut t = tile();
+            wavefront::render_tile::<W, ()>(prep, &mut ws, &mut t, 0..prep.settings.spp, &mut ());
+            black_box(t.sum[0])
+        })
+    });
+}
+
+/// Rays one tile traces (the same for every kernel).
+fn tile_rays(prep: &Prepared) -> u64 {
+    scalar::render_tile(prep, &mut tile(), 0..prep.settings.spp, &mut ())
 }
 
 fn render_tile(c: &mut Criterion) {
     let prep = prepared(2, AccelChoice::Brute);
-    let tile = || TileFilm::new(160, 96, 32, 32);
-    let mut counters = Counters::default();
-    scalar::render_tile(&prep, &mut tile(), &mut counters);
     let mut g = c.benchmark_group("render");
-    g.sample_size(10).measurement_time(Duration::from_secs(6)).throughput(Throughput::Elements(counters.rays));
-    g.bench_function("scalar", |b| {
-        b.iter(|| {
-            let mut t = tile();
-            scalar::render_tile(&prep, &mut t, &mut Counters::default());
-            black_box(t.sum[0])
-        })
-    });
-    let mut ws = wavefront::Workspace::default();
-    g.bench_function("simd", |b| {
-        b.iter(|| {
-            let mut t = tile();
-            wavefront::render_tile(&prep, &mut ws, &mut t, &mut Counters::default());
-            black_box(t.sum[0])
-        })
-    });
+    g.sample_size(10).measurement_time(Duration::from_secs(6)).throughput(Throughput::Elements(tile_rays(&prep)));
+    kernels(&mut g, &prep, "", true);
     g.finish();
 }
 
-/// Brute force against the BVH, for both kernels, on a tile of the final scene.
+/// Brute force against the BVH, for every kernel, on a tile of the final scene.
 fn accel(c: &mut Criterion) {
     let mut g = c.benchmark_group("accel");
-    let tile = || TileFilm::new(160, 96, 32, 32);
     for accel in [AccelChoice::Brute, AccelChoice::Bvh, AccelChoice::BvhRay] {
         let prep = prepared(2, accel);
-        let mut counters = Counters::default();
-        scalar::render_tile(&prep, &mut tile(), &mut counters);
-        g.sample_size(10).measurement_time(Duration::from_secs(4)).throughput(Throughput::Elements(counters.rays));
-        let name = format!("{accel:?}").to_lowercase();
-        if accel != AccelChoice::BvhRay {
-            // The scalar kernel walks the BVH one ray at a time either way.
-            g.bench_function(format!("scalar/{name}"), |b| {
-                b.iter(|| {
-                    let mut t = tile();
-                    scalar::render_tile(&prep, &mut t, &mut Counters::default());
-                    black_box(t.sum[0])
-                })
-            });
-        }
-        let mut ws = wavefront::Workspace::default();
-        g.bench_function(format!("simd/{name}"), |b| {
-            b.iter(|| {
-                let mut t = tile();
-                wavefront::render_tile(&prep, &mut ws, &mut t, &mut Counters::default());
-                black_box(t.sum[0])
-            })
-        });
+        g.sample_size(10).measurement_time(Duration::from_secs(4)).throughput(Throughput::Elements(tile_rays(&prep)));
+        // The scalar kernel walks the BVH one ray at a time either way.
+        kernels(&mut g, &prep, &format!("/{}", accel.name()), accel != AccelChoice::BvhRay);
     }
     g.finish();
 }

@@ -17,11 +17,14 @@
 //! Usage: `cargo run --release --example allocation_bound -- [SCENE] [WIDTH] [HEIGHT] [SPP] [SEED]`
 //! (defaults: final 200 113 128 77).
 
+use rtow::estimator::Estimator;
 use rtow::estimator::RELATIVE_ERROR_FLOOR;
-use rtow::kernel::{scalar, Counters};
-use rtow::plan::{AccelChoice, Prepared};
+use rtow::kernel::scalar;
+use rtow::prepare::prepare;
+use rtow::probe::PathId;
 use rtow::sampling::ScalarStream;
 use rtow::scene::preset;
+use rtow::AccelChoice;
 use rtow::Settings;
 
 struct Pixel {
@@ -50,7 +53,7 @@ fn main() {
         std::process::exit(2)
     }
     let settings = Settings { width: w, height: h, spp, max_depth: 50, seed };
-    let prep = match Prepared::new(&scene, settings, AccelChoice::Auto) {
+    let prep = match prepare(&scene, settings, AccelChoice::Auto, Estimator::default()) {
         Ok(p) => p,
         Err(e) => {
             eprintln!("error: {e}");
@@ -61,11 +64,13 @@ fn main() {
     for y in 0..h {
         for x in 0..w {
             let pixel = (y * w + x) as u64;
-            let mut c = Counters::default();
+            let mut rays = 0u64;
             let mut m = [[0.0f64; 2]; 3];
             for sample in 0..spp {
                 let mut rng = ScalarStream::for_path(seed, pixel, sample as u64);
-                let v = scalar::trace(&prep, x, y, &mut rng, &mut c);
+                let id = PathId { pixel: pixel as u32, sample };
+                let (v, n) = scalar::trace(&prep, x, y, id, &mut rng, &mut ());
+                rays += n as u64;
                 for k in 0..3 {
                     m[k][0] += v[k] as f64;
                     m[k][1] += v[k] as f64 * v[k] as f64;
@@ -74,7 +79,7 @@ fn main() {
             let n = spp as f64;
             let var = m.iter().map(|[s1, s2]| ((s2 - s1 * s1 / n) / (n - 1.0)).max(0.0)).sum::<f64>() / 3.0;
             let mean = m.iter().map(|[s1, _]| s1 / n).sum::<f64>() / 3.0;
-            pixels.push(Pixel { var, mean, cost: c.rays as f64 / n });
+            pixels.push(Pixel { var, mean, cost: rays as f64 / n });
         }
     }
     let p = pixels.len() as f64;

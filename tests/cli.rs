@@ -6,7 +6,7 @@
 mod bad_input;
 
 use rtow::scene;
-use rtow::{Image, KernelKind, RenderOptions, Settings};
+use rtow::{Image, KernelChoice, RenderOptions, Settings};
 use std::path::Path;
 use std::process::Command;
 
@@ -169,7 +169,7 @@ fn small_settings(scene: &scene::Scene) -> Settings {
     Settings { width: 32, height: 18, spp: 2, ..rtow::default_settings(scene) }
 }
 
-fn render_lib(scene: &scene::Scene, s: Settings, kernel: KernelKind) -> rtow::Rendered {
+fn render_lib(scene: &scene::Scene, s: Settings, kernel: KernelChoice) -> rtow::Rendered {
     let opts = RenderOptions { kernel, ..Default::default() };
     rtow::render(scene, s, opts, None).unwrap()
 }
@@ -180,7 +180,7 @@ fn a_render_writes_exactly_its_outputs_and_they_match_the_library() {
     let d = dir.path();
     let preset = scene::preset("ch08-fuzz").unwrap();
     let s = Settings { max_depth: 7, seed: 12345, ..small_settings(&preset) };
-    let lib = render_lib(&preset, s, KernelKind::Scalar);
+    let lib = render_lib(&preset, s, KernelChoice::Scalar);
     // Twice: once creating the outputs, once replacing them.
     for round in 0..2 {
         let r = rtow(
@@ -270,12 +270,17 @@ fn stats_json_reports_the_run() {
             "spp",
             "max_depth",
             "seed",
+            "lanes",
+            "work",
+            "image_hash",
         ] {
             assert!(o.contains_key(key), "{kernel}: no {key} in {text}");
         }
         let u = |k: &str| v[k].as_u64().unwrap_or_else(|| panic!("{k} is not an integer: {text}"));
         let f = |k: &str| v[k].as_f64().unwrap_or_else(|| panic!("{k} is not a number: {text}"));
-        assert_eq!(v["kernel"], kernel);
+        let resolved = rtow::Kernel::resolve(kernel.parse().unwrap()).unwrap();
+        assert_eq!(v["kernel"], resolved.name());
+        assert_eq!(u("lanes"), resolved.lanes() as u64);
         assert_eq!(v["isa"], rtow::isa());
         assert_eq!((u("width"), u("height"), u("spp")), (24, 10, 3));
         assert_eq!((u("max_depth"), u("seed"), u("threads")), (9, 77, 2));
@@ -283,8 +288,14 @@ fn stats_json_reports_the_run() {
         // Every sample casts its camera ray; no path casts more than max_depth.
         assert!(u("rays") >= u("samples") && u("rays") <= u("samples") * 9, "{text}");
         assert!(f("seconds") > 0.0, "{text}");
-        let mrays = u("rays") as f64 / f("seconds") / 1e6;
-        assert!((f("mrays_per_s") / mrays - 1.0).abs() < 1e-9, "{text}");
+        // The work counters: every ray is one active lane of an intersection
+        // packet (SIMD), and visits at least one node or tests at least one sphere.
+        let w = |k: &str| v["work"][k].as_u64().unwrap_or_else(|| panic!("work.{k}: {text}"));
+        if resolved != rtow::Kernel::Scalar {
+            assert_eq!(w("isect_active"), u("rays"), "{text}");
+            assert!(w("isect_lanes") >= w("isect_active"), "{text}");
+        }
+        assert!(w("sphere_tests") > 0 && w("roots") <= w("sphere_tests"), "{text}");
     }
 }
 
@@ -319,7 +330,7 @@ fn scenes_lists_every_preset() {
 fn exported_presets_render_the_identical_image() {
     let dir = tempfile::tempdir().unwrap();
     let d = dir.path();
-    let kernels = [(KernelKind::Scalar, "scalar"), (KernelKind::Simd, "simd")];
+    let kernels = [(KernelChoice::Scalar, "scalar"), (KernelChoice::Simd, "simd")];
     let cli_render = |spec: &str, kernel: &str| -> (Vec<u8>, serde_json::Value) {
         let mut args = vec!["render", spec, "--kernel", kernel, "-o", "cli.png", "--stats-json", "cli.json"];
         args.extend_from_slice(&SMALL);

@@ -5,9 +5,9 @@
 mod common;
 use common::*;
 use proptest::prelude::*;
-use rtow::plan::AccelChoice;
 use rtow::scene::{self, Camera, Material, Mode, Scene, Sky, Sphere};
-use rtow::KernelKind::{Scalar, Simd};
+use rtow::AccelChoice;
+use rtow::KernelChoice::{Scalar, Simd};
 
 #[test]
 fn every_preset_is_bit_identical_across_kernels() {

@@ -3,11 +3,15 @@
 //! tiles and threads, and rays counted only where traced.
 
 use rtow::estimator::Adaptive;
-use rtow::kernel::{scalar, Counters};
-use rtow::plan::{AccelChoice, Prepared};
+use rtow::estimator::Estimator;
+use rtow::kernel::scalar;
+use rtow::plan::Prepared;
+use rtow::prepare::prepare;
+use rtow::probe::PathId;
 use rtow::sampling::ScalarStream;
 use rtow::scene::preset;
-use rtow::{render, KernelKind, RenderOptions, Rendered, Settings};
+use rtow::AccelChoice;
+use rtow::{render, KernelChoice, RenderOptions, Rendered, Settings};
 
 fn settings(w: u32, h: u32, spp: u32, seed: u64) -> Settings {
     Settings { width: w, height: h, spp, max_depth: 50, seed }
@@ -17,7 +21,7 @@ fn run(scene: &str, s: Settings, opts: RenderOptions) -> Rendered {
     render(&preset(scene).unwrap(), s, opts, None).unwrap()
 }
 
-fn opts(kernel: KernelKind, rr: bool, adaptive: Option<Adaptive>) -> RenderOptions {
+fn opts(kernel: KernelChoice, rr: bool, adaptive: Option<Adaptive>) -> RenderOptions {
     // Roulette early, so that it decides much of the image.
     RenderOptions { kernel, threads: Some(2), tile: 16, rr, rr_after: 2, adaptive, ..Default::default() }
 }
@@ -36,7 +40,6 @@ fn assert_same(a: &Rendered, b: &Rendered, what: &str) {
 /// paths traced one by one with the scalar kernel.
 fn pixel_stats(prep: &Prepared, n: u32) -> Vec<[(f64, f64); 3]> {
     let s = prep.settings;
-    let mut c = Counters::default();
     let mut out = Vec::new();
     for y in 0..s.height {
         for x in 0..s.width {
@@ -44,7 +47,8 @@ fn pixel_stats(prep: &Prepared, n: u32) -> Vec<[(f64, f64); 3]> {
             let mut m = [[0.0f64; 2]; 3];
             for sample in 0..n {
                 let mut rng = ScalarStream::for_path(s.seed, pixel, sample as u64);
-                let v = scalar::trace(prep, x, y, &mut rng, &mut c);
+                let id = PathId { pixel: pixel as u32, sample };
+                let (v, _) = scalar::trace(prep, x, y, id, &mut rng, &mut ());
                 for k in 0..3 {
                     m[k][0] += v[k] as f64;
                     m[k][1] += v[k] as f64 * v[k] as f64;
@@ -67,9 +71,9 @@ fn pixel_stats(prep: &Prepared, n: u32) -> Vec<[(f64, f64); 3]> {
 /// as a whole (the mean difference over all pixels, |z| < 4).
 fn roulette_keeps_the_mean(scene: &str, w: u32, h: u32, n: u32, after: u32) {
     let sc = preset(scene).unwrap();
-    let plain = Prepared::new(&sc, settings(w, h, n, 11), AccelChoice::Auto).unwrap();
-    let mut rr = Prepared::new(&sc, settings(w, h, n, 12), AccelChoice::Auto).unwrap();
-    rr.estimator.russian_roulette = Some(after);
+    let plain = prepare(&sc, settings(w, h, n, 11), AccelChoice::Auto, Estimator::default()).unwrap();
+    let with_rr = Estimator { russian_roulette: Some(after), adaptive: None };
+    let rr = prepare(&sc, settings(w, h, n, 12), AccelChoice::Auto, with_rr).unwrap();
     let a = pixel_stats(&plain, n);
     let b = pixel_stats(&rr, n);
     let tests = (a.len() * 3) as f64;
@@ -136,8 +140,8 @@ fn roulette_is_unbiased_on_diffuse_glass_and_metal() {
 #[test]
 fn roulette_traces_fewer_rays_and_changes_the_noise() {
     let s = settings(40, 23, 8, 3);
-    let plain = run("ch07-diffuse", s, opts(KernelKind::Simd, false, None));
-    let rr = run("ch07-diffuse", s, opts(KernelKind::Simd, true, None));
+    let plain = run("ch07-diffuse", s, opts(KernelChoice::Simd, false, None));
+    let rr = run("ch07-diffuse", s, opts(KernelChoice::Simd, true, None));
     assert!(rr.stats.rays < plain.stats.rays, "{} vs {}", rr.stats.rays, plain.stats.rays);
     assert_ne!(rr.image, plain.image);
     assert_eq!(rr.stats.russian_roulette, Some(2));
@@ -147,15 +151,15 @@ fn roulette_traces_fewer_rays_and_changes_the_noise() {
 #[test]
 fn roulette_scalar_and_simd_agree_bit_for_bit() {
     for (scene, s) in [("final", settings(40, 23, 8, 5)), ("ch09-glass", settings(48, 27, 16, 6))] {
-        let a = run(scene, s, opts(KernelKind::Scalar, true, None));
-        let b = run(scene, s, opts(KernelKind::Simd, true, None));
+        let a = run(scene, s, opts(KernelChoice::Scalar, true, None));
+        let b = run(scene, s, opts(KernelChoice::Simd, true, None));
         assert_same(&a, &b, scene);
     }
     // The default start.
     let s = settings(40, 23, 8, 5);
     let dflt = |kernel| RenderOptions { rr_after: rtow::estimator::ROULETTE_AFTER_RAYS, ..opts(kernel, true, None) };
-    let a = run("ch09-glass", s, dflt(KernelKind::Scalar));
-    let b = run("ch09-glass", s, dflt(KernelKind::Simd));
+    let a = run("ch09-glass", s, dflt(KernelChoice::Scalar));
+    let b = run("ch09-glass", s, dflt(KernelChoice::Simd));
     assert_same(&a, &b, "default roulette start");
 }
 
@@ -163,17 +167,17 @@ fn roulette_scalar_and_simd_agree_bit_for_bit() {
 fn adaptive_scalar_and_simd_agree_bit_for_bit_whatever_the_tiles() {
     let s = settings(40, 23, 128, 7);
     let ad = Some(Adaptive::new(0.05, 16).unwrap());
-    let simd = run("final", s, opts(KernelKind::Simd, false, ad));
+    let simd = run("final", s, opts(KernelChoice::Simd, false, ad));
     let px = 40 * 23;
     // Some pixels stopped early and some went on: the decisions did something.
     assert!(simd.stats.samples > px * 16 && simd.stats.samples < px * 128, "{}", simd.stats.samples);
-    let scalar = run("final", s, RenderOptions { threads: Some(1), tile: 7, ..opts(KernelKind::Scalar, false, ad) });
+    let scalar = run("final", s, RenderOptions { threads: Some(1), tile: 7, ..opts(KernelChoice::Scalar, false, ad) });
     assert_same(&simd, &scalar, "adaptive");
-    let odd_tiles = run("final", s, RenderOptions { tile: 45, ..opts(KernelKind::Simd, false, ad) });
+    let odd_tiles = run("final", s, RenderOptions { tile: 45, ..opts(KernelChoice::Simd, false, ad) });
     assert_same(&simd, &odd_tiles, "adaptive, 45-pixel tiles");
     // With roulette as well.
-    let a = run("ch09-glass", s, opts(KernelKind::Scalar, true, ad));
-    let b = run("ch09-glass", s, opts(KernelKind::Simd, true, ad));
+    let a = run("ch09-glass", s, opts(KernelChoice::Scalar, true, ad));
+    let b = run("ch09-glass", s, opts(KernelChoice::Simd, true, ad));
     assert_same(&a, &b, "roulette + adaptive");
 }
 
@@ -182,7 +186,7 @@ fn adaptive_counts_only_what_it_traced() {
     // A threshold every pixel meets: all stop at the first decision point, so
     // the render is the 16-spp render, rays and all, though it was allowed 128.
     let all_stop = Some(Adaptive::new(1e9, 16).unwrap());
-    for kernel in [KernelKind::Scalar, KernelKind::Simd] {
+    for kernel in [KernelChoice::Scalar, KernelChoice::Simd] {
         let a = run("final", settings(24, 14, 128, 9), opts(kernel, false, all_stop));
         let b = run("final", settings(24, 14, 16, 9), opts(kernel, false, None));
         assert_same(&a, &b, kernel.name());
@@ -192,9 +196,9 @@ fn adaptive_counts_only_what_it_traced() {
     let a = run(
         "ch07-diffuse",
         settings(24, 14, 12, 9),
-        opts(KernelKind::Simd, false, Some(Adaptive::new(1e-6, 16).unwrap())),
+        opts(KernelChoice::Simd, false, Some(Adaptive::new(1e-6, 16).unwrap())),
     );
-    let b = run("ch07-diffuse", settings(24, 14, 12, 9), opts(KernelKind::Simd, false, None));
+    let b = run("ch07-diffuse", settings(24, 14, 12, 9), opts(KernelChoice::Simd, false, None));
     assert_same(&a, &b, "under min spp");
 }
 

@@ -4,9 +4,9 @@ mod common;
 use common::*;
 use glam::DVec3;
 use rtow::scene::{self, Camera, Material, Mode, Scene, Sky, Sphere};
-use rtow::KernelKind::{self, Scalar, Simd};
+use rtow::KernelChoice::{self, Scalar, Simd};
 
-const KERNELS: [KernelKind; 2] = [Scalar, Simd];
+const KERNELS: [KernelChoice; 2] = [Scalar, Simd];
 
 fn one_sphere(material: Material, sky: Sky) -> Scene {
     Scene {

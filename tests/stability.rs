@@ -5,10 +5,10 @@
 use glam::DVec3;
 use proptest::prelude::*;
 use rtow::geometry::{surface, Spheres};
-use rtow::scene::{self, Kind, Material, Sphere};
+use rtow::scene;
 use rtow::tools::stress::{self, check_group, Group, GroupResult};
 use rtow::vec3::V3;
-use rtow::{KernelKind, RenderOptions};
+use rtow::{KernelChoice, RenderOptions};
 use std::f64::consts::TAU;
 use wide::f32x8;
 
@@ -27,8 +27,7 @@ fn unit(z: f64, phi: f64) -> DVec3 {
 }
 
 fn one_sphere() -> Spheres {
-    let s = Sphere { center: [0.0; 3], radius: 1.0, material: Material::Lambertian { albedo: [0.5; 3] } };
-    Spheres::new(&[s], |_| (Kind::Lambertian, 0))
+    Spheres::one([0.0; 3], 1.0)
 }
 
 fn assert_clean(res: &GroupResult, what: &str) {
@@ -153,7 +152,7 @@ fn no_preset_produces_nan_or_inf() {
         st.width = 24;
         st.height = 16;
         st.spp = 2;
-        for kernel in [KernelKind::Scalar, KernelKind::Simd] {
+        for kernel in [KernelChoice::Scalar, KernelChoice::Simd] {
             let opts = RenderOptions { kernel, threads: Some(2), tile: 16, ..RenderOptions::default() };
             let r = rtow::render(&sc, st, opts, None).unwrap();
             assert_eq!(r.stats.rejected_samples, 0, "{} [{}]", p.name, kernel.name());

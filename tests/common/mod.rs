@@ -1,21 +1,21 @@
 //! Helpers shared by the integration tests.
 #![allow(dead_code)]
 
-use rtow::plan::AccelChoice;
-use rtow::{render, Image, KernelKind, RenderOptions, Scene, Settings};
+use rtow::AccelChoice;
+use rtow::{render, Image, KernelChoice, RenderOptions, Scene, Settings};
 
 pub fn settings(width: u32, height: u32, spp: u32, max_depth: u32, seed: u64) -> Settings {
     Settings { width, height, spp, max_depth, seed }
 }
 
-pub fn render_with(scene: &Scene, s: Settings, kernel: KernelKind, threads: usize, tile: u32) -> rtow::Rendered {
+pub fn render_with(scene: &Scene, s: Settings, kernel: KernelChoice, threads: usize, tile: u32) -> rtow::Rendered {
     render_accel(scene, s, kernel, threads, tile, AccelChoice::Auto)
 }
 
 pub fn render_accel(
     scene: &Scene,
     s: Settings,
-    kernel: KernelKind,
+    kernel: KernelChoice,
     threads: usize,
     tile: u32,
     accel: AccelChoice,
@@ -24,7 +24,7 @@ pub fn render_accel(
         .expect("render")
 }
 
-pub fn image(scene: &Scene, s: Settings, kernel: KernelKind) -> Image {
+pub fn image(scene: &Scene, s: Settings, kernel: KernelChoice) -> Image {
     render_with(scene, s, kernel, 2, 16).image
 }
 

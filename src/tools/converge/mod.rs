@@ -413,16 +413,6 @@ mod tests {
     }
 
     #[test]
-    fn log_ticks() {
-        assert_eq!(ticks(0.003, 0.06), vec![0.005, 0.01, 0.02, 0.05]);
-        assert_eq!(ticks(0.9, 25.0), vec![1.0, 2.0, 5.0, 10.0, 20.0]);
-        assert!(ticks(0.0, 1.0).is_empty());
-        assert_eq!(ticks(0.003, 0.0045), vec![0.003, 0.0045]);
-        let labels: Vec<String> = [0.005, 0.02, 1.0, 20.0].iter().map(|&v| tick_label(v)).collect();
-        assert_eq!(labels, ["0.005", "0.02", "1", "20"]);
-    }
-
-    #[test]
     fn reference_seed_differs() {
         for s in [0u64, 1, 42, u64::MAX] {
             assert_ne!(reference_seed(s), s);

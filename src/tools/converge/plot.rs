@@ -3,7 +3,7 @@
 use super::Report;
 use crate::error::{Error, Result};
 
-fn ticks(lo: f64, hi: f64) -> Vec<f64> {
+pub(super) fn ticks(lo: f64, hi: f64) -> Vec<f64> {
     let mut out = Vec::new();
     if !(lo > 0.0 && hi >= lo && hi.is_finite()) {
         return out;
@@ -25,7 +25,7 @@ fn ticks(lo: f64, hi: f64) -> Vec<f64> {
 }
 
 /// A tick value with as many decimals as it needs (0.005, 0.02, 1, 20).
-fn tick_label(v: f64) -> String {
+pub(super) fn tick_label(v: f64) -> String {
     let decimals = if v > 0.0 { (-v.log10().floor()).max(0.0) as usize } else { 0 };
     format!("{v:.decimals$}")
 }
@@ -113,5 +113,20 @@ impl Report {
             root.present().map_err(|e| plot_err(&e))?;
         }
         Ok(svg)
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    #[test]
+    fn log_ticks() {
+        assert_eq!(ticks(0.003, 0.06), vec![0.005, 0.01, 0.02, 0.05]);
+        assert_eq!(ticks(0.9, 25.0), vec![1.0, 2.0, 5.0, 10.0, 20.0]);
+        assert!(ticks(0.0, 1.0).is_empty());
+        assert_eq!(ticks(0.003, 0.0045), vec![0.003, 0.0045]);
+        let labels: Vec<String> = [0.005, 0.02, 1.0, 20.0].iter().map(|&v| tick_label(v)).collect();
+        assert_eq!(labels, ["0.005", "0.02", "1", "20"]);
     }
 }

@@ -218,11 +218,12 @@ impl Report {
             .chars()
             .map(|c| if c.is_ascii_alphanumeric() || c == '-' || c == '_' { c } else { '_' })
             .collect();
-        let mut files = vec![("csv", self.csv()), ("md", self.markdown())];
         #[cfg(feature = "plot")]
-        files.push(("svg", self.svg()?));
+        let svg = Some(("svg", self.svg()?));
+        #[cfg(not(feature = "plot"))]
+        let svg = None;
         let mut paths = Vec::new();
-        for (ext, text) in files {
+        for (ext, text) in [("csv", self.csv()), ("md", self.markdown())].into_iter().chain(svg) {
             let p = dir.join(format!("{stem}.{ext}"));
             crate::output::write_atomic(&p, text.as_bytes())?;
             paths.push(p);
