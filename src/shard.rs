@@ -8,6 +8,7 @@
 
 use crate::error::{Error, Result};
 use crate::film::part::{self, Identity, Part, PartCounters, Split, SplitKind};
+use crate::plan::Mode;
 use crate::render::{render_portion, Portion, Progress, Rendered};
 use crate::scene::Scene;
 use crate::settings::{RenderOptions, Settings};
@@ -27,6 +28,8 @@ pub fn identity(scene: &Scene, settings: &Settings, opts: &RenderOptions) -> Ide
     let mut set = |k: &str, v: String| {
         map.insert(k.to_string(), v);
     };
+    // The mode is the scene's (already in its hash); merge takes the PNG gamma from it.
+    set("mode", mode_name(scene.mode));
     set("max_depth", settings.max_depth.to_string());
     set("seed", settings.seed.to_string());
     set("pixel_jitter", plan.jitter.to_string());
@@ -41,6 +44,16 @@ pub fn identity(scene: &Scene, settings: &Settings, opts: &RenderOptions) -> Ide
     Identity { scene_hash: part::fnv1a(&scene_json), width: settings.width, height: settings.height, settings: map }
 }
 
+fn mode_name(m: Mode) -> String {
+    serde_json::to_value(m).ok().and_then(|v| v.as_str().map(str::to_string)).unwrap_or_default()
+}
+
+/// The PNG gamma of a part's scene (its `mode` setting), as `rtow render` chooses it.
+pub fn default_gamma(part: &Part) -> f32 {
+    let mode = part.header.settings.get("mode").cloned().unwrap_or_default();
+    serde_json::from_value::<Mode>(serde_json::Value::String(mode)).unwrap_or_default().default_gamma()
+}
+
 /// A render that writes (or continues) a partial film.
 pub struct Job {
     /// Which shard ([`Split::WHOLE`]: all of it).
@@ -52,7 +65,7 @@ pub struct Job {
 /// Refuses what cannot give the exact image, before any work.
 pub fn check(scene: &Scene, settings: &Settings, opts: &RenderOptions, job: &Job) -> Result<()> {
     job.split.check(settings.spp, settings.height)?;
-    if scene.mode == crate::plan::Mode::Gradient && job.split.kind != SplitKind::None {
+    if scene.mode == Mode::Gradient && job.split.kind != SplitKind::None {
         return Err(Error::invalid("--shard", "this scene traces no samples (a gradient): there is nothing to split"));
     }
     if opts.adaptive.is_some() && job.split.kind == SplitKind::Samples && job.split.of > 1 {
@@ -78,7 +91,7 @@ pub fn check(scene: &Scene, settings: &Settings, opts: &RenderOptions, job: &Job
     let id = identity(scene, settings, opts);
     let mine =
         Part::new(&id, settings.spp, Split::WHOLE, crate::film::Film::new(0, 0, 0..0, false), PartCounters::default());
-    part::same_image(path, h, Path::new("this render"), &mine.header)?;
+    part::same_image(path, h, Path::new("this render"), &mine.header, "this render cannot continue it")?;
     if h.split.kind != SplitKind::None || h.rows != [0, h.height] || h.samples[0] != 0 {
         return Err(Error::Input(format!(
             "{p}: covers rows {}..{} and samples {}..{} ({}); --resume needs a whole render \

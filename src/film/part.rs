@@ -56,16 +56,31 @@ pub fn fnv1a(bytes: &[u8]) -> u64 {
 }
 
 /// How a render is split into shards.
-#[derive(Clone, Copy, Debug, PartialEq, Eq, Serialize, Deserialize, clap::ValueEnum)]
+#[derive(Clone, Copy, Debug, PartialEq, Eq, Serialize, Deserialize)]
 #[serde(rename_all = "lowercase")]
 pub enum SplitKind {
     /// Not split: the whole image, every sample (a one-process render).
-    #[value(skip)]
     None,
     /// Every shard covers the whole image for a range of sample indices.
     Samples,
     /// Every shard covers a band of whole rows with every sample.
     Rows,
+}
+
+impl SplitKind {
+    /// The names `--split` takes.
+    pub const NAMES: &'static [&'static str] = &["samples", "rows"];
+}
+
+impl std::str::FromStr for SplitKind {
+    type Err = String;
+    fn from_str(s: &str) -> std::result::Result<Self, String> {
+        match s {
+            "samples" => Ok(SplitKind::Samples),
+            "rows" => Ok(SplitKind::Rows),
+            _ => Err(format!("'{s}' is not one of {}", SplitKind::NAMES.join(", "))),
+        }
+    }
 }
 
 /// Shard `shard` (from 1) of `of`, by `kind`.
@@ -448,12 +463,12 @@ impl Part {
     }
 }
 
-/// Refuses (naming `p`) a part whose image is not `h0`'s (from `p0`): another
-/// scene, size, rtow version or setting. The sample count is not compared.
-pub fn same_image(p: &Path, h: &Header, p0: &Path, h0: &Header) -> Result<()> {
+/// Refuses (naming `p`, ending the message with `consequence`) a part whose
+/// image is not `h0`'s (from `p0`): another scene, size, rtow version or
+/// setting. The sample count is not compared.
+pub fn same_image(p: &Path, h: &Header, p0: &Path, h0: &Header, consequence: &str) -> Result<()> {
     let a = p0.display();
-    let refuse =
-        |what: String| Error::Input(format!("{}: {what}; parts of different renders cannot be merged", p.display()));
+    let refuse = |what: String| Error::Input(format!("{}: {what}; {consequence}", p.display()));
     if h.rtow != h0.rtow {
         return Err(refuse(format!("written by rtow {}, {a} by rtow {}", h.rtow, h0.rtow)));
     }
@@ -491,7 +506,7 @@ pub fn merge(parts: &[(PathBuf, Part)]) -> Result<Part> {
     let h0 = &first.header;
     for (p, part) in &parts[1..] {
         let h = &part.header;
-        same_image(p, h, p0, h0)?;
+        same_image(p, h, p0, h0, "parts of different renders cannot be merged")?;
         if h.spp != h0.spp {
             return Err(Error::Input(format!(
                 "{}: has {} samples per pixel, {} has {}; parts of different renders cannot be merged",
