@@ -8,6 +8,7 @@
 //!   (brute force);
 //! - `accel`: the same tile, brute force against the BVH (packets, and one ray
 //!   at a time), for every kernel.
+//!
 //! Throughput is in rays (criterion's "elements"). Renders run with the probe off (`()`).
 
 use criterion::{criterion_group, criterion_main, BenchmarkGroup, Criterion, Throughput};
@@ -74,6 +75,7 @@ fn intersect(c: &mut Criterion) {
     g.bench_function("scalar", |b| {
         b.iter(|| {
             let mut acc = 0u32;
+            #[allow(clippy::needless_range_loop)] // six arrays indexed alike
             for i in 0..n {
                 let o = V3::new(r[0][i], r[1][i], r[2][i]);
                 let d = V3::new(r[3][i], r[4][i], r[5][i]);

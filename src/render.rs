@@ -52,15 +52,7 @@ impl Kernel {
             KernelChoice::Simd8 => Ok(Kernel::Simd8),
             KernelChoice::Simd if HAS_SIMD16 => Ok(Kernel::Simd16),
             KernelChoice::Simd => Ok(Kernel::Simd8),
-            KernelChoice::Simd16 if HAS_SIMD16 => Ok(Kernel::Simd16),
-            KernelChoice::Simd16 => Err(Error::invalid(
-                "kernel",
-                format!(
-                    "simd16 needs a build with AVX-512 (this one is built for {}); build with \
-                     RUSTFLAGS=\"-C target-cpu=x86-64-v4\" or use simd8",
-                    isa()
-                ),
-            )),
+            KernelChoice::Simd16 => Ok(Kernel::Simd16),
         }
     }
 }

@@ -6,8 +6,27 @@ mod common;
 use common::*;
 use proptest::prelude::*;
 use rtow::scene::{self, Camera, Material, Mode, Scene, Sky, Sphere};
-use rtow::AccelChoice;
-use rtow::KernelChoice::{Scalar, Simd};
+use rtow::KernelChoice::{self, Scalar, Simd, Simd16, Simd8};
+use rtow::{AccelChoice, Kernel};
+
+/// Every SIMD kernel this build has (8 lanes; 16 on AVX-512 builds), with
+/// every accelerator, against the scalar kernel with brute force.
+fn others() -> Vec<(KernelChoice, AccelChoice)> {
+    let mut v = vec![(Scalar, AccelChoice::Bvh)];
+    for k in [Simd8, Simd16].into_iter().filter(|&k| Kernel::resolve(k).is_ok()) {
+        for a in [AccelChoice::Brute, AccelChoice::Bvh, AccelChoice::BvhRay] {
+            v.push((k, a));
+        }
+    }
+    v
+}
+
+#[test]
+fn simd_is_the_widest_kernel_of_the_build() {
+    let widest = if rtow::render::HAS_SIMD16 { Kernel::Simd16 } else { Kernel::Simd8 };
+    assert_eq!(Kernel::resolve(Simd).unwrap(), widest);
+    assert_eq!(Kernel::resolve(Simd16).is_ok(), rtow::render::HAS_SIMD16);
+}
 
 #[test]
 fn every_preset_is_bit_identical_across_kernels() {
@@ -17,7 +36,7 @@ fn every_preset_is_bit_identical_across_kernels() {
         // Small images, the preset's own depth and a few samples (jitter on).
         let s = settings(40, 24, 3, d.max_depth, 11);
         let a = render_accel(&sc, s, Scalar, 2, 16, AccelChoice::Brute);
-        for (kernel, accel) in [(Simd, AccelChoice::Brute), (Scalar, AccelChoice::Bvh), (Simd, AccelChoice::Bvh)] {
+        for (kernel, accel) in others() {
             let b = render_accel(&sc, s, kernel, 2, 16, accel);
             assert_identical(&a.image, &b.image, &format!("{} {kernel:?} {accel:?}", p.name));
             assert_eq!(a.stats.rays, b.stats.rays, "{}: ray counts differ", p.name);
@@ -33,7 +52,7 @@ fn every_preset_is_bit_identical_across_kernels() {
 fn images_do_not_depend_on_threads_or_tiles() {
     let sc = scene::final_scene();
     let s = settings(37, 21, 2, 50, 5);
-    for kernel in [Scalar, Simd] {
+    for kernel in [Scalar, Simd8, Simd] {
         let base = render_with(&sc, s, kernel, 1, 16).image;
         for (threads, tile) in [(2, 16), (1, 7), (2, 5), (2, 45)] {
             let other = render_with(&sc, s, kernel, threads, tile).image;
@@ -91,7 +110,7 @@ proptest! {
         let s = settings(19, 11, spp, 12, seed);
         let a = render_accel(&sc, s, Scalar, 1, 8, AccelChoice::Brute);
         prop_assert_eq!(a.stats.rejected_samples, 0);
-        for (kernel, accel) in [(Simd, AccelChoice::Brute), (Scalar, AccelChoice::Bvh), (Simd, AccelChoice::Bvh)] {
+        for (kernel, accel) in others() {
             let b = render_accel(&sc, s, kernel, 1, 8, accel);
             assert_identical(&a.image, &b.image, &format!("random scene, {kernel:?} {accel:?}"));
             prop_assert_eq!(a.stats.rays, b.stats.rays);

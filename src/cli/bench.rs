@@ -83,7 +83,7 @@ pub fn run(a: BenchArgs) -> Result<bool> {
         for c in bench::compare(&report, b, a.tolerance) {
             let work = match c.work_change_percent {
                 None => "work: not in the baseline".to_string(),
-                Some(w) if w == 0.0 => "work identical".to_string(),
+                Some(0.0) => "work identical".to_string(),
                 Some(w) => format!("work {w:+.2}%"),
             };
             say!(

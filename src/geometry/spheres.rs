@@ -37,7 +37,7 @@ impl Spheres {
 
     /// Pads the arrays to a multiple of 8 with spheres no ray can hit.
     pub fn pad(&mut self) {
-        while self.cx.len() % 8 != 0 {
+        while !self.cx.len().is_multiple_of(8) {
             let n = self.len;
             self.push([0.0; 3], 0.0, Kind::Lambertian, 0);
             self.r2[n] = -1.0;

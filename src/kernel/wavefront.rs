@@ -248,8 +248,8 @@ fn generate<W: Wide, P: Probe>(prep: &Prepared, ws: &mut Workspace, tile: &TileF
         let (x, y) = tile.pixel_of(ws.active[slot % na] as usize);
         let sample = s0 as u64 + (slot / na) as u64;
         let state = path_state(st.seed, y as u64 * st.width as u64 + x as u64, sample);
-        for w in 0..4 {
-            p.rng[w][slot] = state[w];
+        for (w, word) in state.into_iter().enumerate() {
+            p.rng[w][slot] = word;
         }
         p.thr[0][slot] = x as f32;
         p.thr[1][slot] = y as f32;

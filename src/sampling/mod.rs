@@ -179,9 +179,9 @@ mod tests {
         for _ in 0..200 {
             let w: f32x8 = x8.next();
             let v3: V3<f32x8> = unit_vector(&mut x8);
-            for k in 0..8 {
-                assert_eq!(w.to_array()[k].to_bits(), Stream::<f32>::next(&mut sc[k]).to_bits());
-                let s: V3<f32> = unit_vector(&mut sc[k]);
+            for (k, sk) in sc.iter_mut().enumerate() {
+                assert_eq!(w.to_array()[k].to_bits(), Stream::<f32>::next(sk).to_bits());
+                let s: V3<f32> = unit_vector(sk);
                 assert_eq!(s.x.to_bits(), v3.x.to_array()[k].to_bits());
                 assert_eq!(s.y.to_bits(), v3.y.to_array()[k].to_bits());
                 assert_eq!(s.z.to_bits(), v3.z.to_array()[k].to_bits());

@@ -1,6 +1,8 @@
 //! Helpers shared by the integration tests.
 #![allow(dead_code)]
 
+pub mod stats;
+
 use rtow::AccelChoice;
 use rtow::{render, Image, KernelChoice, RenderOptions, Scene, Settings};
 

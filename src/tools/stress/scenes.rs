@@ -53,6 +53,7 @@ impl SceneOracle {
 
     /// Checks one traced ray: `hit`/`t` is the kernel's closest hit, `front` its
     /// front/back face there, `prev` the surface the ray left.
+    #[allow(clippy::too_many_arguments)] // one ray's whole record, as the kernels report it
     fn check(&self, t: &mut Tally, o: V3<f32>, d: V3<f32>, hit: u32, th: f32, front: bool, prev: Option<Leaving>) {
         if !finite3(o) || !finite3(d) || (hit != MISS && !th.is_finite()) {
             t.nan += 1;
@@ -125,6 +126,9 @@ impl SceneOracle {
     }
 }
 
+/// A rewrite of camera ray origins (origin, direction) -> origin.
+pub(super) type Shift = dyn Fn(V3<f32>, V3<f32>) -> V3<f32> + Sync;
+
 /// The state of one path between its probe events.
 #[derive(Default)]
 struct PathLog {
@@ -143,16 +147,13 @@ struct PathLog {
 /// far camera's reference).
 pub(super) struct StressProbe<'a> {
     oracle: &'a SceneOracle,
-    shift: Option<&'a (dyn Fn(V3<f32>, V3<f32>) -> V3<f32> + Sync)>,
+    shift: Option<&'a Shift>,
     paths: HashMap<(u32, u32), PathLog>,
     tally: Tally,
 }
 
 impl<'a> StressProbe<'a> {
-    pub(super) fn new(
-        oracle: &'a SceneOracle,
-        shift: Option<&'a (dyn Fn(V3<f32>, V3<f32>) -> V3<f32> + Sync)>,
-    ) -> Self {
+    pub(super) fn new(oracle: &'a SceneOracle, shift: Option<&'a Shift>) -> Self {
         StressProbe { oracle, shift, paths: HashMap::new(), tally: Tally::default() }
     }
 }
@@ -227,7 +228,7 @@ pub(super) fn trace(
     s: Settings,
     opts: RenderOptions,
     oracle: &SceneOracle,
-    shift: Option<&(dyn Fn(V3<f32>, V3<f32>) -> V3<f32> + Sync)>,
+    shift: Option<&Shift>,
 ) -> Result<Traced> {
     let (r, probes) = render_probed(scene, s, opts, None, &|| StressProbe::new(oracle, shift))?;
     let mut tally = Tally::default();

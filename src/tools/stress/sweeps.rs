@@ -159,6 +159,7 @@ pub struct GroupResult {
     pub max_disc_ratio: f64,
 }
 
+#[allow(clippy::too_many_arguments)] // one ray's whole record
 fn record_hit(t: &mut Tally, tr: &Truth, ray: &RayF64, c: DVec3, hit: bool, tk: f32, front: bool, gated: bool) {
     t.rays += 1;
     if hit && !tk.is_finite() {
