@@ -65,8 +65,10 @@ pub struct Job {
 /// Refuses what cannot give the exact image, before any work.
 pub fn check(scene: &Scene, settings: &Settings, opts: &RenderOptions, job: &Job) -> Result<()> {
     job.split.check(settings.spp, settings.height)?;
-    if scene.mode == Mode::Gradient && job.split.kind != SplitKind::None {
-        return Err(Error::invalid("--shard", "this scene traces no samples (a gradient): there is nothing to split"));
+    if scene.mode == Mode::Gradient {
+        return Err(Error::Input(
+            "this scene traces no samples (a gradient): it has no film to split, write or resume".into(),
+        ));
     }
     if opts.adaptive.is_some() && job.split.kind == SplitKind::Samples && job.split.of > 1 {
         return Err(Error::invalid(
@@ -134,7 +136,7 @@ pub fn render_part(
         start,
     };
     let (rendered, film) = render_portion(scene, settings, opts, portion, progress)?;
-    let film = film.ok_or_else(|| Error::invalid("--shard", "this scene traces no samples: it has no film"))?;
+    let film = film.ok_or_else(|| Error::Input("this scene traces no samples: it has no film".into()))?;
     let st = &rendered.stats;
     counters.add(&PartCounters { rays: st.rays, samples: st.samples, rejected_samples: st.rejected_samples });
     let part = Part::new(&identity(scene, &settings, &opts), settings.spp, job.split, film, counters);

@@ -286,5 +286,7 @@ fn rtow_merge_refuses_what_would_not_be_the_image() {
     refused(d, &with(&["--shard", "1/2", "--adaptive", "0.1", "-o", "out.rtfilm"]), "--split rows");
     refused(d, &with(&["--shard", "3/2", "-o", "out.rtfilm"]), "--shard");
     refused(d, &with(&["--seed", "1", "--resume", "p1.rtfilm", "-o", "out.png"]), "p1.rtfilm");
+    let e = refused(d, &["render", "ch01-gradient", "--width", "8", "--height", "8", "-o", "out.rtfilm"], "no film");
+    assert!(e.contains("gradient"), "{e}");
     assert!(!d.join("out.rtfilm").exists());
 }

@@ -447,6 +447,7 @@ impl Part {
         if s.of == 0 || s.shard == 0 || s.shard > s.of || (whole && s.of != 1) {
             return Err(format!("shard {}/{} does not exist", s.shard, s.of));
         }
+        s.check(h.spp, h.height).map_err(|e| e.to_string())?;
         let samples = s.samples(h.spp);
         let rows = s.rows(h.height);
         if h.samples != [samples.start, samples.end] || h.rows != [rows.start, rows.end] {
@@ -526,10 +527,10 @@ pub fn merge(parts: &[(PathBuf, Part)]) -> Result<Part> {
         }
     }
     let n = h0.split.of;
-    let mut seen: Vec<Option<&Path>> = vec![None; n as usize];
+    let mut seen: std::collections::BTreeMap<u32, &Path> = std::collections::BTreeMap::new();
     for (p, part) in parts {
         let k = part.header.split.shard;
-        if let Some(prev) = seen[k as usize - 1] {
+        if let Some(prev) = seen.insert(k, p) {
             return Err(Error::Input(format!(
                 "{}: duplicate: {} and {} are both {}",
                 p.display(),
@@ -538,15 +539,16 @@ pub fn merge(parts: &[(PathBuf, Part)]) -> Result<Part> {
                 part.header.split.describe()
             )));
         }
-        seen[k as usize - 1] = Some(p);
     }
-    let missing: Vec<String> =
-        seen.iter().enumerate().filter(|(_, s)| s.is_none()).map(|(k, _)| (k + 1).to_string()).collect();
-    if !missing.is_empty() {
+    if seen.len() as u64 != n as u64 {
+        // Name the missing shards (the first 20 of them).
+        let missing: Vec<String> = (1..=n).filter(|k| !seen.contains_key(k)).take(20).map(|k| k.to_string()).collect();
+        let count = n as usize - seen.len();
+        let more = if count > missing.len() { format!(" and {} more", count - missing.len()) } else { String::new() };
         let kind = if h0.split.kind == SplitKind::Rows { "rows" } else { "samples" };
         return Err(Error::Input(format!(
-            "missing {} {} of {n} (split by {kind}); merged parts: {}",
-            if missing.len() == 1 { "shard" } else { "shards" },
+            "missing {} {}{more} of {n} (split by {kind}); merged parts: {}",
+            if count == 1 { "shard" } else { "shards" },
             missing.join(", "),
             parts.iter().map(|(p, _)| p.display().to_string()).collect::<Vec<_>>().join(", ")
         )));
@@ -762,6 +764,12 @@ mod tests {
         let m = merge(&four[..3]).unwrap_err().to_string();
         assert!(m.contains("missing shard 4 of 4"), "{m}");
         assert!(merge(&[]).is_err());
+        // A part that claims a split into 4 billion shards is refused as
+        // inconsistent (empty shards), never allocated for.
+        let mut huge = four[0].1.clone();
+        huge.header.split.of = u32::MAX;
+        let m = refusal(reread(&huge, "huge.rtfilm"), "huge.rtfilm");
+        assert!(m.contains("inconsistent header"), "{m}");
     }
 
     #[test]
