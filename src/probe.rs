@@ -63,6 +63,10 @@ pub trait Probe {
     fn shaded<R: Real>(&mut self, _id: PathId<R>, _sphere: R::U32, _radius: R, _n: V3<R>, _front: R::Mask, _live: u32) {
     }
 
+    /// `n` rays are traced next, each the `depth`-th of its path (0: camera rays).
+    #[inline(always)]
+    fn rays(&mut self, _depth: u32, _n: u32) {}
+
     /// `n` units of traversal work.
     #[inline(always)]
     fn work(&mut self, _w: Work, _n: u32) {}
@@ -128,5 +132,55 @@ impl Probe for WorkCounters {
         };
         *a += active as u64;
         *l += issued as u64;
+    }
+}
+
+/// The work counters split by the depth of the rays (0: camera rays): how
+/// traversal work per ray grows as paths lose coherence.
+#[derive(Clone, Debug, Default)]
+pub struct WorkByDepth {
+    depth: usize,
+    pub by_depth: Vec<WorkCounters>,
+    /// Rays traced at each depth.
+    pub rays: Vec<u64>,
+}
+
+impl WorkByDepth {
+    pub fn merge(&mut self, o: &WorkByDepth) {
+        if self.by_depth.len() < o.by_depth.len() {
+            self.by_depth.resize(o.by_depth.len(), WorkCounters::default());
+            self.rays.resize(o.rays.len(), 0);
+        }
+        for (d, w) in o.by_depth.iter().enumerate() {
+            self.by_depth[d].merge(w);
+            self.rays[d] += o.rays[d];
+        }
+    }
+
+    fn at(&mut self) -> &mut WorkCounters {
+        if self.by_depth.len() <= self.depth {
+            self.by_depth.resize(self.depth + 1, WorkCounters::default());
+            self.rays.resize(self.depth + 1, 0);
+        }
+        &mut self.by_depth[self.depth]
+    }
+}
+
+impl Probe for WorkByDepth {
+    #[inline(always)]
+    fn rays(&mut self, depth: u32, n: u32) {
+        self.depth = depth as usize;
+        self.at();
+        self.rays[self.depth] += n as u64;
+    }
+
+    #[inline(always)]
+    fn work(&mut self, w: Work, n: u32) {
+        self.at().work(w, n);
+    }
+
+    #[inline(always)]
+    fn lanes(&mut self, stage: Stage, active: u32, issued: u32) {
+        self.at().lanes(stage, active, issued);
     }
 }

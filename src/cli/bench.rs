@@ -33,6 +33,10 @@ pub struct BenchArgs {
     /// Allowed throughput drop against the baseline, in percent.
     #[arg(long, default_value_t = 5.0)]
     tolerance: f64,
+    /// Instead of timing: the traversal work per packet at each ray depth (how
+    /// coherence is lost bounce by bounce), for each kernel, from one counted render.
+    #[arg(long)]
+    by_depth: bool,
 }
 
 /// Ok(false): a regression against the baseline (exit status 1).
@@ -60,6 +64,13 @@ pub fn run(a: BenchArgs) -> Result<bool> {
     }
     for path in [&a.json, &a.save].into_iter().flatten() {
         rtow::output::check_writable(path)?;
+    }
+    if a.by_depth {
+        for &k in &a.kernels {
+            say!("{}:", rtow::Kernel::resolve(k)?.name());
+            say!("{}", bench::depth_table(&bench::work_by_depth(&scene, &cfg, k)?).trim_end());
+        }
+        return Ok(true);
     }
     eprintln!(
         "bench {name}: {}x{} {} spp depth {} seed {}, {} repetition(s) per kernel, built for {}",

@@ -55,6 +55,7 @@ pub fn trace<P: Probe>(
     let mut thr = V3::new(1.0f32, 1.0, 1.0);
     for depth in 0..prep.settings.max_depth {
         let rays = depth + 1;
+        probe.rays(depth, 1);
         let (hit, t) = prep.closest_hit(o, d, probe);
         if P::PATHS {
             probe.traced(id, o, d, hit, t, 1);

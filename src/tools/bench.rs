@@ -313,3 +313,71 @@ pub fn compare(report: &BenchReport, base: &Baseline, tolerance_percent: f64) ->
     }
     out
 }
+
+/// Traversal work per intersection packet (or per ray, for the scalar kernel)
+/// at each ray depth (0: camera rays), from one counted render.
+#[derive(Clone, Debug, Serialize)]
+pub struct DepthRow {
+    pub depth: usize,
+    pub rays: u64,
+    /// Intersection packets issued (rays for the scalar kernel).
+    pub packets: u64,
+    pub lane_occupancy: f64,
+    pub nodes_per_packet: f64,
+    pub box_tests_per_packet: f64,
+    pub sphere_tests_per_packet: f64,
+    pub roots_per_packet: f64,
+}
+
+/// The work at each ray depth of one render with `kernel` (how coherence is lost bounce by bounce).
+pub fn work_by_depth(scene: &Scene, cfg: &Config, kernel: KernelChoice) -> Result<Vec<DepthRow>> {
+    cfg.validate()?;
+    let lanes = Kernel::resolve(kernel)?.lanes() as u64;
+    let opts = RenderOptions { kernel, threads: cfg.threads, accel: cfg.accel, ..Default::default() };
+    let (_, probes) =
+        crate::render::render_probed(scene, cfg.settings, opts, None, &crate::probe::WorkByDepth::default)?;
+    let mut all = crate::probe::WorkByDepth::default();
+    probes.iter().for_each(|p| all.merge(p));
+    Ok(all
+        .by_depth
+        .iter()
+        .enumerate()
+        .filter(|(_, w)| w.nodes + w.sphere_tests > 0)
+        .map(|(depth, w)| {
+            let packets = if lanes == 1 { all.rays[depth] } else { w.isect_lanes / lanes };
+            let p = packets.max(1) as f64;
+            DepthRow {
+                depth,
+                rays: all.rays[depth],
+                packets,
+                lane_occupancy: if w.isect_lanes > 0 { w.isect_active as f64 / w.isect_lanes as f64 } else { 1.0 },
+                nodes_per_packet: w.nodes as f64 / p,
+                box_tests_per_packet: w.box_tests as f64 / p,
+                sphere_tests_per_packet: w.sphere_tests as f64 / p,
+                roots_per_packet: w.roots as f64 / p,
+            }
+        })
+        .collect())
+}
+
+/// The table of [`work_by_depth`].
+pub fn depth_table(rows: &[DepthRow]) -> String {
+    let mut t = format!(
+        "{:>5} {:>11} {:>10} {:>6} {:>8} {:>8} {:>8} {:>8}\n",
+        "depth", "rays", "packets", "occ%", "nodes", "boxes", "spheres", "roots"
+    );
+    for r in rows {
+        t += &format!(
+            "{:>5} {:>11} {:>10} {:>6.1} {:>8.2} {:>8.2} {:>8.2} {:>8.2}\n",
+            r.depth,
+            r.rays,
+            r.packets,
+            100.0 * r.lane_occupancy,
+            r.nodes_per_packet,
+            r.box_tests_per_packet,
+            r.sphere_tests_per_packet,
+            r.roots_per_packet
+        );
+    }
+    t + "(per intersection packet: node visits, box tests, sphere tests, square roots)\n"
+}
