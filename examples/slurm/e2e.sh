@@ -15,8 +15,8 @@
 # Slurm's configuration, state and logs live in $RTOW_SLURM_STATE
 # [/var/tmp/rtow-slurm], nothing is written to /etc/slurm.
 #
-# Environment: RTOW (an rtow binary; default: built here with the test
-# profile, as .ci/run does), RTOW_SHARDS [4], RTOW_SPLIT [samples],
+# Environment: RTOW (an rtow binary; default: the one `cargo test` builds,
+# as .ci/run does), RTOW_SHARDS [4], RTOW_SPLIT [samples],
 # RTOW_ARGS [a small final-scene render], RTOW_SLURM_TIMEOUT seconds [300].
 set -euo pipefail
 
@@ -188,9 +188,11 @@ e2e() {
     fi
     local rtow=${RTOW:-}
     if [ -z "$rtow" ]; then
-        say "building rtow (test profile)"
-        rtow=$(cd "$repo" && cargo build -q --profile test --bin rtow --message-format=json-render-diagnostics |
-            sed -n 's/.*"executable":"\([^"]*\)".*/\1/p' | tail -1)
+        # The binary `cargo test` builds (same profile and features: nothing to
+        # compile again after the README's test command, as in .ci/run).
+        say "building rtow (cargo test --no-run)"
+        rtow=$(cd "$repo" && cargo test -q --no-run --message-format=json-render-diagnostics |
+            grep '"kind":\["bin"\]' | grep '"test":false' | sed -n 's/.*"executable":"\([^"]*\)".*/\1/p' | tail -1)
         [ -x "$rtow" ] || die "cargo did not build rtow"
     fi
     local work
