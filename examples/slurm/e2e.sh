@@ -2,7 +2,8 @@
 # End to end on this machine: a single-node Slurm from Debian's packages runs
 # the job-array example (render-shard.sbatch, one task per shard; merge.sbatch
 # after it with --dependency=afterok), and the merged image must be bit for bit
-# the one-process render (same image hash, same PNG bytes).
+# the one-process render (same image hash, same PNG bytes); a shard rerun
+# alone writes the identical part.
 #
 #   examples/slurm/e2e.sh          install if needed, start, test, stop what it started
 #   examples/slurm/e2e.sh up       install if needed and start (left running)
@@ -233,6 +234,13 @@ e2e() {
     if [ -z "$one" ] || [ "$one" != "$merged" ] || ! cmp -s one.png merged.png; then
         die "the merged image differs from the one-process render (work folder $work kept)"
     fi
+    # A failed or lost shard is rerun alone and writes the identical part.
+    local k=$(((shards + 1) / 2))
+    mv "parts/part-$k.rtfilm" "part-$k.first"
+    RTOW_SHARDS=$shards timeout "$timeout" sbatch --wait --quiet --array="$k" --output="logs/rerun-%A_%a.out" \
+        "$here/render-shard.sbatch" || die "the rerun of shard $k failed (logs in $work/logs)"
+    cmp -s "part-$k.first" "parts/part-$k.rtfilm" || die "the rerun of shard $k wrote a different part"
+    say "shard $k rerun alone (sbatch --array=$k): the identical part"
     say "ok: $shards shards by $split, from submission to merged image $((ms / 1000)).$(printf %03d $((ms % 1000))) s wall"
     cd /
     rm -rf "$work"

@@ -8,6 +8,7 @@
 set -euo pipefail
 n=${1:?usage: $0 N (number of shards)}
 here=$(cd "$(dirname "$0")" && pwd)
+export RTOW_SHARDS=$n
 logs=${RTOW_LOGS:-logs}
 mkdir -p "$logs" "${RTOW_PARTS:-parts}"
 array=$(sbatch --parsable --array="1-$n" --output="$logs/shard-%A_%a.out" "$here/render-shard.sbatch")
