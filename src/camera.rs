@@ -69,6 +69,36 @@ impl Camera {
         }
     }
 
+    /// Checks that the f32 camera of `spec` is computable for every image
+    /// size rtow accepts (1x1 up to `MAX_PIXELS` on a side): every vector
+    /// finite, the pixel steps and the eye-relative pixel grid non-zero, and
+    /// the squared length of a ray's unnormalized direction a normal f32 (the
+    /// ray direction is normalized in f32). A backstop behind the range checks
+    /// of `Scene::validate`.
+    pub fn check(spec: &crate::scene::Camera) -> crate::Result<()> {
+        let view = crate::prepare::view(spec);
+        let big = crate::limits::MAX_PIXELS as u32;
+        for (w, h) in [(1, 1), (big, 1), (1, big)] {
+            let cam = Camera::new(&view, w, h, true);
+            let vecs = [cam.center, cam.to_pixel00, cam.du, cam.dv, cam.lens_u, cam.lens_v];
+            let len2 = |v: [f32; 3]| v.iter().map(|&x| x as f64 * x as f64).sum::<f64>();
+            let ok = vecs.iter().flatten().all(|x| x.is_finite())
+                && [cam.du, cam.dv].iter().all(|v| len2(*v) > 0.0)
+                && len2(cam.to_pixel00) >= (f32::MIN_POSITIVE as f64) * 2f64.powi(24);
+            if !ok {
+                return Err(crate::Error::invalid(
+                    "camera",
+                    format!(
+                        "look_from, look_at, vfov_deg and the focus distance give no camera the f32 kernels can \
+                         represent at {w}x{h} pixels (pixel step {:?}, grid {:?})",
+                        cam.du, cam.to_pixel00
+                    ),
+                ));
+            }
+        }
+        Ok(())
+    }
+
     /// The ray through pixel (`px`, `py`) (integer coordinates, as reals):
     /// `(origin, unit direction)`. Draws 2 values for jitter and 2 for the lens
     /// when those are on.

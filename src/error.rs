@@ -14,6 +14,10 @@ pub enum Error {
     /// An unknown preset or unreadable input.
     #[error("{0}")]
     Input(String),
+    /// A render whose samples were mostly NaN or infinite: the scene is
+    /// numerically degenerate (see `limits::MAX_REJECTED_FRACTION`).
+    #[error("{0}")]
+    Degenerate(String),
     /// Writing an output failed.
     #[error("cannot write {path}: {message}")]
     Output { path: PathBuf, message: String },

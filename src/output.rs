@@ -1,10 +1,73 @@
-//! Atomic output: everything rtow writes goes to a temporary file in the target
-//! folder first and is renamed into place, so a failed or interrupted run never
-//! leaves a half-written file behind.
+//! A run's outputs as one transaction.
+//!
+//! Everything rtow writes in a run (`render`: `-o`, `--float`, `--stats-json`;
+//! `bench`: `--json`, `--save`; `export -o`) goes through [`Outputs`]:
+//!
+//! 1. **Checked up front**, before any expensive work ([`Outputs::add`]): every
+//!    path is distinct from the others and from every input of the run (exit
+//!    status 2: the arguments contradict each other), is not a folder, its
+//!    folder exists and takes a new file, and an existing file there is a
+//!    regular file we may write (a write-protected file is refused: exit
+//!    status 1).
+//! 2. **Staged** ([`Outputs::stage`]): each output is written to a temporary
+//!    file `.rtow-XXXXXX.tmp` next to its target and synced.
+//! 3. **Committed** ([`Outputs::commit`]) only when all were staged: renamed
+//!    into place together. Should a rename fail, the targets already replaced
+//!    get their previous contents back (kept as hard links until the commit
+//!    ends), so a run replaces all of its outputs or none.
+//!
+//! Temporary files are removed when the run fails (dropping an uncommitted
+//! [`Outputs`]) and on SIGINT or SIGTERM ([`install_signal_cleanup`]: the
+//! process then exits with status 130 or 143). A signal that arrives during
+//! a commit waits for it to finish, so the outputs are either all old or all
+//! new. SIGKILL cannot be caught: it may leave `.rtow-*.tmp` files (never a
+//! half-written output).
+//!
+//! **Symlinks.** An output path that is a symbolic link is followed: the file
+//! it points to is replaced atomically (in the link target's folder) and the
+//! link stays. A link to a missing file is refused. Inputs are compared with
+//! outputs after following links (and by device and inode on Unix), so a
+//! link or a hard link to the scene cannot overwrite it.
+//!
+//! A replaced file keeps its permissions; a new one gets 0666 less the umask,
+//! as `File::create` gives.
 
 use crate::error::{Error, Result};
 use std::io::Write;
-use std::path::Path;
+use std::path::{Path, PathBuf};
+use std::sync::{Mutex, MutexGuard};
+
+/// Temporary files of staged, uncommitted outputs: what a signal removes.
+static PENDING: Mutex<Vec<PathBuf>> = Mutex::new(Vec::new());
+
+fn pending() -> MutexGuard<'static, Vec<PathBuf>> {
+    PENDING.lock().unwrap_or_else(|e| e.into_inner())
+}
+
+/// Installs a SIGINT / SIGTERM handler (once per process) that removes every
+/// staged temporary file and exits with status 128 + the signal (130, 143).
+/// A signal during a commit waits for the commit to finish. Call it at the
+/// start of a program that writes outputs (the `rtow` binary does).
+pub fn install_signal_cleanup() {
+    static ONCE: std::sync::Once = std::sync::Once::new();
+    ONCE.call_once(|| {
+        #[cfg(unix)]
+        {
+            use signal_hook::consts::{SIGINT, SIGTERM};
+            let Ok(mut signals) = signal_hook::iterator::Signals::new([SIGINT, SIGTERM]) else { return };
+            std::thread::spawn(move || {
+                if let Some(sig) = signals.forever().next() {
+                    // Held until exit: no commit can start or be half done.
+                    let list = pending();
+                    for p in list.iter() {
+                        let _ = std::fs::remove_file(p);
+                    }
+                    std::process::exit(128 + sig);
+                }
+            });
+        }
+    });
+}
 
 fn output_error(path: &Path, message: impl std::fmt::Display) -> Error {
     // tempfile appends ` at path "<dir>/.rtow-XXXX.tmp"`; the temporary name
@@ -42,27 +105,266 @@ fn temp_in(dir: &Path) -> std::io::Result<tempfile::NamedTempFile> {
     b.tempfile_in(dir)
 }
 
-/// Checks, before any expensive work, that `path` can be written: it is not a
-/// folder, its folder exists, and a file can be created there (a temporary
-/// file is created and removed again).
-pub fn check_writable(path: &Path) -> Result<()> {
-    let dir = target_dir(path)?;
-    temp_in(dir).map_err(|e| output_error(path, e))?;
-    Ok(())
+/// Where writing `path` lands: symlinks followed (a dangling one refused).
+fn resolve(path: &Path) -> Result<PathBuf> {
+    match std::fs::symlink_metadata(path) {
+        Ok(m) if m.file_type().is_symlink() => std::fs::canonicalize(path)
+            .map_err(|_| output_error(path, "is a symbolic link to a file that does not exist (refused)")),
+        _ => Ok(path.to_path_buf()),
+    }
 }
 
-/// Writes `bytes` to `path` atomically. A file replaced keeps its permissions.
-pub fn write_atomic(path: &Path, bytes: &[u8]) -> Result<()> {
-    let fail = |e: &dyn std::fmt::Display| output_error(path, e);
-    let dir = target_dir(path)?;
-    let mut tmp = temp_in(dir).map_err(|e| fail(&e))?;
-    if let Ok(meta) = std::fs::metadata(path) {
-        tmp.as_file().set_permissions(meta.permissions()).map_err(|e| fail(&e))?;
+/// A name for the file at `path` that is equal for equal files: the
+/// canonical folder plus the file name (the file need not exist).
+fn identity(path: &Path) -> Option<PathBuf> {
+    if let Ok(c) = std::fs::canonicalize(path) {
+        return Some(c);
     }
-    tmp.write_all(bytes).map_err(|e| fail(&e))?;
-    tmp.as_file().sync_all().map_err(|e| fail(&e))?;
-    tmp.persist(path).map_err(|e| fail(&e.error))?;
-    Ok(())
+    let dir = match path.parent() {
+        Some(d) if !d.as_os_str().is_empty() => d,
+        _ => Path::new("."),
+    };
+    Some(std::fs::canonicalize(dir).ok()?.join(path.file_name()?))
+}
+
+#[cfg(unix)]
+fn same_inode(a: &Path, b: &Path) -> bool {
+    use std::os::unix::fs::MetadataExt;
+    match (std::fs::metadata(a), std::fs::metadata(b)) {
+        (Ok(x), Ok(y)) => x.dev() == y.dev() && x.ino() == y.ino(),
+        _ => false,
+    }
+}
+
+#[cfg(not(unix))]
+fn same_inode(_: &Path, _: &Path) -> bool {
+    false
+}
+
+fn same_file(a: &Path, b: &Path) -> bool {
+    same_inode(a, b) || matches!((identity(a), identity(b)), (Some(x), Some(y)) if x == y)
+}
+
+/// Checks that the extension of `path` is one of `allowed` (lower case,
+/// without the dot); otherwise a usage error (exit status 2) naming them.
+pub fn check_extension(path: &Path, allowed: &[&str], flag: &str) -> Result<()> {
+    let ext = path.extension().and_then(|e| e.to_str()).map(|e| e.to_ascii_lowercase()).unwrap_or_default();
+    if allowed.contains(&ext.as_str()) {
+        Ok(())
+    } else {
+        let list: Vec<String> = allowed.iter().map(|e| format!(".{e}")).collect();
+        Err(Error::invalid(flag, format!("{}: unsupported file type; use {}", path.display(), list.join(" or "))))
+    }
+}
+
+struct Output {
+    /// As the user gave it (for messages).
+    shown: PathBuf,
+    /// Where the bytes land (symlinks followed).
+    target: PathBuf,
+    flag: String,
+    /// The staged temporary file.
+    temp: Option<PathBuf>,
+}
+
+/// A run's outputs: checked, staged and committed together (see the module
+/// documentation). Dropping it uncommitted removes what was staged.
+#[derive(Default)]
+pub struct Outputs {
+    inputs: Vec<(PathBuf, String)>,
+    outputs: Vec<Output>,
+}
+
+/// Which output of an [`Outputs`] to stage.
+#[derive(Clone, Copy, Debug, PartialEq, Eq)]
+pub struct OutputId(usize);
+
+impl Outputs {
+    pub fn new() -> Self {
+        Outputs::default()
+    }
+
+    /// Declares an input of the run (a scene file, a baseline): no output may
+    /// be the same file. Call before [`Outputs::add`].
+    pub fn input(&mut self, path: &Path, what: &str) {
+        self.inputs.push((path.to_path_buf(), what.to_string()));
+    }
+
+    /// Checks `path` as an output of the run (see the module documentation);
+    /// `flag` names it in messages (`-o`, `--float`).
+    pub fn add(&mut self, path: &Path, flag: &str) -> Result<OutputId> {
+        let target = resolve(path)?;
+        for (input, what) in &self.inputs {
+            if same_file(&target, input) {
+                return Err(Error::invalid(
+                    flag,
+                    format!("{} is the {what} {}: it would be overwritten", path.display(), input.display()),
+                ));
+            }
+        }
+        for o in &self.outputs {
+            if same_file(&target, &o.target) {
+                return Err(Error::invalid(
+                    flag,
+                    format!(
+                        "{} is the same file as {} {}: one would be lost",
+                        path.display(),
+                        o.flag,
+                        o.shown.display()
+                    ),
+                ));
+            }
+        }
+        let dir = target_dir(&target).map_err(|e| match e {
+            Error::Output { message, .. } => output_error(path, message),
+            e => e,
+        })?;
+        if let Ok(meta) = std::fs::metadata(&target) {
+            if !meta.is_file() {
+                return Err(output_error(path, "exists and is not a regular file (refused)"));
+            }
+            if meta.permissions().readonly() {
+                return Err(output_error(path, "is write-protected (refused; make it writable to replace it)"));
+            }
+            // Another user's file, or a folder that forbids it: open to write
+            // without truncating (the file is not changed).
+            std::fs::OpenOptions::new().write(true).open(&target).map_err(|e| output_error(path, e))?;
+        }
+        temp_in(dir).map_err(|e| output_error(path, e))?;
+        self.outputs.push(Output { shown: path.to_path_buf(), target, flag: flag.to_string(), temp: None });
+        Ok(OutputId(self.outputs.len() - 1))
+    }
+
+    /// Writes the contents of output `id` to its temporary file (replacing
+    /// any staged before).
+    pub fn stage(&mut self, id: OutputId, bytes: &[u8]) -> Result<()> {
+        let o = &mut self.outputs[id.0];
+        let fail = |e: &dyn std::fmt::Display| output_error(&o.shown, e);
+        let dir = target_dir(&o.target).map_err(|_| fail(&"its folder is gone"))?;
+        let (mut file, tmp) = {
+            let mut list = pending();
+            let t = temp_in(dir).map_err(|e| fail(&e))?;
+            let (file, tmp) = t.keep().map_err(|e| fail(&e.error))?;
+            list.push(tmp.clone());
+            (file, tmp)
+        };
+        if let Some(old) = o.temp.replace(tmp.clone()) {
+            remove_temp(&old);
+        }
+        if let Ok(meta) = std::fs::metadata(&o.target) {
+            file.set_permissions(meta.permissions()).map_err(|e| fail(&e))?;
+        }
+        file.write_all(bytes).map_err(|e| fail(&e))?;
+        file.sync_all().map_err(|e| fail(&e))?;
+        Ok(())
+    }
+
+    /// Renames every staged output into place; all or none (see the module
+    /// documentation). Every output must have been staged.
+    pub fn commit(mut self) -> Result<()> {
+        // Test hook (tests/hostile.rs): hold the staged files for a while so a
+        // test can signal the process between staging and commit.
+        if let Some(ms) = std::env::var("RTOW_TEST_PAUSE_BEFORE_COMMIT_MS").ok().and_then(|v| v.parse().ok()) {
+            std::thread::sleep(std::time::Duration::from_millis(ms));
+        }
+        let mut list = pending();
+        if let Some(o) = self.outputs.iter().find(|o| o.temp.is_none()) {
+            return Err(output_error(&o.shown, "was never written (internal error)"));
+        }
+        // Previous contents, as hard links, so that a failed rename can be undone.
+        let mut backups: Vec<Option<PathBuf>> = Vec::new();
+        let mut done = 0;
+        let mut failure = None;
+        for o in &self.outputs {
+            let backup = o.target.is_file().then(|| backup_of(&o.target)).flatten();
+            backups.push(backup);
+            let tmp = o.temp.as_ref().expect("checked above");
+            if let Err(e) = std::fs::rename(tmp, &o.target) {
+                failure = Some(output_error(&o.shown, e));
+                break;
+            }
+            done += 1;
+        }
+        if failure.is_some() {
+            for (o, b) in self.outputs[..done].iter().zip(&backups) {
+                match b {
+                    Some(b) => {
+                        let _ = std::fs::rename(b, &o.target);
+                    }
+                    None => {
+                        let _ = std::fs::remove_file(&o.target);
+                    }
+                }
+            }
+        }
+        for b in backups.iter().flatten() {
+            let _ = std::fs::remove_file(b);
+        }
+        for o in &mut self.outputs {
+            if let Some(t) = o.temp.take() {
+                let _ = std::fs::remove_file(&t);
+                list.retain(|p| p != &t);
+            }
+        }
+        drop(list);
+        match failure {
+            Some(e) => Err(e),
+            None => Ok(()),
+        }
+    }
+}
+
+/// A hard link to `target` under a temporary name in its folder.
+fn backup_of(target: &Path) -> Option<PathBuf> {
+    let dir = target_dir(target).ok()?;
+    let (_, tmp) = temp_in(dir).ok()?.keep().ok()?;
+    std::fs::remove_file(&tmp).ok()?;
+    std::fs::hard_link(target, &tmp).ok()?;
+    Some(tmp)
+}
+
+fn remove_temp(p: &Path) {
+    let _ = std::fs::remove_file(p);
+    pending().retain(|q| q != p);
+}
+
+impl Drop for Outputs {
+    fn drop(&mut self) {
+        for o in &mut self.outputs {
+            if let Some(t) = o.temp.take() {
+                remove_temp(&t);
+            }
+        }
+    }
+}
+
+/// The image file types rtow writes: PNG (8-bit, gamma encoded), PFM and EXR (linear).
+pub const IMAGE_TYPES: [&str; 3] = ["png", "pfm", "exr"];
+
+/// The bytes of `image` as the file type `path`'s extension names (checked
+/// up front with [`check_extension`]; an unknown one is a usage error here too).
+pub fn image_bytes(image: &crate::Image, path: &Path, gamma: f32) -> Result<Vec<u8>> {
+    let ext = path.extension().and_then(|e| e.to_str()).map(|e| e.to_ascii_lowercase());
+    match ext.as_deref() {
+        Some("png") => Ok(image.png_bytes(gamma)),
+        Some("pfm") => Ok(image.pfm_bytes()),
+        Some("exr") => Ok(image.exr_bytes()),
+        _ => check_extension(path, &IMAGE_TYPES, "image").map(|_| Vec::new()),
+    }
+}
+
+/// Checks, before any expensive work, that `path` can be written (see
+/// [`Outputs::add`]).
+pub fn check_writable(path: &Path) -> Result<()> {
+    Outputs::new().add(path, "output").map(|_| ())
+}
+
+/// Writes `bytes` to `path` atomically: a transaction of one output.
+pub fn write_atomic(path: &Path, bytes: &[u8]) -> Result<()> {
+    let mut out = Outputs::new();
+    let id = out.add(path, "output")?;
+    out.stage(id, bytes)?;
+    out.commit()
 }
 
 #[cfg(test)]
@@ -121,5 +423,109 @@ mod tests {
             }
         }
         assert_eq!(names(dir.path()), ["file"]);
+    }
+
+    #[test]
+    fn outputs_must_differ_from_each_other_and_from_inputs() {
+        let dir = tempfile::tempdir().unwrap();
+        let d = dir.path();
+        std::fs::write(d.join("scene.json"), b"{}").unwrap();
+        let mut o = Outputs::new();
+        o.input(&d.join("scene.json"), "scene file");
+        // The same file under another spelling is still the same file.
+        let e = o.add(&d.join(".").join("scene.json"), "-o").unwrap_err();
+        assert_eq!(e.exit_code(), 2, "{e}");
+        assert!(e.to_string().contains("overwritten"), "{e}");
+        o.add(&d.join("a.png"), "-o").unwrap();
+        let e = o.add(&d.join("./a.png"), "--float").unwrap_err();
+        assert_eq!(e.exit_code(), 2, "{e}");
+        assert!(e.to_string().contains("same file as -o"), "{e}");
+        #[cfg(unix)]
+        {
+            std::fs::hard_link(d.join("scene.json"), d.join("link.json")).unwrap();
+            assert!(o.add(&d.join("link.json"), "--stats-json").is_err());
+            std::os::unix::fs::symlink(d.join("scene.json"), d.join("sym.json")).unwrap();
+            assert!(o.add(&d.join("sym.json"), "--stats-json").is_err());
+        }
+        assert_eq!(std::fs::read(d.join("scene.json")).unwrap(), b"{}");
+    }
+
+    #[cfg(unix)]
+    #[test]
+    fn write_protected_and_special_files_are_refused() {
+        use std::os::unix::fs::PermissionsExt;
+        let dir = tempfile::tempdir().unwrap();
+        let p = dir.path().join("ro.png");
+        std::fs::write(&p, b"keep").unwrap();
+        std::fs::set_permissions(&p, std::fs::Permissions::from_mode(0o444)).unwrap();
+        let e = write_atomic(&p, b"new").unwrap_err();
+        assert_eq!(e.exit_code(), 1);
+        assert!(e.to_string().contains("write-protected"), "{e}");
+        assert_eq!(std::fs::read(&p).unwrap(), b"keep");
+        let e = check_writable(Path::new("/dev/null")).unwrap_err();
+        assert!(e.to_string().contains("not a regular file"), "{e}");
+    }
+
+    #[cfg(unix)]
+    #[test]
+    fn a_symlink_output_replaces_its_target_and_stays_a_link() {
+        let dir = tempfile::tempdir().unwrap();
+        let d = dir.path();
+        std::fs::create_dir(d.join("real")).unwrap();
+        std::fs::write(d.join("real/a.txt"), b"old").unwrap();
+        std::os::unix::fs::symlink(d.join("real/a.txt"), d.join("link.txt")).unwrap();
+        write_atomic(&d.join("link.txt"), b"new").unwrap();
+        assert!(std::fs::symlink_metadata(d.join("link.txt")).unwrap().file_type().is_symlink());
+        assert_eq!(std::fs::read(d.join("real/a.txt")).unwrap(), b"new");
+        assert_eq!(names(&d.join("real")), ["a.txt"]);
+        std::os::unix::fs::symlink(d.join("missing"), d.join("dangling.txt")).unwrap();
+        let e = check_writable(&d.join("dangling.txt")).unwrap_err();
+        assert!(e.to_string().contains("does not exist"), "{e}");
+    }
+
+    #[test]
+    fn nothing_is_replaced_unless_everything_is_staged() {
+        let dir = tempfile::tempdir().unwrap();
+        let d = dir.path();
+        std::fs::write(d.join("a"), b"old a").unwrap();
+        std::fs::write(d.join("b"), b"old b").unwrap();
+        {
+            let mut o = Outputs::new();
+            let a = o.add(&d.join("a"), "-o").unwrap();
+            let _b = o.add(&d.join("b"), "--float").unwrap();
+            o.stage(a, b"new a").unwrap();
+            // The second output's encoding fails: the run drops its outputs.
+        }
+        assert_eq!(std::fs::read(d.join("a")).unwrap(), b"old a");
+        assert_eq!(names(d), ["a", "b"]);
+        let mut o = Outputs::new();
+        let a = o.add(&d.join("a"), "-o").unwrap();
+        let b = o.add(&d.join("b"), "--float").unwrap();
+        o.stage(a, b"new a").unwrap();
+        o.stage(b, b"new b").unwrap();
+        assert!(pending().iter().any(|p| p.starts_with(d)));
+        o.commit().unwrap();
+        assert_eq!(std::fs::read(d.join("a")).unwrap(), b"new a");
+        assert_eq!(std::fs::read(d.join("b")).unwrap(), b"new b");
+        assert_eq!(names(d), ["a", "b"]);
+        assert!(!pending().iter().any(|p| p.starts_with(d)));
+    }
+
+    #[test]
+    fn a_failed_rename_restores_the_outputs_already_replaced() {
+        let dir = tempfile::tempdir().unwrap();
+        let d = dir.path();
+        std::fs::write(d.join("a"), b"old a").unwrap();
+        let mut o = Outputs::new();
+        let a = o.add(&d.join("a"), "-o").unwrap();
+        let b = o.add(&d.join("b"), "--float").unwrap();
+        o.stage(a, b"new a").unwrap();
+        o.stage(b, b"new b").unwrap();
+        // Between staging and commit, b's target becomes a non-empty folder: its rename fails.
+        std::fs::create_dir(d.join("b")).unwrap();
+        std::fs::write(d.join("b/x"), b"").unwrap();
+        assert_eq!(o.commit().unwrap_err().exit_code(), 1);
+        assert_eq!(std::fs::read(d.join("a")).unwrap(), b"old a");
+        assert_eq!(names(d), ["a", "b"]);
     }
 }

@@ -122,6 +122,15 @@ pub struct Stats {
     pub plan: Plan,
 }
 
+impl Stats {
+    /// An error (exit status 2) when more than
+    /// [`MAX_REJECTED_FRACTION`](crate::limits::MAX_REJECTED_FRACTION) of the
+    /// samples were NaN or infinite: the image would be mostly black or wrong.
+    pub fn check_finite(&self) -> Result<()> {
+        crate::limits::check_rejected(self.rejected_samples, self.samples)
+    }
+}
+
 pub struct Rendered {
     pub image: Image,
     pub stats: Stats,

@@ -82,15 +82,15 @@ pub struct Overrides {
 #[derive(Serialize, Deserialize, Clone, Copy, Debug, PartialEq, Default)]
 #[serde(deny_unknown_fields)]
 pub struct RenderDefaults {
-    #[serde(default, skip_serializing_if = "Option::is_none")]
+    #[serde(default, skip_serializing_if = "Option::is_none", deserialize_with = "crate::scene::de::opt_u32")]
     pub width: Option<u32>,
-    #[serde(default, skip_serializing_if = "Option::is_none")]
+    #[serde(default, skip_serializing_if = "Option::is_none", deserialize_with = "crate::scene::de::opt_u32")]
     pub height: Option<u32>,
-    #[serde(default, skip_serializing_if = "Option::is_none")]
+    #[serde(default, skip_serializing_if = "Option::is_none", deserialize_with = "crate::scene::de::opt_u32")]
     pub samples_per_pixel: Option<u32>,
-    #[serde(default, skip_serializing_if = "Option::is_none")]
+    #[serde(default, skip_serializing_if = "Option::is_none", deserialize_with = "crate::scene::de::opt_u32")]
     pub max_depth: Option<u32>,
-    #[serde(default, skip_serializing_if = "Option::is_none")]
+    #[serde(default, skip_serializing_if = "Option::is_none", deserialize_with = "crate::scene::de::opt_u64")]
     pub seed: Option<u64>,
 }
 
@@ -214,6 +214,7 @@ impl Default for RenderOptions {
 impl RenderOptions {
     /// Checks every option before any work.
     pub fn validate(&self) -> Result<()> {
+        crate::limits::check_threads(self.threads)?;
         if !(1..=MAX_TILE).contains(&self.tile) {
             return Err(Error::invalid("tile", format!("must be between 1 and {MAX_TILE} pixels")));
         }

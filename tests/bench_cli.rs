@@ -35,7 +35,11 @@ fn baseline_catches_a_changed_image_and_a_slowdown() {
     let kernels = v["kernels"].as_array().unwrap();
     assert_eq!(kernels.len(), 2);
     assert_eq!(kernels[0]["image_hash"], kernels[1]["image_hash"], "scalar and SIMD images differ");
-    assert!(kernels[1]["speedup"].as_f64().unwrap() > 0.0);
+    // The speedup is the ratio of the two kernels' throughputs in this report.
+    let (m0, m1) = (kernels[0]["mrays_per_s"].as_f64().unwrap(), kernels[1]["mrays_per_s"].as_f64().unwrap());
+    assert!((kernels[1]["speedup"].as_f64().unwrap() - m1 / m0).abs() < 1e-9 * (m1 / m0));
+    // Exact work counters are saved with each kernel.
+    assert!(kernels[1]["work"]["sphere_tests"].as_u64().unwrap() > 0);
 
     // Same code: passes, and says the image is identical (tolerance 100%: timings of
     // sub-millisecond renders are noise; the slowdown verdict is tested below).
@@ -62,6 +66,23 @@ fn baseline_catches_a_changed_image_and_a_slowdown() {
     let r = bench(dir.path(), &["--baseline", "fast.json"]);
     assert_eq!(r.status.code(), Some(1));
     assert!(String::from_utf8_lossy(&r.stdout).contains("REGRESSION"));
+
+    // A baseline whose algorithm did less work: same image, more work now:
+    // exit 1 and said so, even with timings within any tolerance.
+    let less = dir.path().join("less.json");
+    std::fs::copy(&base, &less).unwrap();
+    edit(&less, |v| {
+        let n = v["kernels"][1]["work"]["sphere_tests"].as_u64().unwrap();
+        v["kernels"][1]["work"]["sphere_tests"] = (n / 2).into();
+    });
+    let r = bench(dir.path(), &["--baseline", "less.json", "--tolerance", "100"]);
+    let out = String::from_utf8_lossy(&r.stdout).to_string();
+    assert_eq!(r.status.code(), Some(1), "{out}");
+    assert!(out.contains("REGRESSION") && out.contains("work changed") && out.contains("image identical"), "{out}");
+
+    // A baseline 1000x faster with the same work: a timing change only, labelled so.
+    let r = bench(dir.path(), &["--baseline", "fast.json"]);
+    assert!(String::from_utf8_lossy(&r.stdout).contains("timing only"), "{}", String::from_utf8_lossy(&r.stdout));
 
     // A baseline of other settings is an input error, not a verdict.
     let r = bench_spp(dir.path(), "3", &["--baseline", "base.json"]);

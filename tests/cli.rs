@@ -98,6 +98,14 @@ fn bad_arguments_exit_2_naming_the_argument_and_write_nothing() {
         (render(&["--gamma", "0"]), &["--gamma", "> 0"]),
         (render(&["--tile", "0"]), &["tile"]),
         (render(&["--bogus"]), &["--bogus"]),
+        // An unsupported output type is a usage error naming the supported ones (issue 11, class 7).
+        (vec!["render", "ch07-diffuse", "-q", "-o", "out.jpg"], &["-o", "out.jpg", ".png"]),
+        (render(&["--float", "out.tiff"]), &["--float", "out.tiff", ".pfm or .exr"]),
+        (vec!["export", "final", "-o", "final.yaml"], &["final.yaml", ".json or .toml"]),
+        // Absurd resource flags are refused up front with the bound (class 4).
+        (render(&["--threads", "100000000"]), &["--threads", "1024"]),
+        (vec!["bench", "ch07-diffuse", "--threads", "5000"], &["--threads", "1024"]),
+        (vec!["stress", "--quick", "--threads", "5000"], &["--threads", "1024"]),
         // Bad input is reported before any output path is looked at.
         (vec!["render", "ch07-diffuse", "-q", "--width", "0", "-o", "missing/out.png"], &["width"]),
         (vec!["render", "no-such-preset", "-o", "keep.png"], &["unknown scene 'no-such-preset'"]),
@@ -136,11 +144,9 @@ fn unwritable_outputs_exit_1_before_rendering_and_write_nothing() {
         (render(&["-o", "missing/out.png"]), &["missing/out.png", "does not exist"]),
         (render(&["-o", "plain/out.png"]), &["plain/out.png", "not a folder"]),
         (render(&["-o", "dir.png"]), &["dir.png", "is a directory"]),
-        (render(&["-o", "out.jpg"]), &["out.jpg", ".png"]),
         // A later output that cannot be written stops the run before the
         // image is written, so no run leaves some of its outputs behind.
         (render(&["-o", "keep.png", "--float", "missing/out.pfm"]), &["missing/out.pfm", "does not exist"]),
-        (render(&["-o", "keep.png", "--float", "out.tiff"]), &["out.tiff", ".pfm"]),
         (
             render(&["-o", "keep.png", "--float", "plain/x.exr", "--stats-json", "s.json"]),
             &["plain/x.exr", "not a folder"],
@@ -149,7 +155,6 @@ fn unwritable_outputs_exit_1_before_rendering_and_write_nothing() {
         (render(&["-o", "keep.png", "--stats-json", "dir.png"]), &["dir.png", "is a directory"]),
         (vec!["export", "final", "-o", "missing/final.json"], &["missing/final.json", "does not exist"]),
         (vec!["export", "final", "-o", "plain/final.toml"], &["plain/final.toml"]),
-        (vec!["export", "final", "-o", "final.yaml"], &["final.yaml", ".json or .toml"]),
     ];
     for (args, needles) in cases {
         let what = args.join(" ");
@@ -359,4 +364,36 @@ fn exported_presets_render_the_identical_image() {
             }
         }
     }
+}
+
+#[test]
+fn explain_prints_the_plan_the_render_uses() {
+    let dir = tempfile::tempdir().unwrap();
+    let small = ["--width", "16", "--height", "9", "--spp", "2", "--depth", "3", "-q"];
+    let r = rtow(dir.path(), &[&["render", "final", "--explain", "-o", "a.png"][..], &small].concat());
+    success(&r, "explain final");
+    assert!(r.stdout.contains("material passes: lambertian, metal, dielectric"), "{}", r.stdout);
+    assert!(r.stdout.contains("thin-lens") && r.stdout.contains("jittered"), "{}", r.stdout);
+    assert!(r.stdout.contains("bvh8, packets"), "{}", r.stdout);
+    let r = rtow(
+        dir.path(),
+        &[&["render", "ch08-metal", "--explain", "--accel", "brute", "-o", "b.png"][..], &small].concat(),
+    );
+    success(&r, "explain ch08");
+    assert!(r.stdout.contains("material passes: lambertian, metal;"), "{}", r.stdout);
+    assert!(r.stdout.contains("pinhole") && r.stdout.contains("brute force"), "{}", r.stdout);
+}
+
+#[test]
+fn book_sets_the_books_settings_and_explicit_flags_win() {
+    let dir = tempfile::tempdir().unwrap();
+    let r = rtow(
+        dir.path(),
+        &["render", "final", "--book", "--spp", "1", "--depth", "2", "-q", "-o", "b.png", "--stats-json", "s.json"],
+    );
+    success(&r, "--book");
+    let v: serde_json::Value =
+        serde_json::from_str(&std::fs::read_to_string(dir.path().join("s.json")).unwrap()).unwrap();
+    assert_eq!((v["width"].as_u64(), v["height"].as_u64()), (Some(1200), Some(675)), "--book size");
+    assert_eq!((v["spp"].as_u64(), v["max_depth"].as_u64()), (Some(1), Some(2)), "explicit flags win");
 }

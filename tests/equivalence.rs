@@ -25,7 +25,9 @@ fn others() -> Vec<(KernelChoice, AccelChoice)> {
 fn simd_is_the_widest_kernel_of_the_build() {
     let widest = if rtow::render::HAS_SIMD16 { Kernel::Simd16 } else { Kernel::Simd8 };
     assert_eq!(Kernel::resolve(Simd).unwrap(), widest);
-    assert_eq!(Kernel::resolve(Simd16).is_ok(), rtow::render::HAS_SIMD16);
+    // Every build has both widths (16 lanes are two 8-lane halves without AVX-512).
+    assert_eq!(Kernel::resolve(Simd16).unwrap(), Kernel::Simd16);
+    assert_eq!(Kernel::resolve(Simd8).unwrap(), Kernel::Simd8);
 }
 
 #[test]

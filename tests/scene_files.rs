@@ -47,7 +47,8 @@ fn values_at_the_edges_of_their_ranges_are_accepted() {
   "render": {"width": 1, "height": 134217728, "samples_per_pixel": 1, "max_depth": 1}
 }"#;
     let toml = "[camera]\nlook_from = [0, 0, 0]\nlook_at = [0, 0, -1]\nvup = [1e-3, 1, 0]\naperture = 0\n\n\
-                [[spheres]]\ncenter = [0, 0, -1]\nradius = -1e-30\nmaterial = { type = \"dielectric\", ior = 1e-30 }\n";
+                [[spheres]]\ncenter = [0, 0, -1]\nradius = -1e-5\nmaterial = { type = \"dielectric\", ior = 1e-30 }\n\n\
+                [[spheres]]\ncenter = [-1e6, 1e6, -1e6]\nradius = 1e6\nmaterial = { type = \"dielectric\", ior = 1.5 }\n";
     for (text, f) in [(json, "ok.json"), (toml, "ok.toml")] {
         scene::scene_from_str(text, format_of(f), Path::new(f)).unwrap_or_else(|e| panic!("{f}: {e}"));
     }
@@ -59,7 +60,8 @@ fn load_scene_rejects_what_it_cannot_read() {
     for (name, contents, says) in [
         ("scene.yaml", &b"camera: {}"[..], "unknown scene file type"),
         ("missing.json", &b""[..], "cannot read"),
-        ("latin1.toml", &b"[camera]\n# caf\xe9\n"[..], "cannot read"),
+        // Not UTF-8: the offending byte's offset, line and column.
+        ("latin1.toml", &b"[camera]\n# caf\xe9\n"[..], "byte offset 14 (line 2, column 6)"),
     ] {
         let p = dir.path().join(name);
         if name != "missing.json" {
@@ -103,11 +105,13 @@ fn saving_to_an_unwritable_path_is_an_output_error_and_writes_nothing() {
     for (target, says) in [
         ("no/such/folder/s.json", "does not exist"),
         ("plain/s.toml", "not a folder"),
-        ("s.yaml", "unknown scene file type"),
-        ("s", "unknown scene file type"),
+        ("s.yaml", ".json or .toml"),
+        ("s", ".json or .toml"),
     ] {
         let e = scene::save_scene(&s, &dir.path().join(target)).unwrap_err();
-        assert_eq!(e.exit_code(), 1, "{target}: {e}");
+        // An unsupported extension is a usage error (2), an unwritable place an output error (1).
+        let want = if says.starts_with(".json") { 2 } else { 1 };
+        assert_eq!(e.exit_code(), want, "{target}: {e}");
         assert!(e.to_string().contains(says), "{target}: {e}");
     }
     let left: Vec<_> = std::fs::read_dir(dir.path()).unwrap().map(|e| e.unwrap().file_name()).collect();
@@ -139,8 +143,19 @@ fn finite() -> impl Strategy<Value = f32> {
     ]
 }
 
+/// A finite float inside the world range (subnormal and -0 included).
+fn coord() -> impl Strategy<Value = f32> {
+    finite().prop_filter("in the world range", |x| x.abs() <= rtow::limits::MAX_COORD)
+}
+
+/// A radius inside the verified range, either sign.
+fn radius() -> impl Strategy<Value = f32> {
+    let (lo, hi) = (rtow::limits::MIN_RADIUS, rtow::limits::MAX_RADIUS);
+    prop_oneof![lo..=hi, -hi..=-lo, Just(lo), Just(-hi)]
+}
+
 fn v3() -> impl Strategy<Value = [f32; 3]> {
-    [finite(), finite(), finite()]
+    [coord(), coord(), coord()]
 }
 
 fn colour() -> impl Strategy<Value = [f32; 3]> {
@@ -156,11 +171,7 @@ fn material() -> impl Strategy<Value = Material> {
 }
 
 fn sphere() -> impl Strategy<Value = Sphere> {
-    (v3(), finite().prop_filter("non-zero", |r| *r != 0.0), material()).prop_map(|(center, radius, material)| Sphere {
-        center,
-        radius,
-        material,
-    })
+    (v3(), radius(), material()).prop_map(|(center, radius, material)| Sphere { center, radius, material })
 }
 
 fn scene_strategy() -> impl Strategy<Value = Scene> {
@@ -193,7 +204,7 @@ fn scene_strategy() -> impl Strategy<Value = Scene> {
 proptest! {
     #![proptest_config(ProptestConfig::with_cases(128))]
 
-    /// Any valid scene, with any finite floats (subnormal, huge, -0), is
+    /// Any valid scene, with any floats in range (subnormal, extreme, -0), is
     /// written and read back bit for bit in both formats.
     #[test]
     fn valid_scenes_round_trip_exactly(s in scene_strategy()) {
@@ -204,6 +215,30 @@ proptest! {
             prop_assert_eq!(&back, &s);
             let bits = |s: &Scene| s.spheres.iter().map(|p| (p.center.map(f32::to_bits), p.radius.to_bits())).collect::<Vec<_>>();
             prop_assert_eq!(bits(&back), bits(&s));
+        }
+    }
+
+    /// A sphere outside the verified range (any finite float, huge ones
+    /// included: `r^2` overflows f32 above ~1.8e19) is refused in both
+    /// formats, naming the field, never rendered as a vanished sphere.
+    #[test]
+    fn out_of_range_spheres_are_refused_naming_the_field(s in scene_strategy(), c in finite(), r in finite()) {
+        let mut s = s;
+        s.spheres = vec![Sphere { center: [c, 0.0, 0.0], radius: r, material: Material::Dielectric { ior: 1.5 } }];
+        let lim = &rtow::limits::MAX_COORD;
+        let ok_c = c.abs() <= *lim;
+        let ok_r = (rtow::limits::MIN_RADIUS..=rtow::limits::MAX_RADIUS).contains(&r.abs());
+        for format in [Format::Json, Format::Toml] {
+            let text = scene::scene_to_string(&s, format);
+            match scene::scene_from_str(&text, format, Path::new("p")) {
+                Ok(_) => prop_assert!(ok_c && ok_r, "accepted c {c} r {r}"),
+                Err(e) => {
+                    prop_assert!(!(ok_c && ok_r), "refused c {c} r {r}: {e}");
+                    let field = if ok_c { "spheres[0].radius" } else { "spheres[0].center" };
+                    prop_assert!(e.to_string().contains(field), "{e}");
+                    prop_assert_eq!(e.exit_code(), 2);
+                }
+            }
         }
     }
 }

@@ -1,11 +1,12 @@
 //! `rtow bench`: rays/s and work per ray of each kernel; baselines.
 
 use super::args::{kernel_parser, ImageArgs};
-use super::{load, say};
+use super::{load, say, tell};
 use clap::Args;
+use rtow::output::Outputs;
 use rtow::tools::bench::{self, Baseline, Verdict};
 use rtow::{Error, KernelChoice, Result};
-use std::path::PathBuf;
+use std::path::{Path, PathBuf};
 
 #[derive(Args)]
 pub struct BenchArgs {
@@ -41,6 +42,7 @@ pub struct BenchArgs {
 
 /// Ok(false): a regression against the baseline (exit status 1).
 pub fn run(a: BenchArgs) -> Result<bool> {
+    rtow::limits::check_threads(a.image.threads)?;
     let (scene, name) = load(&a.scene)?;
     let s = a.image.settings(&scene);
     if a.image.tile != 16 {
@@ -62,8 +64,20 @@ pub fn run(a: BenchArgs) -> Result<bool> {
     if let Some(b) = &baseline {
         b.check(&name, &s, &a.kernels)?;
     }
-    for path in [&a.json, &a.save].into_iter().flatten() {
-        rtow::output::check_writable(path)?;
+    // The outputs are one transaction: distinct from each other and from the
+    // inputs, checked now, written together after the measurements.
+    let mut outputs = Outputs::new();
+    if rtow::scene::preset(&a.scene).is_none() {
+        outputs.input(Path::new(&a.scene), "scene file");
+    }
+    if let Some(b) = &a.baseline {
+        outputs.input(b, "baseline");
+    }
+    let mut ids = Vec::new();
+    for (path, flag) in [(&a.json, "--json"), (&a.save, "--save")] {
+        if let Some(p) = path {
+            ids.push(outputs.add(p, flag)?);
+        }
     }
     if a.by_depth {
         for &k in &a.kernels {
@@ -72,7 +86,7 @@ pub fn run(a: BenchArgs) -> Result<bool> {
         }
         return Ok(true);
     }
-    eprintln!(
+    tell!(
         "bench {name}: {}x{} {} spp depth {} seed {}, {} repetition(s) per kernel, built for {}",
         s.width,
         s.height,
@@ -83,12 +97,14 @@ pub fn run(a: BenchArgs) -> Result<bool> {
         rtow::isa()
     );
     let report = bench::run(&scene, &name, &cfg, |k, i, st| {
-        eprintln!("  {} run {}: {:.3} s, {:.2} Mrays/s", k.name(), i + 1, st.seconds, st.mrays_per_s)
+        tell!("  {} run {}: {:.3} s, {:.2} Mrays/s", k.name(), i + 1, st.seconds, st.mrays_per_s)
     })?;
     say!("{}", report.table().trim_end_matches('\n'));
-    for path in [&a.json, &a.save].into_iter().flatten() {
-        rtow::output::write_atomic(path, report.to_json().as_bytes())?;
+    let json = report.to_json();
+    for id in ids {
+        outputs.stage(id, json.as_bytes())?;
     }
+    outputs.commit()?;
     let mut ok = true;
     if let Some(b) = &baseline {
         for c in bench::compare(&report, b, a.tolerance) {

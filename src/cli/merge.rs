@@ -2,11 +2,11 @@
 //! for bit the one a single process renders with the same scene and settings.
 
 use super::args::positive_f32;
-use super::render::check_ext;
 use super::say;
 use clap::Args;
 use rayon::prelude::*;
 use rtow::film::part::{self, is_part_path, Part};
+use rtow::output::{check_extension, image_bytes, Outputs};
 use rtow::Result;
 use std::path::PathBuf;
 use std::time::Instant;
@@ -37,15 +37,18 @@ pub struct MergeArgs {
 pub fn run(a: MergeArgs) -> Result<()> {
     let t0 = Instant::now();
     let film_out = is_part_path(&a.output);
-    if !film_out {
-        check_ext(&a.output, &["png", "rtfilm"], "the output")?;
-    }
+    check_extension(&a.output, &["png", "rtfilm"], "-o")?;
     if let Some(f) = &a.float {
-        check_ext(f, &["pfm", "exr"], "--float")?;
+        check_extension(f, &["pfm", "exr"], "--float")?;
     }
-    for p in std::iter::once(&a.output).chain(&a.float).chain(&a.stats_json) {
-        rtow::output::check_writable(p)?;
+    // The outputs are one transaction (see `rtow::output`); no output may be one of the parts.
+    let mut outputs = Outputs::new();
+    for p in &a.parts {
+        outputs.input(p, "partial film");
     }
+    let out_id = outputs.add(&a.output, "-o")?;
+    let float_id = a.float.as_deref().map(|f| outputs.add(f, "--float")).transpose()?;
+    let stats_id = a.stats_json.as_deref().map(|j| outputs.add(j, "--stats-json")).transpose()?;
     // Read (and check) every part; the first failure in the order given is reported.
     let read: Vec<Result<Part>> = a.parts.par_iter().map(|p| Part::read(p)).collect();
     let mut parts = Vec::with_capacity(read.len());
@@ -59,13 +62,13 @@ pub fn run(a: MergeArgs) -> Result<()> {
     let merge_seconds = t1.elapsed().as_secs_f64();
     let t2 = Instant::now();
     if film_out {
-        merged.write(&a.output)?;
+        outputs.stage(out_id, &merged.to_bytes())?;
     } else {
         let gamma = a.gamma.unwrap_or_else(|| rtow::shard::default_gamma(&merged));
-        image.save(&a.output, gamma)?;
+        outputs.stage(out_id, &image_bytes(&image, &a.output, gamma)?)?;
     }
-    if let Some(f) = &a.float {
-        image.save(f, 1.0)?;
+    if let (Some(id), Some(f)) = (float_id, &a.float) {
+        outputs.stage(id, &image_bytes(&image, f, 1.0)?)?;
     }
     let h = &merged.header;
     let split = parts[0].1.header.split;
@@ -86,10 +89,11 @@ pub fn run(a: MergeArgs) -> Result<()> {
     let write_seconds = t2.elapsed().as_secs_f64();
     stats["write_seconds"] = write_seconds.into();
     stats["seconds"] = t0.elapsed().as_secs_f64().into();
-    if let Some(j) = &a.stats_json {
+    if let Some(id) = stats_id {
         let text = serde_json::to_string_pretty(&stats).expect("stats serialize") + "\n";
-        rtow::output::write_atomic(j, text.as_bytes())?;
+        outputs.stage(id, text.as_bytes())?;
     }
+    outputs.commit()?;
     if !a.quiet {
         say!(
             "merged {} part(s) ({}x{}, {} spp, split by {}) -> {}: {} rays, {} samples, image hash {hash}, in {:.3} s \

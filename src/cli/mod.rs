@@ -22,6 +22,15 @@ macro_rules! say {
     }};
 }
 
+/// `eprintln!` that never panics: with stderr on a full or closed device the
+/// message is lost, but the exit status stays the documented one.
+macro_rules! tell {
+    ($($t:tt)*) => {{
+        use std::io::Write as _;
+        let _ = writeln!(std::io::stderr(), $($t)*);
+    }};
+}
+
 #[derive(Parser)]
 #[command(name = "rtow", about = "A data-oriented SIMD path tracer for Ray Tracing in One Weekend")]
 struct Cli {
@@ -66,6 +75,7 @@ enum Command {
 }
 
 pub(crate) use say;
+pub(crate) use tell;
 
 /// A preset or a file: the scene and a short name for default outputs.
 pub fn load(spec: &str) -> Result<(Scene, String)> {
@@ -84,8 +94,9 @@ pub fn load(spec: &str) -> Result<(Scene, String)> {
 /// Prints the stress tables; exits with status 1 when a bound is broken.
 fn cmd_stress(quick: bool, seed: u64, threads: Option<usize>) -> Result<bool> {
     use std::io::Write;
+    rtow::limits::check_threads(threads)?;
     let cfg = rtow::tools::stress::Config { quick, seed, threads };
-    let report = rtow::tools::stress::run(&cfg, &mut |part| eprintln!("done: {part}"))?;
+    let report = rtow::tools::stress::run(&cfg, &mut |part| tell!("done: {part}"))?;
     say!("{}", report.table().trim_end_matches('\n'));
     let _ = std::io::stdout().flush();
     Ok(report.passed())
@@ -109,6 +120,7 @@ fn run(cli: Cli) -> Result<bool> {
         Command::Export { preset, output } => {
             let s = scene::preset(&preset)
                 .ok_or_else(|| Error::Input(format!("unknown preset '{preset}' (see `rtow scenes`)")))?;
+            rtow::output::check_extension(&output, &["json", "toml"], "-o")?;
             scene::save_scene(&s, &output).map(|_| true)
         }
     }
@@ -136,11 +148,12 @@ fn clap_exit(e: clap::Error) -> ! {
         }
         line.push_str(part);
     }
-    eprintln!("error: {line}");
+    tell!("error: {line}");
     std::process::exit(2)
 }
 
 pub fn main() -> ExitCode {
+    rtow::output::install_signal_cleanup();
     let version = format!("{} ({})", env!("CARGO_PKG_VERSION"), rtow::render::build_description());
     let version: &'static str = Box::leak(version.into_boxed_str());
     let cli = match Cli::command().version(version).try_get_matches().and_then(|m| Cli::from_arg_matches(&m)) {
@@ -151,7 +164,7 @@ pub fn main() -> ExitCode {
         Ok(true) => ExitCode::SUCCESS,
         Ok(false) => ExitCode::from(1),
         Err(e) => {
-            eprintln!("error: {e}");
+            tell!("error: {e}");
             ExitCode::from(e.exit_code() as u8)
         }
     }

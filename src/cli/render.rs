@@ -7,6 +7,7 @@ use super::{load, say};
 use clap::Args;
 use indicatif::{ProgressBar, ProgressStyle};
 use rtow::film::part::{is_part_path, Part, Split, SplitKind};
+use rtow::output::{check_extension, Outputs};
 use rtow::render::{render_counted, Progress};
 use rtow::shard::{self, Job};
 use rtow::{Error, KernelChoice, Result};
@@ -62,18 +63,6 @@ pub struct RenderArgs {
     quiet: bool,
 }
 
-pub(super) fn check_ext(path: &Path, allowed: &[&str], what: &str) -> Result<()> {
-    let ext = path.extension().and_then(|e| e.to_str()).map(|e| e.to_ascii_lowercase()).unwrap_or_default();
-    if allowed.contains(&ext.as_str()) {
-        Ok(())
-    } else {
-        Err(Error::Output {
-            path: path.to_path_buf(),
-            message: format!("{what} must end in .{}", allowed.join(" or .")),
-        })
-    }
-}
-
 fn progress_bar(quiet: bool) -> Option<ProgressBar> {
     if quiet || !std::io::stderr().is_terminal() {
         return None;
@@ -109,15 +98,14 @@ fn render_with_progress<T>(
 }
 
 pub fn run(a: RenderArgs) -> Result<()> {
+    rtow::limits::check_threads(a.image.threads)?;
     let (scene, name) = load(&a.scene)?;
     let s = a.image.settings(&scene);
     let out = a.output.clone().unwrap_or_else(|| PathBuf::from(format!("{name}.png")));
     let film_out = is_part_path(&out);
-    if !film_out {
-        check_ext(&out, &["png", "rtfilm"], "the output")?;
-    }
+    check_extension(&out, &["png", "rtfilm"], "-o")?;
     if let Some(f) = &a.float {
-        check_ext(f, &["pfm", "exr"], "--float")?;
+        check_extension(f, &["pfm", "exr"], "--float")?;
     }
     // Bad input first (exit 2), then every output path, before the render:
     // a failure after it would waste the render and leave some outputs written.
@@ -143,19 +131,27 @@ pub fn run(a: RenderArgs) -> Result<()> {
     if partial {
         shard::check(&scene, &s, &opts, &job)?;
     }
-    for p in std::iter::once(&out).chain(&a.float).chain(&a.stats_json) {
-        rtow::output::check_writable(p)?;
+    // The outputs are one transaction (see `rtow::output`): checked now,
+    // written only when all of them are ready. (The --resume film is read
+    // whole before, so -o may replace it: a render continued in place.)
+    let mut outputs = Outputs::new();
+    if rtow::scene::preset(&a.scene).is_none() {
+        outputs.input(Path::new(&a.scene), "scene file");
     }
+    let png_id = outputs.add(&out, "-o")?;
+    let float_id = a.float.as_deref().map(|f| outputs.add(f, "--float")).transpose()?;
+    let stats_id = a.stats_json.as_deref().map(|j| outputs.add(j, "--stats-json")).transpose()?;
     if a.explain {
         say!("{}", rtow::prepare::plan(&scene, &s, opts.accel).explain());
     }
     let gamma = a.gamma.unwrap_or(scene.mode.default_gamma());
     let r = if partial {
         let (r, part) = render_with_progress(a.quiet, |cb| shard::render_part(&scene, s, opts, &job, cb))?;
+        r.stats.check_finite()?;
         if film_out {
-            part.write(&out)?;
+            outputs.stage(png_id, &part.to_bytes())?;
         } else {
-            r.image.save(&out, gamma)?;
+            outputs.stage(png_id, &rtow::output::image_bytes(&r.image, &out, gamma)?)?;
         }
         r
     } else {
@@ -167,16 +163,18 @@ pub fn run(a: RenderArgs) -> Result<()> {
                 rtow::render(&scene, s, opts, cb)
             }
         })?;
-        r.image.save(&out, gamma)?;
+        r.stats.check_finite()?;
+        outputs.stage(png_id, &rtow::output::image_bytes(&r.image, &out, gamma)?)?;
         r
     };
-    if let Some(f) = &a.float {
-        r.image.save(f, 1.0)?;
+    if let (Some(id), Some(f)) = (float_id, &a.float) {
+        outputs.stage(id, &rtow::output::image_bytes(&r.image, f, 1.0)?)?;
     }
-    if let Some(j) = &a.stats_json {
+    if let Some(id) = stats_id {
         let text = serde_json::to_string_pretty(&r.stats).expect("stats serialize") + "\n";
-        rtow::output::write_atomic(j, text.as_bytes())?;
+        outputs.stage(id, text.as_bytes())?;
     }
+    outputs.commit()?;
     if !a.quiet {
         let st = &r.stats;
         say!(

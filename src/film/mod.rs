@@ -319,13 +319,31 @@ impl Image {
     /// Reads a linear image back (PFM or EXR), e.g. a converge reference.
     pub fn load_float(path: &Path) -> Result<Image> {
         let bad = |m: String| Error::Input(format!("{}: {m}", path.display()));
-        let bytes = std::fs::read(path).map_err(|e| bad(e.to_string()))?;
+        let bytes = crate::limits::read_bounded(path, crate::limits::MAX_IMAGE_BYTES, "image")?;
         if bytes.starts_with(b"PF\n") {
             let text_end = nth_newline(&bytes, 3).ok_or_else(|| bad("truncated PFM header".into()))?;
             let header = std::str::from_utf8(&bytes[..text_end]).map_err(|e| bad(e.to_string()))?;
             let mut it = header.split_whitespace().skip(1);
-            let mut num = || it.next().and_then(|s| s.parse::<f64>().ok()).ok_or_else(|| bad("bad PFM header".into()));
-            let (w, h, scale) = (num()? as u32, num()? as u32, num()?);
+            let mut word = |what: &str| it.next().ok_or_else(|| bad(format!("PFM header: {what} missing")));
+            let (ws, hs, ss) = (word("width")?, word("height")?, word("scale")?);
+            // Sizes are positive integers that fit the film, each named when it is not.
+            let size = |what: &str, s: &str| -> Result<u32> {
+                match s.parse::<i64>() {
+                    Ok(v) if v >= 1 && v as u64 <= crate::limits::MAX_PIXELS => Ok(v as u32),
+                    Ok(v) => {
+                        Err(bad(format!("PFM header: {what} {v} must be from 1 to {}", crate::limits::MAX_PIXELS)))
+                    }
+                    Err(_) => Err(bad(format!("PFM header: {what} '{s}' is not an integer"))),
+                }
+            };
+            let (w, h) = (size("width", ws)?, size("height", hs)?);
+            if w as u64 * h as u64 > crate::limits::MAX_PIXELS {
+                return Err(bad(format!("PFM header: {w}x{h} pixels, at most {}", crate::limits::MAX_PIXELS)));
+            }
+            let scale = match ss.parse::<f64>() {
+                Ok(v) if v.is_finite() && v != 0.0 => v,
+                _ => return Err(bad(format!("PFM header: scale '{ss}' must be a non-zero number"))),
+            };
             let body = &bytes[text_end + 1..];
             if body.len() as u64 != w as u64 * h as u64 * 12 {
                 return Err(bad("PFM size does not match its header".into()));
@@ -347,7 +365,23 @@ impl Image {
             }
             Ok(img)
         } else {
-            let img = image::load_from_memory(&bytes).map_err(|e| bad(e.to_string()))?.into_rgb32f();
+            let mut reader = image::ImageReader::new(Cursor::new(&bytes[..]))
+                .with_guessed_format()
+                .map_err(|e| bad(e.to_string()))?;
+            // The decoder's memory is bounded like the file: at most MAX_PIXELS RGBA f32 pixels.
+            let mut limits = image::Limits::default();
+            limits.max_alloc = Some(crate::limits::MAX_PIXELS * 16 + (64 << 20));
+            reader.limits(limits);
+            let img = reader.decode().map_err(|e| bad(e.to_string()))?;
+            if img.width() as u64 * img.height() as u64 > crate::limits::MAX_PIXELS {
+                return Err(bad(format!(
+                    "{}x{} pixels, at most {}",
+                    img.width(),
+                    img.height(),
+                    crate::limits::MAX_PIXELS
+                )));
+            }
+            let img = img.into_rgb32f();
             let (w, h) = img.dimensions();
             let data = img.into_raw().chunks_exact(3).map(|c| [c[0], c[1], c[2]]).collect();
             Ok(Image { width: w, height: h, data })

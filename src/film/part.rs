@@ -37,6 +37,9 @@ use std::path::{Path, PathBuf};
 pub const MAGIC: &[u8; 8] = b"RTOWFILM";
 /// The format version this rtow writes and reads.
 pub const VERSION: u32 = 1;
+/// Largest partial film read (bytes): `MAX_PIXELS` pixels with the widest
+/// sums and the sums of squares, and a header.
+pub const MAX_FILM_BYTES: u64 = crate::limits::MAX_PIXELS * (4 + 3 * 16 + 3 * 8) + (1 << 20);
 /// The file extension of partial films.
 pub const EXTENSION: &str = "rtfilm";
 
@@ -327,7 +330,7 @@ impl Part {
 
     /// Reads and checks a partial film; every error names `path` (exit status 2).
     pub fn read(path: &Path) -> Result<Part> {
-        let bytes = std::fs::read(path).map_err(|e| Error::Input(format!("{}: cannot read: {e}", path.display())))?;
+        let bytes = crate::limits::read_bounded(path, MAX_FILM_BYTES, "partial film")?;
         Part::from_bytes(&bytes, path)
     }
 

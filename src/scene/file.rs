@@ -41,8 +41,38 @@ fn field_prefix(path: &serde_path_to_error::Path) -> String {
     }
 }
 
-/// Parses and validates a scene; `origin` names the source in errors.
+impl Format {
+    /// The largest file of this format rtow reads (see [`crate::limits`]).
+    pub fn max_bytes(self) -> u64 {
+        match self {
+            Format::Json => crate::limits::MAX_JSON_BYTES,
+            Format::Toml => crate::limits::MAX_TOML_BYTES,
+        }
+    }
+}
+
+/// Parses and validates a scene file's bytes: a UTF-8 byte-order mark is
+/// skipped; bytes that are not UTF-8 are reported with their offset, line and
+/// column; more than [`Format::max_bytes`] are refused before parsing.
+pub fn scene_from_bytes(bytes: &[u8], format: Format, origin: &Path) -> Result<Scene> {
+    let parse_err = |message: String| Error::Parse { path: origin.to_path_buf(), message };
+    if bytes.len() as u64 > format.max_bytes() {
+        return Err(parse_err(format!("{} bytes is too large: at most {}", bytes.len(), format.max_bytes())));
+    }
+    let bytes = bytes.strip_prefix(b"\xEF\xBB\xBF").unwrap_or(bytes);
+    let text = std::str::from_utf8(bytes).map_err(|e| {
+        let at = e.valid_up_to();
+        // The valid prefix is text: place the bad byte in it.
+        let (l, c) = line_col(std::str::from_utf8(&bytes[..at]).unwrap_or_default(), at);
+        parse_err(format!("not UTF-8: byte 0x{:02x} at byte offset {at} (line {l}, column {c})", bytes[at]))
+    })?;
+    scene_from_str(text, format, origin)
+}
+
+/// Parses and validates a scene; `origin` names the source in errors. A
+/// leading byte-order mark is skipped (JSON and TOML alike).
 pub fn scene_from_str(text: &str, format: Format, origin: &Path) -> Result<Scene> {
+    let text = text.strip_prefix('\u{feff}').unwrap_or(text);
     let parse_err = |message: String| Error::Parse { path: origin.to_path_buf(), message };
     let scene: Scene = match format {
         Format::Json => {
@@ -94,9 +124,8 @@ fn strip_position(s: &str) -> String {
 /// Reads, parses and validates a scene file (.json or .toml).
 pub fn load_scene(path: &Path) -> Result<Scene> {
     let format = Format::from_path(path)?;
-    let text =
-        std::fs::read_to_string(path).map_err(|e| Error::Input(format!("cannot read {}: {e}", path.display())))?;
-    scene_from_str(&text, format, path)
+    let bytes = crate::limits::read_bounded(path, format.max_bytes(), "scene file")?;
+    scene_from_bytes(&bytes, format, path)
 }
 
 pub fn scene_to_string(scene: &Scene, format: Format) -> String {
@@ -107,10 +136,10 @@ pub fn scene_to_string(scene: &Scene, format: Format) -> String {
 }
 
 /// Writes a scene file, atomically, in the format its extension names.
-/// A path without .json / .toml is an output error, like any other unwritable path.
+/// A path without .json / .toml is a usage error (exit status 2) naming them.
 pub fn save_scene(scene: &Scene, path: &Path) -> Result<()> {
-    let out_err = |message: String| Error::Output { path: path.to_path_buf(), message };
-    let format = Format::from_path(path).map_err(|_| out_err("unknown scene file type (use .json or .toml)".into()))?;
+    crate::output::check_extension(path, &["json", "toml"], "scene file")?;
+    let format = Format::from_path(path)?;
     crate::output::write_atomic(path, scene_to_string(scene, format).as_bytes())
 }
 

@@ -3,10 +3,11 @@
 //! This is also the schema of scene files (JSON or TOML, see `file.rs`), so a
 //! scene written by `rtow export` loads back into the identical value.
 
+pub(crate) mod de;
 mod file;
 mod presets;
 
-pub use file::{load_scene, save_scene, scene_from_str, scene_to_string, Format};
+pub use file::{load_scene, save_scene, scene_from_bytes, scene_from_str, scene_to_string, Format};
 pub use presets::{final_scene, preset, presets, Preset};
 
 use crate::error::{Error, Result};
@@ -34,8 +35,11 @@ pub enum Material {
 struct MaterialFields {
     #[serde(rename = "type")]
     kind: Kind,
+    #[serde(default, deserialize_with = "de::opt_vec3")]
     albedo: Option<[f32; 3]>,
+    #[serde(default, deserialize_with = "de::opt_f32")]
     fuzz: Option<f32>,
+    #[serde(default, deserialize_with = "de::opt_f32")]
     ior: Option<f32>,
 }
 
@@ -78,8 +82,10 @@ impl Material {
 #[derive(Serialize, Deserialize, Clone, Copy, Debug, PartialEq)]
 #[serde(deny_unknown_fields)]
 pub struct Sphere {
+    #[serde(deserialize_with = "de::vec3")]
     pub center: [f32; 3],
     /// Signed: a negative radius is the book's hollow sphere (normal flipped inwards).
+    #[serde(deserialize_with = "de::f32")]
     pub radius: f32,
     pub material: Material,
 }
@@ -94,21 +100,23 @@ fn default_vfov() -> f32 {
 #[derive(Serialize, Deserialize, Clone, Copy, Debug, PartialEq)]
 #[serde(deny_unknown_fields)]
 pub struct Camera {
+    #[serde(deserialize_with = "de::vec3")]
     pub look_from: [f32; 3],
+    #[serde(deserialize_with = "de::vec3")]
     pub look_at: [f32; 3],
-    #[serde(default = "default_vup")]
+    #[serde(default = "default_vup", deserialize_with = "de::vec3")]
     pub vup: [f32; 3],
-    #[serde(default = "default_vfov")]
+    #[serde(default = "default_vfov", deserialize_with = "de::f32")]
     pub vfov_deg: f32,
     /// Cone angle of the thin lens seen from the focus plane; 0 = pinhole.
-    #[serde(default, skip_serializing_if = "Option::is_none")]
+    #[serde(default, skip_serializing_if = "Option::is_none", deserialize_with = "de::opt_f32")]
     pub defocus_angle_deg: Option<f32>,
     /// The seed's lens diameter: `2 * focus_dist * tan(defocus_angle / 2)`. Either this
     /// or `defocus_angle_deg`, not both.
-    #[serde(default, skip_serializing_if = "Option::is_none")]
+    #[serde(default, skip_serializing_if = "Option::is_none", deserialize_with = "de::opt_f32")]
     pub aperture: Option<f32>,
     /// Distance to the plane in focus; defaults to |look_from - look_at|.
-    #[serde(default, skip_serializing_if = "Option::is_none")]
+    #[serde(default, skip_serializing_if = "Option::is_none", deserialize_with = "de::opt_f32")]
     pub focus_dist: Option<f32>,
 }
 
@@ -148,7 +156,9 @@ impl Camera {
 #[derive(Serialize, Deserialize, Clone, Copy, Debug, PartialEq)]
 #[serde(deny_unknown_fields)]
 pub struct Sky {
+    #[serde(deserialize_with = "de::vec3")]
     pub horizon: [f32; 3],
+    #[serde(deserialize_with = "de::vec3")]
     pub zenith: [f32; 3],
 }
 
@@ -174,7 +184,7 @@ pub struct Scene {
     #[serde(default, skip_serializing_if = "is_default")]
     pub mode: Mode,
     pub camera: Camera,
-    #[serde(default)]
+    #[serde(default, deserialize_with = "de::spheres")]
     pub spheres: Vec<Sphere>,
     #[serde(default)]
     pub sky: Sky,
@@ -198,6 +208,22 @@ fn finite(field: &str, v: f32) -> Result<()> {
     }
 }
 
+/// A point of the world: finite and inside the range where the kernels'
+/// error bounds hold ([`crate::limits::MAX_COORD`]).
+fn point(field: &str, v: [f32; 3]) -> Result<()> {
+    finite3(field, v)?;
+    let m = crate::limits::MAX_COORD;
+    if v.iter().any(|x| x.abs() > m) {
+        return Err(Error::invalid(
+            field,
+            format!(
+                "coordinates must be within [-{m:e}, {m:e}] (the range rtow's f32 kernels are verified in), got {v:?}"
+            ),
+        ));
+    }
+    Ok(())
+}
+
 fn colour(field: &str, v: [f32; 3]) -> Result<()> {
     finite3(field, v)?;
     if v.iter().any(|&x| x < 0.0) {
@@ -207,11 +233,50 @@ fn colour(field: &str, v: [f32; 3]) -> Result<()> {
 }
 
 impl Scene {
+    /// The focus distance and the lens, checked in f64 to be what the f32
+    /// camera can represent: the camera's pixel grid (relative to the eye, at
+    /// the focus distance) and its lens vectors must be finite and normal f32
+    /// numbers whatever the image size (see [`crate::camera::Camera::check`]).
+    fn check_lens(&self) -> Result<()> {
+        use crate::limits::{MAX_FOCUS, MAX_LENS_RADIUS, MIN_FOCUS};
+        let c = &self.camera;
+        let focus = c.focus_distance();
+        let field = if c.focus_dist.is_some() { "camera.focus_dist" } else { "camera.look_at" };
+        if !(focus >= MIN_FOCUS as f64 && focus <= MAX_FOCUS as f64) {
+            return Err(Error::invalid(
+                field,
+                format!(
+                    "the focus distance{} must be in [{MIN_FOCUS:e}, {MAX_FOCUS:e}], got {focus:e}",
+                    if c.focus_dist.is_some() { "" } else { " |look_from - look_at|" }
+                ),
+            ));
+        }
+        if c.vfov_deg < crate::limits::MIN_VFOV_DEG {
+            return Err(Error::invalid(
+                "camera.vfov_deg",
+                format!(
+                    "must be at least {:e} degrees for the f32 camera, got {}",
+                    crate::limits::MIN_VFOV_DEG,
+                    c.vfov_deg
+                ),
+            ));
+        }
+        let lr = c.lens_radius();
+        if !(lr.is_finite() && lr <= MAX_LENS_RADIUS as f64) {
+            let field = if c.aperture.is_some() { "camera.aperture" } else { "camera.defocus_angle_deg" };
+            return Err(Error::invalid(
+                field,
+                format!("the lens radius must be at most {MAX_LENS_RADIUS:e}, got {lr:e}"),
+            ));
+        }
+        crate::camera::Camera::check(c)
+    }
+
     /// Checks every value a render depends on; the error names the field.
     pub fn validate(&self) -> Result<()> {
         let c = &self.camera;
-        finite3("camera.look_from", c.look_from)?;
-        finite3("camera.look_at", c.look_at)?;
+        point("camera.look_from", c.look_from)?;
+        point("camera.look_at", c.look_at)?;
         finite3("camera.vup", c.vup)?;
         finite("camera.vfov_deg", c.vfov_deg)?;
         if self.mode != Mode::Gradient {
@@ -253,6 +318,9 @@ impl Scene {
                 return Err(Error::invalid("camera.focus_dist", format!("must be > 0, got {f}")));
             }
         }
+        if self.mode != Mode::Gradient {
+            self.check_lens()?;
+        }
         self.render.validate()?;
         colour("sky.horizon", self.sky.horizon)?;
         colour("sky.zenith", self.sky.zenith)?;
@@ -264,10 +332,20 @@ impl Scene {
         }
         for (i, s) in self.spheres.iter().enumerate() {
             let f = |name: &str| format!("spheres[{i}].{name}");
-            finite3(&f("center"), s.center)?;
+            point(&f("center"), s.center)?;
             finite(&f("radius"), s.radius)?;
             if s.radius == 0.0 {
                 return Err(Error::invalid(f("radius"), "must not be 0"));
+            }
+            let (lo, hi) = (crate::limits::MIN_RADIUS, crate::limits::MAX_RADIUS);
+            if !(lo..=hi).contains(&s.radius.abs()) {
+                return Err(Error::invalid(
+                    f("radius"),
+                    format!(
+                        "|radius| must be in [{lo:e}, {hi:e}] (the range rtow's f32 kernels are verified in), got {}",
+                        s.radius
+                    ),
+                ));
             }
             match s.material {
                 Material::Lambertian { albedo } => colour(&f("material.albedo"), albedo)?,

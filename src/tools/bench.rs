@@ -101,6 +101,7 @@ pub fn run(
         let mut runs = Vec::new();
         for i in 0..cfg.repeat {
             let r = render(scene, cfg.settings, opts, None)?;
+            r.stats.check_finite()?;
             on_run(kernel, i, &r.stats);
             runs.push(r.stats);
         }
@@ -207,9 +208,8 @@ pub struct Baseline {
 
 impl Baseline {
     pub fn load(path: &Path) -> Result<Baseline> {
-        let text = std::fs::read_to_string(path)
-            .map_err(|e| Error::Input(format!("cannot read baseline {}: {e}", path.display())))?;
-        serde_json::from_str(&text)
+        let bytes = crate::limits::read_bounded(path, crate::limits::MAX_BASELINE_BYTES, "baseline")?;
+        serde_json::from_slice(&bytes)
             .map_err(|e| Error::Parse { path: path.to_path_buf(), message: format!("not a rtow bench baseline: {e}") })
     }
 

@@ -1,0 +1,341 @@
+//! A fuzzer over the whole input path, on stable Rust: bytes -> scene parse ->
+//! validation -> a tiny render with both kernels. Inputs come from a corpus of
+//! every preset exported as JSON and TOML, mutated at the byte and the token
+//! level (numbers replaced by extreme values, vectors lengthened, BOMs,
+//! invalid UTF-8, deep nesting, splices between files), and from a structured
+//! generator of scenes with extreme but finite values. Every input must:
+//!
+//! - never panic;
+//! - be refused with exit status 2 and a one-line message, or be accepted;
+//! - when accepted, render with both kernels within a time bound, with no NaN
+//!   or infinity in the image, the same image from both kernels, and either
+//!   few rejected samples or a `check_finite` error (exit status 2);
+//! - keep the process's peak memory bounded.
+//!
+//! `cargo test` runs it for 3 seconds; `.ci/run` for 60
+//! (`RTOW_FUZZ_SECS=60 cargo test --test fuzz`); a long run:
+//! `RTOW_FUZZ_SECS=3600 RTOW_FUZZ_SEED=7 cargo test --test fuzz -- --nocapture`.
+//! A failure prints the seed and the input, and writes it to
+//! `target/tmp/fuzz-failure.<ext>` to be replayed with `rtow render`.
+
+use rtow::scene::{self, Format};
+use rtow::{KernelChoice, Overrides, RenderOptions, Settings};
+use std::path::Path;
+use std::time::{Duration, Instant};
+
+struct Rng(u64);
+
+impl Rng {
+    fn next(&mut self) -> u64 {
+        // xorshift64*
+        self.0 ^= self.0 >> 12;
+        self.0 ^= self.0 << 25;
+        self.0 ^= self.0 >> 27;
+        self.0.wrapping_mul(0x2545_f491_4f6c_dd1d)
+    }
+    fn below(&mut self, n: usize) -> usize {
+        (self.next() % n.max(1) as u64) as usize
+    }
+    fn pick<'a, T>(&mut self, v: &'a [T]) -> &'a T {
+        &v[self.below(v.len())]
+    }
+}
+
+/// Values that have broken float code before.
+const NUMBERS: &[&str] = &[
+    "0",
+    "-0",
+    "1",
+    "-1",
+    "1e-30",
+    "-1e-30",
+    "1e30",
+    "1e20",
+    "1e38",
+    "3.4028235e38",
+    "-3.4028235e38",
+    "1e39",
+    "1.17549435e-38",
+    "1e-45",
+    "1e-5",
+    "1e6",
+    "1000001",
+    "4294967295",
+    "4294967296",
+    "18446744073709551615",
+    "18446744073709551616",
+    "100000000000000000000",
+    "-5",
+    "0.5",
+    "179.99998",
+    "180",
+    "1e-4",
+    "nan",
+    "inf",
+    "-inf",
+    "NaN",
+    "1979-05-27",
+    "1979-05-27T07:32:00Z",
+    "true",
+    "\"1\"",
+    "[]",
+    "{}",
+    "[1, 2, 3, 4]",
+    "[1]",
+];
+
+/// Tokens spliced in anywhere.
+const TOKENS: &[&str] = &[
+    "[",
+    "]",
+    "{",
+    "}",
+    ",",
+    ":",
+    "=",
+    "\"",
+    "\n",
+    "\u{feff}",
+    "[[spheres]]\n",
+    "[camera]\n",
+    "\"spheres\": [",
+    "\"radius\": ",
+    "radius = ",
+    "\\u0000",
+    "\u{0}",
+    "#",
+    "'''",
+    "\"\"\"",
+];
+
+fn corpus() -> Vec<(Vec<u8>, Format)> {
+    let mut v = Vec::new();
+    for p in scene::presets() {
+        let s = (p.build)();
+        for f in [Format::Json, Format::Toml] {
+            v.push((scene::scene_to_string(&s, f).into_bytes(), f));
+        }
+    }
+    v
+}
+
+fn is_num_byte(b: u8) -> bool {
+    b.is_ascii_digit() || b == b'.' || b == b'-' || b == b'e' || b == b'E' || b == b'+'
+}
+
+/// One random mutation of `data` (corpus entries available for splicing).
+fn mutate(rng: &mut Rng, data: &mut Vec<u8>, corpus: &[(Vec<u8>, Format)]) {
+    let n = data.len();
+    match rng.below(10) {
+        // Replace a number by an extreme value.
+        0..=2 => {
+            let starts: Vec<usize> =
+                (0..n).filter(|&i| data[i].is_ascii_digit() && (i == 0 || !is_num_byte(data[i - 1]))).collect();
+            if let Some(&i) = starts.get(rng.below(starts.len())) {
+                let mut j = i;
+                while j < n && is_num_byte(data[j]) {
+                    j += 1;
+                }
+                let start = if i > 0 && data[i - 1] == b'-' { i - 1 } else { i };
+                data.splice(start..j, rng.pick(NUMBERS).bytes());
+            }
+        }
+        3 => {
+            let i = rng.below(n + 1);
+            data.splice(i..i, rng.pick(TOKENS).bytes());
+        }
+        4 if n > 0 => {
+            let i = rng.below(n);
+            data[i] ^= 1 << rng.below(8);
+        }
+        5 if n > 0 => {
+            let i = rng.below(n);
+            let len = rng.below(64.min(n - i) + 1);
+            data.drain(i..i + len);
+        }
+        6 if n > 0 => {
+            // Duplicate a range (more spheres, repeated keys).
+            let i = rng.below(n);
+            let len = rng.below(512.min(n - i) + 1);
+            let chunk: Vec<u8> = data[i..i + len].to_vec();
+            let at = rng.below(n + 1);
+            data.splice(at..at, chunk);
+        }
+        7 => {
+            // Splice the tail of another corpus entry.
+            let (other, _) = rng.pick(corpus);
+            let i = rng.below(n + 1);
+            let j = rng.below(other.len() + 1);
+            data.truncate(i);
+            data.extend_from_slice(&other[j..]);
+        }
+        8 => {
+            // Deep nesting.
+            let depth = 1 + rng.below(2000);
+            let i = rng.below(n + 1);
+            let open = if rng.below(2) == 0 { "[" } else { "{\"a\":" };
+            data.splice(i..i, open.repeat(depth).into_bytes());
+        }
+        _ => {
+            // Invalid UTF-8 or a BOM at the start.
+            let bytes: &[u8] = if rng.below(2) == 0 { b"\xEF\xBB\xBF" } else { b"\xff\xfe" };
+            let i = if rng.below(2) == 0 { 0 } else { rng.below(n + 1) };
+            data.splice(i..i, bytes.iter().copied());
+        }
+    }
+    data.truncate(256 << 10);
+}
+
+/// A scene from scratch, with extreme but finite values, as text.
+fn generated(rng: &mut Rng) -> (Vec<u8>, Format) {
+    let mut num = |rng: &mut Rng| -> String {
+        match rng.below(4) {
+            0 => rng.pick(NUMBERS[..22].as_ref()).to_string(),
+            1 => format!("{}", (rng.next() as i64 as f64) / 2f64.powi(rng.below(120) as i32)),
+            _ => format!("{:.3}", (rng.next() % 2000) as f64 / 100.0 - 10.0),
+        }
+    };
+    let v3 =
+        |rng: &mut Rng, num: &mut dyn FnMut(&mut Rng) -> String| format!("[{}, {}, {}]", num(rng), num(rng), num(rng));
+    let mut spheres = Vec::new();
+    for _ in 0..rng.below(6) {
+        let mat = match rng.below(3) {
+            0 => format!(r#"{{"type": "lambertian", "albedo": {}}}"#, v3(rng, &mut num)),
+            1 => format!(r#"{{"type": "metal", "albedo": {}, "fuzz": {}}}"#, v3(rng, &mut num), num(rng)),
+            _ => format!(r#"{{"type": "dielectric", "ior": {}}}"#, num(rng)),
+        };
+        spheres.push(format!(r#"{{"center": {}, "radius": {}, "material": {mat}}}"#, v3(rng, &mut num), num(rng)));
+    }
+    let mut cam = format!(r#""look_from": {}, "look_at": {}"#, v3(rng, &mut num), v3(rng, &mut num));
+    for (key, p) in [("vup", 4), ("vfov_deg", 2), ("focus_dist", 3), ("aperture", 4), ("defocus_angle_deg", 4)] {
+        if rng.below(p) == 0 {
+            let val = if key == "vup" { v3(rng, &mut num) } else { num(rng) };
+            cam += &format!(r#", "{key}": {val}"#);
+        }
+    }
+    let sky = if rng.below(3) == 0 {
+        format!(r#", "sky": {{"horizon": {}, "zenith": {}}}"#, v3(rng, &mut num), v3(rng, &mut num))
+    } else {
+        String::new()
+    };
+    let mode = *rng.pick(&["", r#""mode": "flat", "#, r#""mode": "normals", "#, r#""mode": "gradient", "#]);
+    let json = format!(r#"{{{mode}"camera": {{{cam}}}, "spheres": [{}]{sky}}}"#, spheres.join(", "));
+    // The same scene as TOML half the time, when it is valid JSON.
+    if rng.below(2) == 0 {
+        if let Ok(v) = serde_json::from_str::<serde_json::Value>(&json) {
+            if let Ok(t) = toml::to_string(&v) {
+                return (t.into_bytes(), Format::Toml);
+            }
+        }
+    }
+    (json.into_bytes(), Format::Json)
+}
+
+/// Runs one input through the whole path; `Err` describes a broken promise.
+fn check(bytes: &[u8], format: Format) -> Result<&'static str, String> {
+    let origin = Path::new(if format == Format::Json { "fuzz.json" } else { "fuzz.toml" });
+    let scene = match scene::scene_from_bytes(bytes, format, origin) {
+        Ok(s) => s,
+        Err(e) => {
+            let msg = e.to_string();
+            if e.exit_code() != 2 || msg.is_empty() || msg.lines().count() != 1 {
+                return Err(format!("bad refusal (exit {}): {msg:?}", e.exit_code()));
+            }
+            return Ok("refused");
+        }
+    };
+    let o = Overrides { width: Some(8), height: Some(5), spp: Some(2), max_depth: Some(6), seed: None, book: false };
+    let s = Settings::resolve(&scene.render, &o);
+    s.validate().map_err(|e| format!("tiny settings refused: {e}"))?;
+    let mut hashes = Vec::new();
+    for kernel in [KernelChoice::Scalar, KernelChoice::Simd] {
+        let t = Instant::now();
+        let opts = RenderOptions { kernel, threads: Some(1), ..Default::default() };
+        let r = match rtow::render(&scene, s, opts, None) {
+            Ok(r) => r,
+            Err(e) if e.exit_code() == 2 => return Ok("refused by render"),
+            Err(e) => return Err(format!("render failed with exit {}: {e}", e.exit_code())),
+        };
+        if t.elapsed() > Duration::from_secs(10) {
+            return Err(format!("{kernel:?} took {:?} for 80 samples", t.elapsed()));
+        }
+        if let Some(v) = r.image.data.iter().flatten().find(|v| !v.is_finite()) {
+            return Err(format!("{kernel:?}: non-finite pixel value {v}"));
+        }
+        if let Err(e) = r.stats.check_finite() {
+            if e.exit_code() != 2 {
+                return Err(format!("check_finite exit {}", e.exit_code()));
+            }
+            return Ok("degenerate (exit 2)");
+        }
+        hashes.push(r.stats.image_hash.clone());
+    }
+    if hashes[0] != hashes[1] {
+        return Err(format!("kernels disagree: {hashes:?}"));
+    }
+    Ok("rendered")
+}
+
+fn peak_rss_kib() -> Option<u64> {
+    let s = std::fs::read_to_string("/proc/self/status").ok()?;
+    let line = s.lines().find(|l| l.starts_with("VmHWM:"))?;
+    line.split_whitespace().nth(1)?.parse().ok()
+}
+
+#[test]
+fn fuzz_the_input_path() {
+    let secs: u64 = std::env::var("RTOW_FUZZ_SECS").ok().and_then(|v| v.parse().ok()).unwrap_or(3);
+    let seed: u64 = std::env::var("RTOW_FUZZ_SEED").ok().and_then(|v| v.parse().ok()).unwrap_or_else(|| {
+        std::time::SystemTime::now().duration_since(std::time::UNIX_EPOCH).map_or(1, |d| d.as_nanos() as u64)
+    });
+    let corpus = corpus();
+    let mut rng = Rng(seed | 1);
+    let start = Instant::now();
+    let mut tally: std::collections::BTreeMap<&str, u64> = Default::default();
+    let mut execs = 0u64;
+    // Every corpus entry once, unchanged: they must render.
+    for (bytes, f) in &corpus {
+        assert_eq!(check(bytes, *f), Ok("rendered"), "{}", String::from_utf8_lossy(bytes));
+    }
+    while start.elapsed() < Duration::from_secs(secs) {
+        let (input, format) = if rng.below(4) == 0 {
+            generated(&mut rng)
+        } else {
+            let (base, f) = rng.pick(&corpus);
+            let mut data = base.clone();
+            for _ in 0..1 + rng.below(4) {
+                mutate(&mut rng, &mut data, &corpus);
+            }
+            (data, *f)
+        };
+        let outcome = std::panic::catch_unwind(|| check(&input, format));
+        let failure = match outcome {
+            Ok(Ok(kind)) => {
+                *tally.entry(kind).or_default() += 1;
+                None
+            }
+            Ok(Err(why)) => Some(why),
+            Err(_) => Some("panic".to_string()),
+        };
+        if let Some(why) = failure {
+            let ext = if format == Format::Json { "json" } else { "toml" };
+            let path = Path::new(env!("CARGO_TARGET_TMPDIR")).join(format!("fuzz-failure.{ext}"));
+            let _ = std::fs::write(&path, &input);
+            panic!(
+                "fuzz seed {seed}, execution {execs}: {why}\ninput written to {}:\n{}",
+                path.display(),
+                String::from_utf8_lossy(&input[..input.len().min(4000)])
+            );
+        }
+        execs += 1;
+    }
+    let rss = peak_rss_kib();
+    println!(
+        "fuzz: seed {seed}, {execs} executions in {:.1} s: {tally:?}, peak RSS {rss:?} KiB",
+        start.elapsed().as_secs_f64()
+    );
+    if let Some(kib) = rss {
+        assert!(kib < 1 << 20, "peak RSS {kib} KiB: memory is not bounded");
+    }
+    assert!(execs > 0);
+}
