@@ -186,7 +186,7 @@ pub fn render_portion(
     portion: Portion,
     progress: Option<&(dyn Fn(Progress) + Sync)>,
 ) -> Result<(Rendered, Option<Film>)> {
-    render_inner(scene, settings, opts, portion, progress, &|| ()).map(|(r, _, f)| (r, f))
+    render_inner(scene, settings, opts, portion, true, progress, &|| ()).map(|(r, _, f)| (r, f))
 }
 
 /// Renders with the exact work counters on (`Stats::work`).
@@ -211,7 +211,7 @@ pub fn render_probed<P: Probe + Send>(
     progress: Option<&(dyn Fn(Progress) + Sync)>,
     make: &(dyn Fn() -> P + Sync),
 ) -> Result<(Rendered, Vec<P>)> {
-    render_inner(scene, settings, opts, Portion::default(), progress, make).map(|(r, p, _)| (r, p))
+    render_inner(scene, settings, opts, Portion::default(), false, progress, make).map(|(r, p, _)| (r, p))
 }
 
 fn render_inner<P: Probe + Send>(
@@ -219,6 +219,7 @@ fn render_inner<P: Probe + Send>(
     settings: Settings,
     opts: RenderOptions,
     portion: Portion,
+    keep_film: bool,
     progress: Option<&(dyn Fn(Progress) + Sync)>,
     make: &(dyn Fn() -> P + Sync),
 ) -> Result<(Rendered, Vec<P>, Option<Film>)> {
@@ -253,7 +254,7 @@ fn render_inner<P: Probe + Send>(
             return Err(Error::Input("the film to continue from does not cover the rows to render".into()));
         }
     }
-    let job = Job { rows, samples, start: portion.start };
+    let job = Job { rows, samples, start: portion.start, keep_film };
     let out = pool.install(|| render_prepared(&prep, kernel, opts.tile, &job, progress, make));
     let seconds = t1.elapsed().as_secs_f64();
     let (w, h) = (settings.width, settings.height);
@@ -286,6 +287,7 @@ struct Job<'a> {
     rows: Range<u32>,
     samples: Range<u32>,
     start: Option<&'a Film>,
+    keep_film: bool,
 }
 
 struct Output<P> {
@@ -343,18 +345,25 @@ fn render_prepared<P: Probe + Send>(
         Kernel::Simd8 => wide_tiles::<f32x8, P>(prep, &mut films, samples, &report, make),
         Kernel::Simd16 => wide_tiles::<f32x16, P>(prep, &mut films, samples, &report, make),
     };
-    let mut film = Film::new(s.width, s.height, job.rows.clone(), moments);
+    // The film is gathered only for a caller that wants it (a partial film):
+    // a plain render writes the image straight from the tiles.
+    let mut film = job.keep_film.then(|| Film::new(s.width, s.height, job.rows.clone(), moments));
     let mut rejected = 0;
     let mut traced = 0;
     // Tiles are dropped as they are copied: the peak stays near one film.
     for t in films {
-        film.put_tile(&t);
+        match &mut film {
+            Some(f) => f.put_tile(&t),
+            None => image.put_tile(&t),
+        }
         rejected += t.rejected;
         traced += t.rejected + t.count.iter().map(|&c| c as u64).sum::<u64>();
     }
-    film.write_into(&mut image);
+    if let Some(f) = &film {
+        f.write_into(&mut image);
+    }
     let traced = Some(traced - started);
-    Output { image, rays: rays.into_inner(), rejected, traced, probes, film: Some(film) }
+    Output { image, rays: rays.into_inner(), rejected, traced, probes, film }
 }
 
 fn wide_tiles<W: Wide, P: Probe + Send>(
