@@ -69,7 +69,8 @@ impl TileFilm {
     }
 
     /// Adds one sample to pixel `local` (row-major inside the tile).
-    #[inline]
+    #[cfg_attr(not(feature = "phases"), inline)]
+    #[cfg_attr(feature = "phases", inline(never))]
     pub fn add(&mut self, local: usize, c: [f32; 3]) {
         match accum::to_fixed(c) {
             Some(q) => {

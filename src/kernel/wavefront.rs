@@ -69,7 +69,8 @@ impl Paths {
     }
 
     /// Appends the lanes of `alive` (a bitmask) of a packet: SIMD stream compaction.
-    #[inline(always)]
+    #[cfg_attr(not(feature = "phases"), inline(always))]
+    #[cfg_attr(feature = "phases", inline(never))]
     fn append<W: Wide>(&mut self, alive: u32, o: V3<W>, d: V3<W>, thr: V3<W>, rng: &XoshiroLanes<W::U>, slot: W::U) {
         let at = self.len;
         let put = |v: &mut Vec<f32>, x: W| W::compress_store_u(x.to_bits(), alive, bytemuck::cast_slice_mut(v), at);
@@ -238,6 +239,7 @@ fn render_round<W: Wide, P: Probe>(
 
 /// Camera rays for samples `s0..s1` of every active pixel of the tile, W at a time.
 /// Path `slot` is sample `s0 + slot / na` of active pixel `slot % na`.
+#[cfg_attr(feature = "phases", inline(never))]
 fn generate<W: Wide, P: Probe>(prep: &Prepared, ws: &mut Workspace, tile: &TileFilm, s0: u32, s1: u32, probe: &mut P) {
     let st = &prep.settings;
     let na = ws.active.len();
@@ -460,7 +462,8 @@ fn debug_shade<W: Wide, P: Probe>(
 }
 
 /// Scatters a packet of paths that hit material `kind`; survivors join the next bounce.
-#[inline(always)]
+#[cfg_attr(not(feature = "phases"), inline(always))]
+#[cfg_attr(feature = "phases", inline(never))]
 fn scatter<W: Wide, P: Probe>(
     prep: &Prepared,
     ws: &mut Workspace,
