@@ -6,11 +6,12 @@
 //! - Russian roulette is width-generic ([`roulette`]) and draws one value from
 //!   the path's own stream, at the same bounce in both kernels.
 //! - Adaptive sampling decides at fixed sample counts ([`Adaptive::round_end`]),
-//!   from the film's own accumulated moments ([`TileFilm::relative_error`]),
-//!   which both kernels fill with the same values in the same order.
+//!   from the film's per-pixel moments ([`TileFilm::moments`], turned into an
+//!   error by [`relative_error`]), which both kernels fill with the same values
+//!   in the same order.
 
 use crate::error::{Error, Result};
-use crate::film::TileFilm;
+use crate::film::{Moments, TileFilm};
 use crate::real::Real;
 use crate::sampling::Sampler;
 use crate::sampling::Stream;
@@ -113,8 +114,28 @@ impl Adaptive {
     /// Whether pixel `local` of `tile` has reached the threshold.
     #[inline]
     pub fn converged(&self, tile: &TileFilm, local: usize) -> bool {
-        tile.relative_error(local) <= self.threshold as f64
+        relative_error(&tile.moments(local)) <= self.threshold as f64
     }
+}
+
+/// The relative standard error of a pixel's mean: the standard error (root of
+/// the channels' mean sample variance over the sample count) over the pixel's
+/// mean value (the channels' average, at least [`RELATIVE_ERROR_FLOOR`]).
+/// Infinite below 2 samples. It is computed from the very samples being
+/// averaged, so stopping on it is slightly biased (see the README).
+pub fn relative_error(m: &Moments) -> f64 {
+    let n = m.n as f64;
+    if m.n < 2 {
+        return f64::INFINITY;
+    }
+    let mut var = 0.0;
+    let mut mean = 0.0;
+    for k in 0..3 {
+        var += ((m.sum_sq[k] - m.sum[k] * m.sum[k] / n) / (n - 1.0)).max(0.0);
+        mean += m.sum[k] / n;
+    }
+    let se = (var / 3.0 / n).sqrt();
+    se / (mean / 3.0).max(RELATIVE_ERROR_FLOOR)
 }
 
 /// The estimator's options, as the kernels see them.
@@ -153,6 +174,30 @@ mod tests {
         assert_eq!(a.round_end(0, u32::MAX), 16);
         assert_eq!(a.round_end(1 << 31, u32::MAX), u32::MAX);
         assert_eq!(Estimator::default().round_end(0, 77), 77);
+    }
+
+    #[test]
+    fn relative_error_of_known_samples() {
+        let mut t = TileFilm::new(0, 0, 2, 1).with_moments();
+        let err = |t: &TileFilm, l| relative_error(&t.moments(l));
+        assert_eq!(err(&t, 0), f64::INFINITY);
+        // Pixel 0: samples 1 and 3 in every channel: mean 2, variance 2, se 1.
+        t.add(0, [1.0; 3]);
+        assert_eq!(err(&t, 0), f64::INFINITY);
+        t.add(0, [3.0; 3]);
+        assert!((err(&t, 0) - 0.5).abs() < 1e-12);
+        // Pixel 1: identical samples have no error; a dark noisy pixel is
+        // measured against the floor.
+        t.add(1, [0.5; 3]);
+        t.add(1, [0.5; 3]);
+        assert_eq!(err(&t, 1), 0.0);
+        let mut d = TileFilm::new(0, 0, 1, 1).with_moments();
+        d.add(0, [0.0; 3]);
+        d.add(0, [0.02; 3]);
+        let se = (0.0002f64 / 2.0).sqrt();
+        assert!((err(&d, 0) - se / RELATIVE_ERROR_FLOOR).abs() < 1e-6);
+        let a = Adaptive::new(0.6, 2).unwrap();
+        assert!(a.converged(&t, 0) && !Adaptive::new(0.4, 2).unwrap().converged(&t, 0));
     }
 
     #[test]

@@ -32,6 +32,7 @@ pub mod render;
 pub mod sampling;
 pub mod scene;
 pub mod settings;
+pub mod shard;
 pub mod tools;
 pub mod vec3;
 

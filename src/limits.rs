@@ -6,9 +6,10 @@
 
 use crate::error::{Error, Result};
 
-/// Most pixels an image may have (memory for the film and the 8-bit output:
-/// about 30 bytes a pixel, 4 GB at the limit).
-pub const MAX_PIXELS: u64 = 1 << 27;
+/// Most pixels an image may have: 2^26, an 8192 x 8192 image. Memory: the
+/// exact per-pixel sums (52 bytes a pixel, `film::accum`) plus the linear
+/// image (12) and the 8-bit output, about 4.5 GB at the limit.
+pub const MAX_PIXELS: u64 = 1 << 26;
 
 /// Largest tile edge in pixels: a tile's paths must fit one wavefront workspace.
 pub const MAX_TILE: u32 = 45;

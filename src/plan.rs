@@ -160,7 +160,8 @@ impl Prepared {
     /// The closest hits of a packet of rays (wavefront kernel; bit k of `live`
     /// marks a real ray), as the plan says: brute force, BVH packets, or the BVH
     /// one ray at a time.
-    #[inline(always)]
+    #[cfg_attr(not(feature = "phases"), inline(always))]
+    #[cfg_attr(feature = "phases", inline(never))]
     pub fn closest_hits<W: Wide, P: Probe>(&self, o: V3<W>, d: V3<W>, live: u32, probe: &mut P) -> (W::U32, W) {
         match (&self.bvh, self.plan.accel) {
             (Some(b), Accel::BvhRays) => b.closest_hits_one_by_one(o, d, live, probe),

@@ -3,7 +3,7 @@
 
 use crate::error::{Error, Result};
 use crate::estimator::{Adaptive, Estimator};
-use crate::film::{Image, TileFilm};
+use crate::film::{Film, Image, TileFilm};
 use crate::kernel::{gradient, scalar, wavefront};
 use crate::plan::{Mode, Plan, Prepared};
 use crate::prepare::prepare;
@@ -14,6 +14,7 @@ use crate::scene::Scene;
 use crate::settings::{KernelChoice, RenderOptions, Settings};
 use rayon::prelude::*;
 use serde::Serialize;
+use std::ops::Range;
 use std::sync::atomic::{AtomicU64, Ordering};
 use std::time::Instant;
 use wide::{f32x16, f32x8};
@@ -138,15 +139,34 @@ pub struct Rendered {
     pub stats: Stats,
 }
 
-fn tiles(width: u32, height: u32, edge: u32, moments: bool) -> Vec<TileFilm> {
+/// The tiles of rows `rows`, empty or starting from `start`'s accumulators.
+fn tiles(width: u32, rows: Range<u32>, edge: u32, moments: bool, start: Option<&Film>) -> Vec<TileFilm> {
     let mut v = Vec::new();
-    for y0 in (0..height).step_by(edge as usize) {
+    for y0 in rows.clone().step_by(edge as usize) {
         for x0 in (0..width).step_by(edge as usize) {
-            let t = TileFilm::new(x0, y0, edge.min(width - x0), edge.min(height - y0));
-            v.push(if moments { t.with_moments() } else { t });
+            let (w, h) = (edge.min(width - x0), edge.min(rows.end - y0));
+            let t = match start {
+                Some(f) => f.tile(x0, y0, w, h),
+                None => TileFilm::new(x0, y0, w, h),
+            };
+            v.push(if moments && t.sum_sq.is_empty() { t.with_moments() } else { t });
         }
     }
     v
+}
+
+/// The part of a render to do: a band of rows and a range of sample indices
+/// (all of both by default), starting from an empty film or from `start`
+/// (a resumed render). Every pixel's samples are the same whatever the
+/// portion, so portions add up exactly ([`crate::film`]).
+#[derive(Clone, Debug, Default)]
+pub struct Portion<'a> {
+    /// Rows `rows.start..rows.end` (`None`: every row).
+    pub rows: Option<Range<u32>>,
+    /// Sample indices (`None`: `0..spp`).
+    pub samples: Option<Range<u32>>,
+    /// The accumulators to continue from (their rows must include `rows`).
+    pub start: Option<&'a Film>,
 }
 
 /// Renders `scene` with `settings`; `progress` is called after every tile.
@@ -157,6 +177,19 @@ pub fn render(
     progress: Option<&(dyn Fn(Progress) + Sync)>,
 ) -> Result<Rendered> {
     render_probed(scene, settings, opts, progress, &|| ()).map(|(r, _)| r)
+}
+
+/// Renders a [`Portion`] of the image; also returns its accumulators (`None`
+/// for a scene that traces no samples: the gradient). The image holds the
+/// portion's rows (others are black); the statistics count this run's work.
+pub fn render_portion(
+    scene: &Scene,
+    settings: Settings,
+    opts: RenderOptions,
+    portion: Portion,
+    progress: Option<&(dyn Fn(Progress) + Sync)>,
+) -> Result<(Rendered, Option<Film>)> {
+    render_inner(scene, settings, opts, portion, true, progress, &|| ()).map(|(r, _, f)| (r, f))
 }
 
 /// Renders with the exact work counters on (`Stats::work`).
@@ -181,6 +214,18 @@ pub fn render_probed<P: Probe + Send>(
     progress: Option<&(dyn Fn(Progress) + Sync)>,
     make: &(dyn Fn() -> P + Sync),
 ) -> Result<(Rendered, Vec<P>)> {
+    render_inner(scene, settings, opts, Portion::default(), false, progress, make).map(|(r, p, _)| (r, p))
+}
+
+fn render_inner<P: Probe + Send>(
+    scene: &Scene,
+    settings: Settings,
+    opts: RenderOptions,
+    portion: Portion,
+    keep_film: bool,
+    progress: Option<&(dyn Fn(Progress) + Sync)>,
+    make: &(dyn Fn() -> P + Sync),
+) -> Result<(Rendered, Vec<P>, Option<Film>)> {
     let t0 = Instant::now();
     opts.validate()?;
     let kernel = Kernel::resolve(opts.kernel)?;
@@ -194,7 +239,26 @@ pub fn render_probed<P: Probe + Send>(
         .map_err(|e| Error::Input(format!("cannot start threads: {e}")))?;
     let threads = pool.current_num_threads();
     let t1 = Instant::now();
-    let out = pool.install(|| render_prepared(&prep, kernel, opts.tile, progress, make));
+    let rows = portion.rows.clone().unwrap_or(0..settings.height);
+    let samples = portion.samples.clone().unwrap_or(0..settings.spp);
+    if rows.start > rows.end || rows.end > settings.height || samples.start > samples.end || samples.end > settings.spp
+    {
+        return Err(Error::Input(format!(
+            "rows {rows:?} and samples {samples:?} are not inside a {}-row, {}-spp render",
+            settings.height, settings.spp
+        )));
+    }
+    if let Some(f) = portion.start {
+        if f.width != settings.width
+            || f.height != settings.height
+            || f.rows.start > rows.start
+            || f.rows.end < rows.end
+        {
+            return Err(Error::Input("the film to continue from does not cover the rows to render".into()));
+        }
+    }
+    let job = Job { rows, samples, start: portion.start, keep_film };
+    let out = pool.install(|| render_prepared(&prep, kernel, opts.tile, &job, progress, make));
     let seconds = t1.elapsed().as_secs_f64();
     let (w, h) = (settings.width, settings.height);
     let stats = Stats {
@@ -220,7 +284,14 @@ pub fn render_probed<P: Probe + Send>(
         image_hash: format!("{:016x}", out.image.hash()),
         plan: prep.plan.clone(),
     };
-    Ok((Rendered { image: out.image, stats }, out.probes))
+    Ok((Rendered { image: out.image, stats }, out.probes, out.film))
+}
+
+struct Job<'a> {
+    rows: Range<u32>,
+    samples: Range<u32>,
+    start: Option<&'a Film>,
+    keep_film: bool,
 }
 
 struct Output<P> {
@@ -230,12 +301,15 @@ struct Output<P> {
     /// Samples traced (`None` when no sample is traced: the gradient).
     traced: Option<u64>,
     probes: Vec<P>,
+    /// The accumulators of the rows rendered (`None` for the gradient).
+    film: Option<Film>,
 }
 
 fn render_prepared<P: Probe + Send>(
     prep: &Prepared,
     kernel: Kernel,
     tile: u32,
+    job: &Job,
     progress: Option<&(dyn Fn(Progress) + Sync)>,
     make: &(dyn Fn() -> P + Sync),
 ) -> Output<P> {
@@ -247,9 +321,11 @@ fn render_prepared<P: Probe + Send>(
                 image.data[(y * s.width + x) as usize] = gradient(x, y, s.width, s.height);
             }
         }
-        return Output { image, rays: 0, rejected: 0, traced: None, probes: Vec::new() };
+        return Output { image, rays: 0, rejected: 0, traced: None, probes: Vec::new(), film: None };
     }
-    let mut films = tiles(s.width, s.height, tile, prep.estimator.adaptive.is_some());
+    let moments = prep.estimator.adaptive.is_some();
+    let mut films = tiles(s.width, job.rows.clone(), tile, moments, job.start);
+    let started: u64 = films.iter().flat_map(|t| &t.count).map(|&c| c as u64).sum();
     let total = films.len() as u64;
     let done = AtomicU64::new(0);
     let rays = AtomicU64::new(0);
@@ -260,7 +336,7 @@ fn render_prepared<P: Probe + Send>(
             p(Progress { tiles_done: d, tiles_total: total, rays: r });
         }
     };
-    let samples = 0..s.spp;
+    let samples = job.samples.clone();
     let probes: Vec<P> = match kernel {
         Kernel::Scalar => films
             .par_iter_mut()
@@ -273,14 +349,25 @@ fn render_prepared<P: Probe + Send>(
         Kernel::Simd8 => wide_tiles::<f32x8, P>(prep, &mut films, samples, &report, make),
         Kernel::Simd16 => wide_tiles::<f32x16, P>(prep, &mut films, samples, &report, make),
     };
+    // The film is gathered only for a caller that wants it (a partial film):
+    // a plain render writes the image straight from the tiles.
+    let mut film = job.keep_film.then(|| Film::new(s.width, s.height, job.rows.clone(), moments));
     let mut rejected = 0;
     let mut traced = 0;
-    for t in &films {
-        image.put_tile(t);
+    // Tiles are dropped as they are copied: the peak stays near one film.
+    for t in films {
+        match &mut film {
+            Some(f) => f.put_tile(&t),
+            None => image.put_tile(&t),
+        }
         rejected += t.rejected;
         traced += t.rejected + t.count.iter().map(|&c| c as u64).sum::<u64>();
     }
-    Output { image, rays: rays.into_inner(), rejected, traced: Some(traced), probes }
+    if let Some(f) = &film {
+        f.write_into(&mut image);
+    }
+    let traced = Some(traced - started);
+    Output { image, rays: rays.into_inner(), rejected, traced, probes, film }
 }
 
 fn wide_tiles<W: Wide, P: Probe + Send>(

@@ -44,7 +44,7 @@ fn values_at_the_edges_of_their_ranges_are_accepted() {
     {"center": [0, 1, -1], "radius": 0.5, "material": {"type": "metal", "albedo": [0, 0, 0], "fuzz": 1}},
     {"center": [0, 1, -1], "radius": 0.5, "material": {"type": "metal", "albedo": [9, 9, 9], "fuzz": 0}}
   ],
-  "render": {"width": 1, "height": 134217728, "samples_per_pixel": 1, "max_depth": 1}
+  "render": {"width": 1, "height": 67108864, "samples_per_pixel": 1, "max_depth": 1}
 }"#;
     let toml = "[camera]\nlook_from = [0, 0, 0]\nlook_at = [0, 0, -1]\nvup = [1e-3, 1, 0]\naperture = 0\n\n\
                 [[spheres]]\ncenter = [0, 0, -1]\nradius = -1e-5\nmaterial = { type = \"dielectric\", ior = 1e-30 }\n\n\

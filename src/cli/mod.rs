@@ -4,6 +4,7 @@
 mod args;
 mod bench;
 mod converge;
+mod merge;
 mod render;
 
 use clap::{CommandFactory, FromArgMatches, Parser, Subcommand};
@@ -41,6 +42,9 @@ struct Cli {
 enum Command {
     /// Render a preset or a scene file (.json / .toml) to PNG (and optionally a float image).
     Render(render::RenderArgs),
+    /// Merge partial films (.rtfilm: the shards of one render) into the image,
+    /// bit for bit the one-process render's.
+    Merge(merge::MergeArgs),
     /// List the built-in scenes.
     Scenes,
     /// Measure rays/s of each kernel on a scene; compare with a saved baseline.
@@ -102,6 +106,7 @@ fn cmd_stress(quick: bool, seed: u64, threads: Option<usize>) -> Result<bool> {
 fn run(cli: Cli) -> Result<bool> {
     match cli.command {
         Command::Render(a) => render::run(a).map(|_| true),
+        Command::Merge(a) => merge::run(a).map(|_| true),
         Command::Bench(a) => bench::run(a),
         Command::Converge(a) => converge::run(a).map(|_| true),
         Command::Scenes => {

@@ -1,12 +1,16 @@
-//! `rtow render`: one scene to a PNG (and optionally a float image and stats).
+//! `rtow render`: one scene to a PNG (and optionally a float image and stats),
+//! or to a partial film (`.rtfilm`): a shard of the render (`--shard K/N`), or
+//! a whole render to be resumed (`--resume`) or merged later.
 
-use super::args::{kernel_parser, positive_f32, EstimatorArgs, ImageArgs};
+use super::args::{choice, kernel_parser, positive_f32, EstimatorArgs, ImageArgs};
 use super::{load, say};
 use clap::Args;
 use indicatif::{ProgressBar, ProgressStyle};
+use rtow::film::part::{is_part_path, Part, Split, SplitKind};
 use rtow::output::{check_extension, Outputs};
 use rtow::render::{render_counted, Progress};
-use rtow::{KernelChoice, RenderOptions, Rendered, Result, Scene, Settings};
+use rtow::shard::{self, Job};
+use rtow::{Error, KernelChoice, Result};
 use std::io::IsTerminal;
 use std::path::{Path, PathBuf};
 use std::time::Instant;
@@ -15,9 +19,24 @@ use std::time::Instant;
 pub struct RenderArgs {
     /// A preset name (see `rtow scenes`) or a scene file (.json / .toml).
     scene: String,
-    /// Output PNG (8-bit, gamma encoded) [default: <scene name>.png]
+    /// Output PNG (8-bit, gamma encoded), or a partial film (.rtfilm) for
+    /// `rtow merge` or `--resume` [default: <scene name>.png]
     #[arg(short, long)]
     output: Option<PathBuf>,
+    /// Render only the K-th of N deterministic pieces of the work (K from 1 to N)
+    /// into a partial film (-o part-K.rtfilm); `rtow merge` puts the N parts
+    /// together into exactly the one-process image. A failed shard is rerun and
+    /// writes the identical file.
+    #[arg(long, value_name = "K/N")]
+    shard: Option<String>,
+    /// How --shard splits the work: by sample range (every shard covers the
+    /// whole image: balanced) or by bands of image rows.
+    #[arg(long, value_parser = choice::<SplitKind>(SplitKind::NAMES), default_value = "samples", requires = "shard")]
+    split: SplitKind,
+    /// Continue a render that wrote a partial film with fewer samples per
+    /// pixel (same scene and settings): gives exactly the image of --spp.
+    #[arg(long, value_name = "FILE")]
+    resume: Option<PathBuf>,
     #[command(flatten)]
     image: ImageArgs,
     /// Kernel: the scalar reference, or the SIMD wavefront at the widest lane count
@@ -57,13 +76,10 @@ fn progress_bar(quiet: bool) -> Option<ProgressBar> {
 }
 
 /// Renders with a progress bar (on a terminal) showing live Mrays/s.
-fn render_with_progress(
-    scene: &Scene,
-    s: Settings,
-    opts: RenderOptions,
+fn render_with_progress<T>(
     quiet: bool,
-    counted: bool,
-) -> Result<Rendered> {
+    render: impl FnOnce(Option<&(dyn Fn(Progress) + Sync)>) -> Result<T>,
+) -> Result<T> {
     let bar = progress_bar(quiet);
     let start = Instant::now();
     let cb = |p: Progress| {
@@ -74,7 +90,7 @@ fn render_with_progress(
             b.set_message(format!("{:.2} Mrays/s", p.rays as f64 / secs / 1e6));
         }
     };
-    let out = if counted { render_counted(scene, s, opts, Some(&cb)) } else { rtow::render(scene, s, opts, Some(&cb)) };
+    let out = render(Some(&cb));
     if let Some(b) = bar {
         b.finish_and_clear();
     }
@@ -86,7 +102,8 @@ pub fn run(a: RenderArgs) -> Result<()> {
     let (scene, name) = load(&a.scene)?;
     let s = a.image.settings(&scene);
     let out = a.output.clone().unwrap_or_else(|| PathBuf::from(format!("{name}.png")));
-    check_extension(&out, &["png"], "-o")?;
+    let film_out = is_part_path(&out);
+    check_extension(&out, &["png", "rtfilm"], "-o")?;
     if let Some(f) = &a.float {
         check_extension(f, &["pfm", "exr"], "--float")?;
     }
@@ -95,8 +112,28 @@ pub fn run(a: RenderArgs) -> Result<()> {
     s.validate()?;
     let opts = a.estimator.options(a.kernel, &a.image, &scene)?;
     rtow::Kernel::resolve(opts.kernel)?;
+    let split = match &a.shard {
+        Some(k) => Split::parse(k, a.split)?,
+        None => Split::WHOLE,
+    };
+    if split.kind != SplitKind::None && !film_out {
+        return Err(Error::invalid(
+            "--shard",
+            format!("a shard writes a partial film: use -o {name}-{}.rtfilm, then rtow merge", split.shard),
+        ));
+    }
+    let resume = match &a.resume {
+        Some(p) => Some((p.clone(), Part::read(p)?)),
+        None => None,
+    };
+    let job = Job { split, resume };
+    let partial = film_out || job.resume.is_some();
+    if partial {
+        shard::check(&scene, &s, &opts, &job)?;
+    }
     // The outputs are one transaction (see `rtow::output`): checked now,
-    // written only when all of them are ready.
+    // written only when all of them are ready. (The --resume film is read
+    // whole before, so -o may replace it: a render continued in place.)
     let mut outputs = Outputs::new();
     if rtow::scene::preset(&a.scene).is_none() {
         outputs.input(Path::new(&a.scene), "scene file");
@@ -107,10 +144,29 @@ pub fn run(a: RenderArgs) -> Result<()> {
     if a.explain {
         say!("{}", rtow::prepare::plan(&scene, &s, opts.accel).explain());
     }
-    let r = render_with_progress(&scene, s, opts, a.quiet, a.stats_json.is_some())?;
-    r.stats.check_finite()?;
     let gamma = a.gamma.unwrap_or(scene.mode.default_gamma());
-    outputs.stage(png_id, &rtow::output::image_bytes(&r.image, &out, gamma)?)?;
+    let r = if partial {
+        let (r, part) = render_with_progress(a.quiet, |cb| shard::render_part(&scene, s, opts, &job, cb))?;
+        r.stats.check_finite()?;
+        if film_out {
+            outputs.stage(png_id, &part.to_bytes())?;
+        } else {
+            outputs.stage(png_id, &rtow::output::image_bytes(&r.image, &out, gamma)?)?;
+        }
+        r
+    } else {
+        let counted = a.stats_json.is_some();
+        let r = render_with_progress(a.quiet, |cb| {
+            if counted {
+                render_counted(&scene, s, opts, cb)
+            } else {
+                rtow::render(&scene, s, opts, cb)
+            }
+        })?;
+        r.stats.check_finite()?;
+        outputs.stage(png_id, &rtow::output::image_bytes(&r.image, &out, gamma)?)?;
+        r
+    };
     if let (Some(id), Some(f)) = (float_id, &a.float) {
         outputs.stage(id, &rtow::output::image_bytes(&r.image, f, 1.0)?)?;
     }
@@ -122,10 +178,15 @@ pub fn run(a: RenderArgs) -> Result<()> {
     if !a.quiet {
         let st = &r.stats;
         say!(
-            "{name}: {}x{} {} spp -> {}: {} rays, {} samples in {:.3} s = {:.2} Mrays/s ({} kernel, {} threads, {}){}",
+            "{name}: {}x{} {} spp{} -> {}: {} rays, {} samples in {:.3} s = {:.2} Mrays/s ({} kernel, {} threads, {}){}",
             st.width,
             st.height,
             st.spp,
+            match (&job_desc(&a), &a.resume) {
+                (Some(d), _) => format!(" ({d})"),
+                (None, Some(p)) => format!(" (resumed from {})", p.display()),
+                (None, None) => String::new(),
+            },
             out.display(),
             st.rays,
             st.samples,
@@ -142,4 +203,10 @@ pub fn run(a: RenderArgs) -> Result<()> {
         );
     }
     Ok(())
+}
+
+/// The shard a render does, for its summary line.
+fn job_desc(a: &RenderArgs) -> Option<String> {
+    let s = Split::parse(a.shard.as_deref()?, a.split).ok()?;
+    Some(s.describe())
 }

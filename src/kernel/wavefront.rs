@@ -72,7 +72,8 @@ impl Paths {
     }
 
     /// Appends the lanes of `alive` (a bitmask) of a packet: SIMD stream compaction.
-    #[inline(always)]
+    #[cfg_attr(not(feature = "phases"), inline(always))]
+    #[cfg_attr(feature = "phases", inline(never))]
     fn append<W: Wide, S: PathSampler>(
         &mut self,
         alive: u32,
@@ -264,6 +265,7 @@ fn render_round<W: Wide, P: Probe, S: PathSampler>(
 
 /// Camera rays for samples `s0..s1` of every active pixel of the tile, W at a time.
 /// Path `slot` is sample `s0 + slot / na` of active pixel `slot % na`.
+#[cfg_attr(feature = "phases", inline(never))]
 fn generate<W: Wide, P: Probe, S: PathSampler>(
     prep: &Prepared,
     sampler: S,
@@ -503,7 +505,8 @@ fn debug_shade<W: Wide, P: Probe>(
 }
 
 /// Scatters a packet of paths that hit material `kind`; survivors join the next bounce.
-#[inline(always)]
+#[cfg_attr(not(feature = "phases"), inline(always))]
+#[cfg_attr(feature = "phases", inline(never))]
 #[allow(clippy::too_many_arguments)]
 fn scatter<W: Wide, P: Probe, S: PathSampler>(
     prep: &Prepared,

@@ -1,0 +1,108 @@
+//! The exact, grouping-independent accumulation of samples.
+//!
+//! Each sample's three f32 channels are converted to fixed point with
+//! [`FRACTION_BITS`] fractional bits (a multiplication by a power of two, exact
+//! in f64, then rounding to the nearest integer, ties to even) and summed per
+//! pixel in `i128`. Integer addition is associative and commutative, so the
+//! sum, and the mean computed from it, do not depend on how samples were
+//! grouped: by tile, thread, kernel batch, shard or resume point.
+//!
+//! - **Resolution**: 2^-32 (about 2.3e-10) per sample. Every f32 of magnitude
+//!   2^-9 (about 0.002) or more is a multiple of 2^-32 and converts exactly; a
+//!   darker sample is rounded by at most 2^-33.
+//! - **Range**: a sample is accepted when every channel's magnitude is below
+//!   [`SAMPLE_LIMIT`] = 2^31 (about 2.1e9). A sample outside it (and NaN or
+//!   Inf) is rejected whole and counted, never added.
+//! - **No overflow**: a converted channel is below 2^63 in magnitude and a
+//!   pixel takes at most 2^32 - 1 samples (its count is a `u32`), so a sum stays
+//!   below 2^95, far inside `i128`.
+//! - **Mean**: `(sum as f64 / count as f64 * 2^-32) as f32`, a deterministic
+//!   function of the integer sum and the count (0 for a pixel without samples).
+
+/// Fractional bits of the fixed-point samples.
+pub const FRACTION_BITS: i32 = 32;
+
+/// A sample is accepted when every channel's magnitude is below this.
+pub const SAMPLE_LIMIT: f64 = (1u64 << 31) as f64;
+
+const SCALE: f64 = (1u64 << FRACTION_BITS) as f64;
+const INV_SCALE: f64 = 1.0 / SCALE;
+/// `SAMPLE_LIMIT * SCALE` = 2^63: the bound after scaling.
+const SCALED_LIMIT: f64 = SAMPLE_LIMIT * SCALE;
+
+/// One sample in fixed point, or `None` if a channel is NaN, infinite or
+/// outside [`SAMPLE_LIMIT`].
+#[inline(always)]
+pub fn to_fixed(c: [f32; 3]) -> Option<[i64; 3]> {
+    let v = c.map(|x| x as f64 * SCALE);
+    // `!(a < b)` is true for NaN too.
+    if v[0].abs() < SCALED_LIMIT && v[1].abs() < SCALED_LIMIT && v[2].abs() < SCALED_LIMIT {
+        Some(v.map(|x| x.round_ties_even() as i64))
+    } else {
+        None
+    }
+}
+
+/// The value a fixed-point sum stands for, in f64 (rounded once).
+#[inline]
+pub fn to_f64(sum: i128) -> f64 {
+    sum as f64 * INV_SCALE
+}
+
+/// The pixel mean of `n` samples whose fixed-point channel sums are `sum`.
+#[inline]
+pub fn mean(sum: [i128; 3], n: u32) -> [f32; 3] {
+    if n == 0 {
+        return [0.0; 3];
+    }
+    let n = n as f64;
+    sum.map(|s| (s as f64 / n * INV_SCALE) as f32)
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    #[test]
+    fn bright_samples_convert_exactly_and_dark_ones_round_to_nearest() {
+        for x in [0.0f32, 1.0, 0.5, 0.1, 1e3, 2.0f32.powi(-9), -0.75, (SAMPLE_LIMIT as f32).next_down()] {
+            let q = to_fixed([x; 3]).unwrap();
+            if x.abs() >= 2.0f32.powi(-9) || x == 0.0 {
+                assert_eq!(q[0] as f64 * INV_SCALE, x as f64, "{x}");
+            }
+        }
+        // 2^-34 is a quarter step: rounds to 0; 3 * 2^-34 rounds to one step; 2^-33 is a tie -> even (0).
+        assert_eq!(to_fixed([2.0f32.powi(-34), 3.0 * 2.0f32.powi(-34), 2.0f32.powi(-33)]), Some([0, 1, 0]));
+        assert_eq!(to_fixed([3.0 * 2.0f32.powi(-33), 0.0, 0.0]), Some([2, 0, 0]));
+    }
+
+    #[test]
+    fn out_of_range_nan_and_inf_are_refused() {
+        for bad in [SAMPLE_LIMIT as f32, -(SAMPLE_LIMIT as f32), f32::MAX, f32::NAN, f32::INFINITY, f32::NEG_INFINITY] {
+            assert_eq!(to_fixed([0.5, bad, 0.5]), None, "{bad}");
+        }
+    }
+
+    #[test]
+    fn the_largest_sums_do_not_overflow() {
+        let q = to_fixed([(SAMPLE_LIMIT as f32).next_down(); 3]).unwrap()[0] as i128;
+        let sum = q * u32::MAX as i128;
+        assert!(sum < 1i128 << 95);
+        let m = mean([sum; 3], u32::MAX);
+        assert_eq!(m[0], (SAMPLE_LIMIT as f32).next_down());
+    }
+
+    #[test]
+    fn the_mean_does_not_depend_on_grouping() {
+        // Samples whose f32 running sum depends on the order.
+        let xs = [1.0e7f32, 0.3, -1.0e7, 0.7, 1e-5, 3.25, 0.1, 2.0f32.powi(-20)];
+        let q: Vec<i128> = xs.iter().map(|&x| to_fixed([x; 3]).unwrap()[0] as i128).collect();
+        let all: i128 = q.iter().sum();
+        let a: i128 = q[..3].iter().sum::<i128>() + q[3..].iter().rev().sum::<i128>();
+        assert_eq!(all, a);
+        let f32_fwd = xs.iter().fold(0.0f32, |s, &x| s + x);
+        let f32_rev = xs.iter().rev().fold(0.0f32, |s, &x| s + x);
+        assert_ne!(f32_fwd, f32_rev, "the example should defeat f32 sums");
+        assert_eq!(mean([all; 3], 8), mean([a; 3], 8));
+    }
+}

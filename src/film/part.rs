@@ -1,0 +1,870 @@
+//! Partial films (`.rtfilm`): the exact accumulators of a shard or of a whole
+//! render, in a file that `rtow merge` and `rtow render --resume` read back, and
+//! that refuses to be combined with anything it does not fit.
+//!
+//! # Format, version 1
+//!
+//! All integers little-endian.
+//!
+//! | bytes | content |
+//! |---|---|
+//! | 8 | magic `RTOWFILM` |
+//! | 4 | format version (`u32`, 1) |
+//! | 4 | header length `H` in bytes (`u32`) |
+//! | `H` | header: one JSON object ([`Header`]) |
+//! | `D` | data: for every pixel of the film's rows, row-major: the accepted samples (`u32`), the three fixed-point channel sums ([`super::accum`]) as two's complement integers of `sum_bytes` bytes each, then, if `moments`, the three f64 sums of squares |
+//! | 4 | CRC-32 (IEEE) of everything before it |
+//!
+//! The header names the image (`key`: a hash of the scene, the rtow version
+//! and every setting that changes the image, listed in `scene_hash` and
+//! `settings` too, so a refusal can name the difference), the image size and
+//! samples per pixel, the split (`samples` or `rows`, shard K of N, or `none`
+//! for a whole render), the sample range and the rows it covers, the
+//! fixed-point layout, and the kernel-independent counters (rays, samples,
+//! rejected samples).
+//!
+//! Readers refuse a file whose version is newer than theirs before looking
+//! further, so a later version may change anything after the first 16 bytes.
+
+use super::{accum, Film};
+use crate::error::{Error, Result};
+use serde::{Deserialize, Serialize};
+use std::collections::BTreeMap;
+use std::ops::Range;
+use std::path::{Path, PathBuf};
+
+/// The first 8 bytes of every partial film.
+pub const MAGIC: &[u8; 8] = b"RTOWFILM";
+/// The format version this rtow writes and reads.
+pub const VERSION: u32 = 1;
+/// Largest partial film read (bytes): `MAX_PIXELS` pixels with the widest
+/// sums and the sums of squares, and a header.
+pub const MAX_FILM_BYTES: u64 = crate::limits::MAX_PIXELS * (4 + 3 * 16 + 3 * 8) + (1 << 20);
+/// The file extension of partial films.
+pub const EXTENSION: &str = "rtfilm";
+
+/// Whether `path` names a partial film (ends in `.rtfilm`).
+pub fn is_part_path(path: &Path) -> bool {
+    path.extension().and_then(|e| e.to_str()).is_some_and(|e| e.eq_ignore_ascii_case(EXTENSION))
+}
+
+/// FNV-1a, 64 bits.
+pub fn fnv1a(bytes: &[u8]) -> u64 {
+    let mut h: u64 = 0xcbf2_9ce4_8422_2325;
+    for &b in bytes {
+        h ^= b as u64;
+        h = h.wrapping_mul(0x0000_0100_0000_01b3);
+    }
+    h
+}
+
+/// How a render is split into shards.
+#[derive(Clone, Copy, Debug, PartialEq, Eq, Serialize, Deserialize)]
+#[serde(rename_all = "lowercase")]
+pub enum SplitKind {
+    /// Not split: the whole image, every sample (a one-process render).
+    None,
+    /// Every shard covers the whole image for a range of sample indices.
+    Samples,
+    /// Every shard covers a band of whole rows with every sample.
+    Rows,
+}
+
+impl SplitKind {
+    /// The names `--split` takes.
+    pub const NAMES: &'static [&'static str] = &["samples", "rows"];
+}
+
+impl std::str::FromStr for SplitKind {
+    type Err = String;
+    fn from_str(s: &str) -> std::result::Result<Self, String> {
+        match s {
+            "samples" => Ok(SplitKind::Samples),
+            "rows" => Ok(SplitKind::Rows),
+            _ => Err(format!("'{s}' is not one of {}", SplitKind::NAMES.join(", "))),
+        }
+    }
+}
+
+/// Shard `shard` (from 1) of `of`, by `kind`.
+#[derive(Clone, Copy, Debug, PartialEq, Eq, Serialize, Deserialize)]
+#[serde(deny_unknown_fields)]
+pub struct Split {
+    pub kind: SplitKind,
+    pub shard: u32,
+    pub of: u32,
+}
+
+/// The `k`-th of `n` near-equal pieces of `0..total`.
+fn piece(k: u32, n: u32, total: u32) -> Range<u32> {
+    let at = |i: u32| (i as u64 * total as u64 / n as u64) as u32;
+    at(k - 1)..at(k)
+}
+
+impl Split {
+    /// The whole render.
+    pub const WHOLE: Split = Split { kind: SplitKind::None, shard: 1, of: 1 };
+
+    /// Parses `K/N` (`--shard`).
+    pub fn parse(text: &str, kind: SplitKind) -> Result<Split> {
+        let bad = |m: &str| Error::invalid("--shard", format!("'{text}': {m}"));
+        let (k, n) = text.split_once('/').ok_or_else(|| bad("expected K/N, e.g. 3/8"))?;
+        let k: u32 = k.trim().parse().map_err(|_| bad("K must be a whole number"))?;
+        let n: u32 = n.trim().parse().map_err(|_| bad("N must be a whole number"))?;
+        if n == 0 || k == 0 || k > n {
+            return Err(bad("K must be between 1 and N"));
+        }
+        Ok(Split { kind, shard: k, of: n })
+    }
+
+    /// Checks that every shard gets some work: at most `spp` shards by
+    /// samples, at most `height` by rows.
+    pub fn check(&self, spp: u32, height: u32) -> Result<()> {
+        let (limit, what) = match self.kind {
+            SplitKind::None => return Ok(()),
+            SplitKind::Samples => (spp, "samples per pixel"),
+            SplitKind::Rows => (height, "rows"),
+        };
+        if self.of > limit {
+            return Err(Error::invalid(
+                "--shard",
+                format!("{} shards by {:?} leave some empty: the render has only {limit} {what}", self.of, self.kind)
+                    .to_lowercase(),
+            ));
+        }
+        Ok(())
+    }
+
+    /// The sample indices this shard renders.
+    pub fn samples(&self, spp: u32) -> Range<u32> {
+        match self.kind {
+            SplitKind::Samples => piece(self.shard, self.of, spp),
+            _ => 0..spp,
+        }
+    }
+
+    /// The rows this shard renders.
+    pub fn rows(&self, height: u32) -> Range<u32> {
+        match self.kind {
+            SplitKind::Rows => piece(self.shard, self.of, height),
+            _ => 0..height,
+        }
+    }
+
+    /// E.g. "shard 2/4 by rows".
+    pub fn describe(&self) -> String {
+        match self.kind {
+            SplitKind::None => "a whole render".into(),
+            SplitKind::Samples => format!("shard {}/{} by samples", self.shard, self.of),
+            SplitKind::Rows => format!("shard {}/{} by rows", self.shard, self.of),
+        }
+    }
+}
+
+/// What makes two renders the same image: the scene and every setting that
+/// changes the image (not the kernel, threads, tile size or accelerator,
+/// which never change it). The samples per pixel are kept apart, because a
+/// film of the first 256 samples is the start of a 1024-sample render.
+#[derive(Clone, Debug, PartialEq, Eq)]
+pub struct Identity {
+    /// A hash of the scene (its canonical JSON).
+    pub scene_hash: u64,
+    pub width: u32,
+    pub height: u32,
+    /// Every other setting that changes the image, by name (e.g. `seed`, `max_depth`).
+    pub settings: BTreeMap<String, String>,
+}
+
+impl Identity {
+    /// The hash of all of it, with the rtow version (a later version may render differently).
+    pub fn key(&self) -> u64 {
+        let mut text = format!(
+            "rtow {}\nscene {:016x}\nwidth {}\nheight {}\n",
+            env!("CARGO_PKG_VERSION"),
+            self.scene_hash,
+            self.width,
+            self.height
+        );
+        for (k, v) in &self.settings {
+            text.push_str(&format!("{k} {v}\n"));
+        }
+        fnv1a(text.as_bytes())
+    }
+}
+
+/// Counters that every kernel keeps the same way.
+#[derive(Clone, Copy, Debug, Default, PartialEq, Eq, Serialize, Deserialize)]
+#[serde(deny_unknown_fields)]
+pub struct PartCounters {
+    /// Closest-hit queries.
+    pub rays: u64,
+    /// Samples traced (accepted and rejected).
+    pub samples: u64,
+    /// Samples rejected (NaN, Inf or out of the fixed-point range).
+    pub rejected_samples: u64,
+}
+
+impl PartCounters {
+    pub fn add(&mut self, o: &PartCounters) {
+        self.rays += o.rays;
+        self.samples += o.samples;
+        self.rejected_samples += o.rejected_samples;
+    }
+}
+
+/// The header of a partial film (JSON in the file).
+#[derive(Clone, Debug, PartialEq, Serialize, Deserialize)]
+#[serde(deny_unknown_fields)]
+pub struct Header {
+    /// The rtow version that wrote it.
+    pub rtow: String,
+    /// [`Identity::key`], hex.
+    pub key: String,
+    /// [`Identity::scene_hash`], hex.
+    pub scene_hash: String,
+    pub settings: BTreeMap<String, String>,
+    pub width: u32,
+    pub height: u32,
+    /// Samples per pixel of the finished image.
+    pub spp: u32,
+    pub split: Split,
+    /// Sample indices covered: `[start, end)`.
+    pub samples: [u32; 2],
+    /// Rows covered: `[start, end)`.
+    pub rows: [u32; 2],
+    /// Fractional bits of the fixed-point sums.
+    pub fraction_bits: i32,
+    /// Bytes per stored channel sum.
+    pub sum_bytes: u32,
+    /// Whether the per-pixel sums of squares follow the sums.
+    pub moments: bool,
+    pub counters: PartCounters,
+}
+
+/// A partial film: its header and its accumulators.
+#[derive(Clone, Debug, PartialEq)]
+pub struct Part {
+    pub header: Header,
+    pub film: Film,
+}
+
+fn hex(v: u64) -> String {
+    format!("{v:016x}")
+}
+
+/// The fewest bytes that hold every sum as a two's complement integer.
+fn sum_bytes(film: &Film) -> u32 {
+    let mut bits_needed = 1;
+    for s in film.sum.iter().flatten() {
+        // Significant bits plus the sign bit.
+        let b = 129 - if *s < 0 { s.leading_ones() } else { s.leading_zeros() };
+        bits_needed = bits_needed.max(b);
+    }
+    bits_needed.div_ceil(8).clamp(1, 16)
+}
+
+const PREFIX: usize = 16;
+const TRAILER: usize = 4;
+
+impl Part {
+    /// A part of the image `id` with `spp` samples per pixel: `film` holds the
+    /// rows and `split` says which samples.
+    pub fn new(id: &Identity, spp: u32, split: Split, film: Film, counters: PartCounters) -> Part {
+        let samples = split.samples(spp);
+        let header = Header {
+            rtow: env!("CARGO_PKG_VERSION").into(),
+            key: hex(id.key()),
+            scene_hash: hex(id.scene_hash),
+            settings: id.settings.clone(),
+            width: id.width,
+            height: id.height,
+            spp,
+            split,
+            samples: [samples.start, samples.end],
+            rows: [film.rows.start, film.rows.end],
+            fraction_bits: accum::FRACTION_BITS,
+            sum_bytes: sum_bytes(&film),
+            moments: film.has_moments(),
+            counters,
+        };
+        Part { header, film }
+    }
+
+    fn pixel_bytes(h: &Header) -> u64 {
+        4 + 3 * h.sum_bytes as u64 + if h.moments { 24 } else { 0 }
+    }
+
+    /// The file's bytes.
+    pub fn to_bytes(&self) -> Vec<u8> {
+        let mut h = self.header.clone();
+        h.sum_bytes = sum_bytes(&self.film);
+        h.moments = self.film.has_moments();
+        let json = serde_json::to_vec(&h).expect("a header serializes");
+        let px = self.film.count.len();
+        let mut out = Vec::with_capacity(PREFIX + json.len() + px * Self::pixel_bytes(&h) as usize + TRAILER);
+        out.extend_from_slice(MAGIC);
+        out.extend_from_slice(&VERSION.to_le_bytes());
+        out.extend_from_slice(&(json.len() as u32).to_le_bytes());
+        out.extend_from_slice(&json);
+        let nb = h.sum_bytes as usize;
+        for i in 0..px {
+            out.extend_from_slice(&self.film.count[i].to_le_bytes());
+            for s in self.film.sum[i] {
+                out.extend_from_slice(&s.to_le_bytes()[..nb]);
+            }
+            if h.moments {
+                for v in self.film.sum_sq[i] {
+                    out.extend_from_slice(&v.to_le_bytes());
+                }
+            }
+        }
+        let crc = crc32fast::hash(&out);
+        out.extend_from_slice(&crc.to_le_bytes());
+        out
+    }
+
+    /// Writes the part atomically (a temporary file renamed into place).
+    pub fn write(&self, path: &Path) -> Result<()> {
+        crate::output::write_atomic(path, &self.to_bytes())
+    }
+
+    /// Reads and checks a partial film; every error names `path` (exit status 2).
+    pub fn read(path: &Path) -> Result<Part> {
+        let bytes = crate::limits::read_bounded(path, MAX_FILM_BYTES, "partial film")?;
+        Part::from_bytes(&bytes, path)
+    }
+
+    /// Parses and checks the bytes of a partial film read from `path`.
+    pub fn from_bytes(bytes: &[u8], path: &Path) -> Result<Part> {
+        let bad = |m: String| Error::Input(format!("{}: {m}", path.display()));
+        if bytes.len() < 8 || &bytes[..8] != MAGIC {
+            return Err(bad("not an rtow partial film (no RTOWFILM signature)".into()));
+        }
+        if bytes.len() < PREFIX {
+            return Err(bad(format!("truncated: {} bytes, shorter than the 16-byte preamble", bytes.len())));
+        }
+        let u32_at = |i: usize| u32::from_le_bytes(bytes[i..i + 4].try_into().expect("4 bytes"));
+        let version = u32_at(8);
+        if version > VERSION {
+            return Err(bad(format!(
+                "format version {version} is newer than this rtow reads ({VERSION}); use a newer rtow"
+            )));
+        }
+        if version == 0 {
+            return Err(bad("corrupted: format version 0 does not exist".into()));
+        }
+        let hlen = u32_at(12) as u64;
+        let header_end = PREFIX as u64 + hlen;
+        if bytes.len() as u64 <= header_end + TRAILER as u64 {
+            return Err(bad(format!(
+                "truncated: {} bytes, but the header alone is {} bytes long (with the checksum {})",
+                bytes.len(),
+                header_end,
+                header_end + TRAILER as u64
+            )));
+        }
+        // The header is parsed before the checksum is checked, to tell a
+        // truncated file (its length falls short of what the header says)
+        // from a corrupted one.
+        let header: Option<Header> = serde_json::from_slice(&bytes[PREFIX..header_end as usize]).ok();
+        let expected = header.as_ref().and_then(|h| {
+            let px = h.width as u64 * (h.rows[1] as u64).checked_sub(h.rows[0] as u64)?;
+            Some(header_end + px.checked_mul(Self::pixel_bytes(h))? + TRAILER as u64)
+        });
+        if let Some(n) = expected {
+            if (bytes.len() as u64) < n {
+                return Err(bad(format!("truncated: {} bytes, the header says {n}", bytes.len())));
+            }
+        }
+        let body_end = bytes.len() - TRAILER;
+        let stored = u32_at(body_end);
+        let actual = crc32fast::hash(&bytes[..body_end]);
+        if stored != actual {
+            return Err(bad(format!("corrupted: checksum {actual:08x} does not match the stored {stored:08x}")));
+        }
+        let h = header.ok_or_else(|| bad("corrupted: the header is not valid JSON".into()))?;
+        if expected != Some(bytes.len() as u64) {
+            return Err(bad(format!("corrupted: {} bytes, the header says {expected:?}", bytes.len())));
+        }
+        Self::check_header(&h).map_err(|m| bad(format!("inconsistent header: {m}")))?;
+        let mut film = Film::new(h.width, h.height, h.rows[0]..h.rows[1], h.moments);
+        let nb = h.sum_bytes as usize;
+        let max_count = h.samples[1] - h.samples[0];
+        let mut at = header_end as usize;
+        let mut accepted = 0u64;
+        for i in 0..film.count.len() {
+            let n = u32_at(at);
+            at += 4;
+            if n > max_count {
+                return Err(bad(format!("corrupted: a pixel has {n} samples, more than the part's {max_count}")));
+            }
+            accepted += n as u64;
+            film.count[i] = n;
+            for k in 0..3 {
+                let mut b = if bytes[at + nb - 1] & 0x80 != 0 { [0xff; 16] } else { [0; 16] };
+                b[..nb].copy_from_slice(&bytes[at..at + nb]);
+                at += nb;
+                let s = i128::from_le_bytes(b);
+                // Each accepted sample is below 2^63 in fixed point.
+                if s.unsigned_abs() > (n as u128) << 63 {
+                    return Err(bad("corrupted: a pixel's sum is out of range for its samples".into()));
+                }
+                film.sum[i][k] = s;
+            }
+            if h.moments {
+                for k in 0..3 {
+                    let v = f64::from_le_bytes(bytes[at..at + 8].try_into().expect("8 bytes"));
+                    at += 8;
+                    if !(v.is_finite() && v >= 0.0) {
+                        return Err(bad("corrupted: a sum of squares is negative or not finite".into()));
+                    }
+                    film.sum_sq[i][k] = v;
+                }
+            }
+        }
+        if accepted + h.counters.rejected_samples != h.counters.samples {
+            return Err(bad(format!(
+                "inconsistent header: {} samples counted, but the pixels hold {accepted} and {} were rejected",
+                h.counters.samples, h.counters.rejected_samples
+            )));
+        }
+        Ok(Part { header: h, film })
+    }
+
+    fn check_header(h: &Header) -> std::result::Result<(), String> {
+        if h.fraction_bits != accum::FRACTION_BITS {
+            return Err(format!(
+                "sums with {} fractional bits; this rtow uses {}",
+                h.fraction_bits,
+                accum::FRACTION_BITS
+            ));
+        }
+        if !(1..=16).contains(&h.sum_bytes) {
+            return Err(format!("sum_bytes {} is not between 1 and 16", h.sum_bytes));
+        }
+        if h.width == 0 || h.height == 0 || h.spp == 0 {
+            return Err("width, height and spp must be at least 1".into());
+        }
+        let s = h.split;
+        let whole = s.kind == SplitKind::None;
+        if s.of == 0 || s.shard == 0 || s.shard > s.of || (whole && s.of != 1) {
+            return Err(format!("shard {}/{} does not exist", s.shard, s.of));
+        }
+        s.check(h.spp, h.height).map_err(|e| e.to_string())?;
+        let samples = s.samples(h.spp);
+        let rows = s.rows(h.height);
+        if h.samples != [samples.start, samples.end] || h.rows != [rows.start, rows.end] {
+            return Err(format!(
+                "{} of {} spp and {} rows covers samples {samples:?} and rows {rows:?}, not {:?} and {:?}",
+                s.describe(),
+                h.spp,
+                h.height,
+                h.samples,
+                h.rows
+            ));
+        }
+        Ok(())
+    }
+}
+
+/// Refuses (naming `p`, ending the message with `consequence`) a part whose
+/// image is not `h0`'s (from `p0`): another scene, size, rtow version or
+/// setting. The sample count is not compared.
+pub fn same_image(p: &Path, h: &Header, p0: &Path, h0: &Header, consequence: &str) -> Result<()> {
+    let a = p0.display();
+    let refuse = |what: String| Error::Input(format!("{}: {what}; {consequence}", p.display()));
+    if h.rtow != h0.rtow {
+        return Err(refuse(format!("written by rtow {}, {a} by rtow {}", h.rtow, h0.rtow)));
+    }
+    if h.scene_hash != h0.scene_hash {
+        return Err(refuse(format!(
+            "renders a different scene than {a} (scene hash {} against {})",
+            h.scene_hash, h0.scene_hash
+        )));
+    }
+    if (h.width, h.height) != (h0.width, h0.height) {
+        return Err(refuse(format!("is {}x{}, {a} is {}x{}", h.width, h.height, h0.width, h0.height)));
+    }
+    for name in h.settings.keys().chain(h0.settings.keys()) {
+        let (v, v0) = (h.settings.get(name), h0.settings.get(name));
+        if v != v0 {
+            let show = |v: Option<&String>| v.cloned().unwrap_or_else(|| "(unset)".into());
+            return Err(refuse(format!("rendered with {name} = {}, {a} with {name} = {}", show(v), show(v0))));
+        }
+    }
+    if h.key != h0.key {
+        return Err(refuse(format!("its image key {} differs from {a}'s {}", h.key, h0.key)));
+    }
+    Ok(())
+}
+
+/// Merges parts (with the paths they were read from, for messages) into the
+/// whole render's film. Refuses, naming the files: parts of different scenes
+/// or settings, parts of different splits, duplicate shards, and missing
+/// shards (naming which). The result is the whole render's film, with a header
+/// that describes it as a whole render (counters summed over the parts).
+pub fn merge(parts: &[(PathBuf, Part)]) -> Result<Part> {
+    let Some((p0, first)) = parts.first() else {
+        return Err(Error::Input("merge needs at least one partial film".into()));
+    };
+    let h0 = &first.header;
+    for (p, part) in &parts[1..] {
+        let h = &part.header;
+        same_image(p, h, p0, h0, "parts of different renders cannot be merged")?;
+        if h.spp != h0.spp {
+            return Err(Error::Input(format!(
+                "{}: has {} samples per pixel, {} has {}; parts of different renders cannot be merged",
+                p.display(),
+                h.spp,
+                p0.display(),
+                h0.spp
+            )));
+        }
+        let (a, b) = (p0.display(), p.display());
+        if (h.split.kind, h.split.of) != (h0.split.kind, h0.split.of) {
+            return Err(Error::Input(format!(
+                "{b} is {} but {a} is {}: parts of different splits overlap or leave gaps",
+                h.split.describe(),
+                h0.split.describe()
+            )));
+        }
+    }
+    let n = h0.split.of;
+    let mut seen: std::collections::BTreeMap<u32, &Path> = std::collections::BTreeMap::new();
+    for (p, part) in parts {
+        let k = part.header.split.shard;
+        if let Some(prev) = seen.insert(k, p) {
+            return Err(Error::Input(format!(
+                "{}: duplicate: {} and {} are both {}",
+                p.display(),
+                prev.display(),
+                p.display(),
+                part.header.split.describe()
+            )));
+        }
+    }
+    if seen.len() as u64 != n as u64 {
+        // Name the missing shards (the first 20 of them).
+        let missing: Vec<String> = (1..=n).filter(|k| !seen.contains_key(k)).take(20).map(|k| k.to_string()).collect();
+        let count = n as usize - seen.len();
+        let more = if count > missing.len() { format!(" and {} more", count - missing.len()) } else { String::new() };
+        let kind = if h0.split.kind == SplitKind::Rows { "rows" } else { "samples" };
+        return Err(Error::Input(format!(
+            "missing {} {}{more} of {n} (split by {kind}); merged parts: {}",
+            if count == 1 { "shard" } else { "shards" },
+            missing.join(", "),
+            parts.iter().map(|(p, _)| p.display().to_string()).collect::<Vec<_>>().join(", ")
+        )));
+    }
+    let mut film = Film::new(h0.width, h0.height, 0..h0.height, parts.iter().all(|(_, p)| p.film.has_moments()));
+    let mut counters = PartCounters::default();
+    for (p, part) in parts {
+        film.absorb(&part.film).ok_or_else(|| {
+            Error::Input(format!("{}: overlaps the other parts (a pixel's count overflows)", p.display()))
+        })?;
+        counters.add(&part.header.counters);
+    }
+    let mut header = h0.clone();
+    header.split = Split::WHOLE;
+    header.samples = [0, h0.spp];
+    header.rows = [0, h0.height];
+    header.counters = counters;
+    header.moments = film.has_moments();
+    header.sum_bytes = sum_bytes(&film);
+    Ok(Part { header, film })
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+    use crate::sampling::{ScalarStream, Stream};
+
+    const W: u32 = 6;
+    const H: u32 = 5;
+    const SPP: u32 = 11;
+
+    fn identity(seed: u64) -> Identity {
+        let settings = [("seed", seed.to_string()), ("max_depth", "50".to_string())];
+        Identity {
+            scene_hash: 0x1234,
+            width: W,
+            height: H,
+            settings: settings.into_iter().map(|(k, v)| (k.to_string(), v)).collect(),
+        }
+    }
+
+    /// A stand-in for a render: pseudo-random samples, some negative, some
+    /// rejected, some dark enough to round.
+    fn sample(x: u32, y: u32, s: u32) -> [f32; 3] {
+        let mut r = ScalarStream::for_path(5, (y * W + x) as u64, s as u64);
+        let u = [r.next(), r.next(), r.next()];
+        if u[0] < 0.03 {
+            return [f32::NAN, 0.0, 0.0];
+        }
+        [u[0] * 4.0 - 3.0, u[1] * u[1] * 1e-6, u[2] * 1e3]
+    }
+
+    fn render(split: Split, moments: bool) -> Part {
+        let (rows, samples) = (split.rows(H), split.samples(SPP));
+        let mut film = Film::new(W, H, rows.clone(), moments);
+        let mut counters = PartCounters::default();
+        for y in rows {
+            let mut t = film.tile(0, y, W, 1);
+            for x in 0..W {
+                for s in samples.clone() {
+                    t.add(x as usize, sample(x, y, s));
+                    counters.samples += 1;
+                    counters.rays += 3;
+                }
+            }
+            counters.rejected_samples += t.rejected;
+            film.put_tile(&t);
+        }
+        Part::new(&identity(0), SPP, split, film, counters)
+    }
+
+    fn shards(kind: SplitKind, n: u32) -> Vec<(PathBuf, Part)> {
+        (1..=n)
+            .map(|k| (PathBuf::from(format!("part-{k}.rtfilm")), render(Split { kind, shard: k, of: n }, false)))
+            .collect()
+    }
+
+    /// The message of a refusal; checks it is bad input (exit 2) naming `file`.
+    fn refusal(r: Result<Part>, file: &str) -> String {
+        let e = r.expect_err("must be refused");
+        assert_eq!(e.exit_code(), 2, "{e}");
+        let m = e.to_string();
+        assert!(m.contains(file), "{m:?} does not name {file}");
+        m
+    }
+
+    fn reread(p: &Part, name: &str) -> Result<Part> {
+        Part::from_bytes(&p.to_bytes(), Path::new(name))
+    }
+
+    #[test]
+    fn parts_round_trip_with_the_fewest_bytes() {
+        for moments in [false, true] {
+            let p = render(Split::WHOLE, moments);
+            assert!(p.film.sum.iter().flatten().any(|&s| s < 0), "negative sums are exercised");
+            assert_eq!(reread(&p, "a.rtfilm").unwrap(), p);
+            assert!(p.header.counters.rejected_samples > 0);
+        }
+        let p = render(Split::WHOLE, false);
+        // Sums of 11 samples below 1e3 need 32 + 4 + 10 + 1 bits: 6 bytes.
+        assert_eq!(p.header.sum_bytes, 6);
+        let mut zero = p.clone();
+        zero.film = Film::new(W, H, 0..H, false);
+        zero.header.counters = PartCounters::default();
+        assert_eq!(reread(&zero, "z.rtfilm").unwrap().header.sum_bytes, 1);
+    }
+
+    #[test]
+    fn any_split_merges_into_the_whole_render() {
+        let whole = render(Split::WHOLE, false);
+        for kind in [SplitKind::Samples, SplitKind::Rows] {
+            let n_max = if kind == SplitKind::Rows { H } else { SPP };
+            for n in [1, 2, 3, n_max] {
+                let mut parts = shards(kind, n);
+                parts.reverse();
+                let merged = merge(&parts).unwrap();
+                assert_eq!(merged.film, whole.film, "{kind:?} {n}");
+                assert_eq!(merged.header.counters, whole.header.counters);
+                assert_eq!(merged.film.image().hash(), whole.film.image().hash());
+                // Through files as well.
+                let read: Vec<_> = parts.iter().map(|(p, part)| (p.clone(), reread(part, "x").unwrap())).collect();
+                assert_eq!(merge(&read).unwrap().film, whole.film);
+            }
+        }
+    }
+
+    /// Samples `samples` of every pixel added to `film`, tile by tile (one row each).
+    fn continue_film(film: &mut Film, samples: Range<u32>) -> PartCounters {
+        let mut c = PartCounters::default();
+        for y in film.rows.clone() {
+            let mut t = film.tile(0, y, W, 1);
+            for x in 0..W {
+                for s in samples.clone() {
+                    t.add(x as usize, sample(x, y, s));
+                    c.samples += 1;
+                }
+            }
+            c.rejected_samples += t.rejected;
+            film.put_tile(&t);
+        }
+        c
+    }
+
+    #[test]
+    fn resume_continues_exactly() {
+        let whole = render(Split::WHOLE, true);
+        let mut film = Film::new(W, H, 0..H, true);
+        let counters = continue_film(&mut film, 0..4);
+        let done = Part::new(&identity(0), 4, Split::WHOLE, film, counters);
+        let mut resumed = reread(&done, "done-4.rtfilm").unwrap();
+        continue_film(&mut resumed.film, 4..SPP);
+        // Sums, counts, and the sums of squares (added in sample order) too.
+        assert_eq!(resumed.film, whole.film);
+    }
+
+    #[test]
+    fn parts_of_different_renders_are_refused() {
+        let base = shards(SplitKind::Samples, 2);
+        let with = |f: &dyn Fn(&mut Header)| {
+            let mut v = base.clone();
+            f(&mut v[1].1.header);
+            v
+        };
+        let m = refusal(merge(&with(&|h| h.scene_hash = "00000000000000ff".into())), "part-2.rtfilm");
+        assert!(m.contains("different scene"), "{m}");
+        let m = refusal(
+            merge(&with(&|h| {
+                h.settings.insert("seed".into(), "7".into());
+            })),
+            "part-2.rtfilm",
+        );
+        assert!(m.contains("seed = 7") && m.contains("seed = 0"), "{m}");
+        let m = refusal(
+            merge(&with(&|h| {
+                h.settings.insert("roulette".into(), "6".into());
+            })),
+            "part-2.rtfilm",
+        );
+        assert!(m.contains("roulette = 6") && m.contains("(unset)"), "{m}");
+        let m = refusal(merge(&with(&|h| h.width = 7)), "part-2.rtfilm");
+        assert!(m.contains("7x5"), "{m}");
+        let m = refusal(merge(&with(&|h| h.spp = 12)), "part-2.rtfilm");
+        assert!(m.contains("12 samples per pixel"), "{m}");
+        let m = refusal(merge(&with(&|h| h.rtow = "9.9.9".into())), "part-2.rtfilm");
+        assert!(m.contains("9.9.9"), "{m}");
+        let m = refusal(merge(&with(&|h| h.key = "0".into())), "part-2.rtfilm");
+        assert!(m.contains("image key"), "{m}");
+        // Settings really change the key.
+        assert_ne!(identity(0).key(), identity(1).key());
+    }
+
+    #[test]
+    fn overlapping_duplicate_and_missing_parts_are_refused() {
+        let four = shards(SplitKind::Samples, 4);
+        let rows = shards(SplitKind::Rows, 4);
+        // A part of another split overlaps.
+        let mut mixed = four.clone();
+        mixed[2] = (PathBuf::from("rows-3.rtfilm"), rows[2].1.clone());
+        let m = refusal(merge(&mixed), "rows-3.rtfilm");
+        assert!(m.contains("by rows") && m.contains("by samples"), "{m}");
+        let mut other_n = four.clone();
+        other_n.push((PathBuf::from("of3.rtfilm"), shards(SplitKind::Samples, 3).remove(0).1));
+        refusal(merge(&other_n), "of3.rtfilm");
+        // Duplicates: the same file twice, or a copy.
+        let mut dup = four.clone();
+        dup.push((PathBuf::from("copy-of-2.rtfilm"), four[1].1.clone()));
+        let m = refusal(merge(&dup), "copy-of-2.rtfilm");
+        assert!(m.contains("part-2.rtfilm") && m.contains("duplicate"), "{m}");
+        // Missing shards are named.
+        let some = vec![four[0].clone(), four[2].clone()];
+        let m = merge(&some).unwrap_err().to_string();
+        assert!(m.contains("missing shards 2, 4 of 4"), "{m}");
+        let m = merge(&four[..3]).unwrap_err().to_string();
+        assert!(m.contains("missing shard 4 of 4"), "{m}");
+        assert!(merge(&[]).is_err());
+        // A part that claims a split into 4 billion shards is refused as
+        // inconsistent (empty shards), never allocated for.
+        let mut huge = four[0].1.clone();
+        huge.header.split.of = u32::MAX;
+        let m = refusal(reread(&huge, "huge.rtfilm"), "huge.rtfilm");
+        assert!(m.contains("inconsistent header"), "{m}");
+    }
+
+    #[test]
+    fn damaged_files_are_refused() {
+        let p = render(Split { kind: SplitKind::Rows, shard: 2, of: 3 }, true);
+        let bytes = p.to_bytes();
+        let name = "damaged.rtfilm";
+        let read = |b: &[u8]| Part::from_bytes(b, Path::new(name));
+        assert_eq!(read(&bytes).unwrap(), p);
+        // Truncated anywhere: in the preamble, the header, the data, the checksum.
+        let hlen = u32::from_le_bytes(bytes[12..16].try_into().unwrap()) as usize;
+        for cut in [0, 5, 12, 16, 16 + hlen / 2, 16 + hlen, 16 + hlen + 7, bytes.len() / 2, bytes.len() - 1] {
+            let m = refusal(read(&bytes[..cut]), name);
+            assert!(m.contains("truncated") || (cut < 8 && m.contains("not an rtow")), "cut {cut}: {m}");
+        }
+        // Any flipped bit after the preamble.
+        for at in [16, 16 + hlen / 2, 16 + hlen, 16 + hlen + 9, bytes.len() - 30, bytes.len() - 2] {
+            let mut b = bytes.clone();
+            b[at] ^= 0x10;
+            let m = refusal(read(&b), name);
+            assert!(m.contains("corrupted"), "byte {at}: {m}");
+        }
+        // Trailing bytes.
+        let mut longer = bytes.clone();
+        longer.extend_from_slice(b"xx");
+        refusal(read(&longer), name);
+        // Not a film at all.
+        let m = refusal(read(b"\x89PNG\r\n\x1a\n........"), name);
+        assert!(m.contains("not an rtow partial film"), "{m}");
+        // A future version is refused as such, whatever follows.
+        let mut future = bytes.clone();
+        future[8..12].copy_from_slice(&2u32.to_le_bytes());
+        let m = refusal(read(&future[..20]), name);
+        assert!(m.contains("format version 2 is newer"), "{m}");
+        let mut zero = bytes.clone();
+        zero[8..12].copy_from_slice(&0u32.to_le_bytes());
+        refusal(read(&zero), name);
+    }
+
+    /// Files whose checksum is right but whose content is not: written by a
+    /// bug or by hand. They are refused, not trusted.
+    #[test]
+    fn inconsistent_files_are_refused() {
+        let p = render(Split { kind: SplitKind::Samples, shard: 2, of: 3 }, false);
+        let name = "odd.rtfilm";
+        let edit = |f: &dyn Fn(&mut Part)| {
+            let mut q = p.clone();
+            f(&mut q);
+            refusal(reread(&q, name), name)
+        };
+        assert!(edit(&|q| q.header.samples = [0, 4]).contains("inconsistent header"));
+        assert!(edit(&|q| q.header.split.shard = 4).contains("does not exist"));
+        assert!(edit(&|q| q.header.split.kind = SplitKind::None).contains("does not exist"));
+        assert!(edit(&|q| q.header.fraction_bits = 24).contains("fractional bits"));
+        assert!(edit(&|q| q.header.counters.samples += 1).contains("samples counted"));
+        // A pixel with more samples than the part renders.
+        assert!(edit(&|q| q.film.count[3] = 5).contains("more than the part's"));
+        // A sum too large for its samples (it could make an infinite mean).
+        assert!(edit(&|q| q.film.sum[0][1] = i128::MAX >> 1).contains("out of range"));
+        // Not JSON.
+        let mut b = p.to_bytes();
+        b[16] = b'#';
+        let body = b.len() - 4;
+        let crc = crc32fast::hash(&b[..body]);
+        b[body..].copy_from_slice(&crc.to_le_bytes());
+        assert!(refusal(Part::from_bytes(&b, Path::new(name)), name).contains("not valid JSON"));
+    }
+
+    #[test]
+    fn shards_cover_everything_once() {
+        for total in [1u32, 7, 64, 675] {
+            for n in 1..=total.min(20) {
+                let mut next = 0;
+                for k in 1..=n {
+                    let s = Split { kind: SplitKind::Samples, shard: k, of: n };
+                    let r = s.samples(total);
+                    assert_eq!(r.start, next);
+                    assert!(!r.is_empty());
+                    next = r.end;
+                    assert_eq!(s.rows(total), 0..total);
+                    assert_eq!(Split { kind: SplitKind::Rows, ..s }.rows(total), r);
+                }
+                assert_eq!(next, total);
+            }
+        }
+        assert_eq!(Split::parse("3/8", SplitKind::Rows).unwrap(), Split { kind: SplitKind::Rows, shard: 3, of: 8 });
+        for bad in ["0/4", "5/4", "1/0", "x/2", "3", "-1/2", ""] {
+            let e = Split::parse(bad, SplitKind::Samples).unwrap_err().to_string();
+            assert!(e.starts_with("--shard:"), "{e}");
+        }
+        assert!(Split::parse("3/8", SplitKind::Samples).unwrap().check(7, 100).is_err());
+        assert!(Split::parse("3/8", SplitKind::Rows).unwrap().check(7, 100).is_ok());
+        assert!(Split::parse("3/8", SplitKind::Rows).unwrap().check(700, 5).is_err());
+    }
+}

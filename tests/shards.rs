@@ -1,0 +1,292 @@
+//! Shards, merge and resume: any split of a render, by samples or by rows,
+//! merges into exactly the one-process image (every kernel, any threads and
+//! tiles); a resumed render is exactly the render with more samples; and
+//! `rtow merge` refuses, with exit status 2 naming the file, everything that
+//! would not give that image.
+
+use rtow::estimator::Adaptive;
+use rtow::film::part::{self, Part, Split, SplitKind};
+use rtow::scene::{preset, Scene};
+use rtow::shard::{self, Job};
+use rtow::{render, KernelChoice, RenderOptions, Settings};
+use std::path::{Path, PathBuf};
+use std::process::Command;
+
+const BIN: &str = env!("CARGO_BIN_EXE_rtow");
+
+fn kernels() -> Vec<KernelChoice> {
+    let mut k = vec![KernelChoice::Scalar, KernelChoice::Simd8];
+    if rtow::render::HAS_SIMD16 {
+        k.push(KernelChoice::Simd16);
+    }
+    k
+}
+
+fn opts(kernel: KernelChoice, threads: usize, tile: u32) -> RenderOptions {
+    RenderOptions { kernel, threads: Some(threads), tile, ..Default::default() }
+}
+
+fn settings(spp: u32) -> Settings {
+    Settings { width: 37, height: 21, spp, max_depth: 12, seed: 3 }
+}
+
+/// Renders shard `k` of `n` and passes it through its file bytes.
+fn shard_part(scene: &Scene, s: Settings, o: RenderOptions, split: Split) -> (PathBuf, Part) {
+    let job = Job { split, resume: None };
+    let (_, p) = shard::render_part(scene, s, o, &job, None).expect("shard renders");
+    let name = PathBuf::from(format!("part-{}.rtfilm", split.shard));
+    let back = Part::from_bytes(&p.to_bytes(), &name).expect("reads back");
+    assert_eq!(back, p);
+    (name, back)
+}
+
+#[test]
+fn any_split_merges_into_the_one_process_image() {
+    for name in ["final", "ch09-glass"] {
+        let scene = preset(name).unwrap();
+        let s = settings(7);
+        let one = render(&scene, s, opts(KernelChoice::Simd, 2, 16), None).unwrap();
+        for (i, kernel) in kernels().into_iter().enumerate() {
+            for (kind, ns) in [(SplitKind::Samples, &[1u32, 2, 3, 7][..]), (SplitKind::Rows, &[2, 5, 21][..])] {
+                for &n in ns {
+                    // Shards run with different threads and tiles, as on different machines.
+                    let mut parts: Vec<_> = (1..=n)
+                        .map(|k| {
+                            let o = opts(kernel, 1 + (k as usize % 2), [16, 5, 1, 45][(k as usize + i) % 4]);
+                            shard_part(&scene, s, o, Split { kind, shard: k, of: n })
+                        })
+                        .collect();
+                    parts.rotate_left(n as usize / 2);
+                    let merged = part::merge(&parts).unwrap();
+                    let image = merged.film.image();
+                    assert_eq!(
+                        image.hash(),
+                        one.image.hash(),
+                        "{name} {kernel:?}: {n} shards by {kind:?} merge into another image"
+                    );
+                    assert_eq!(image, one.image);
+                    assert_eq!(merged.header.counters.rays, one.stats.rays, "{name} {kernel:?} {kind:?} {n}");
+                    assert_eq!(merged.header.counters.samples, one.stats.samples);
+                }
+            }
+        }
+    }
+}
+
+#[test]
+fn the_image_does_not_depend_on_threads_tiles_or_kernel() {
+    let scene = preset("final").unwrap();
+    let s = settings(5);
+    let reference = render(&scene, s, opts(KernelChoice::Scalar, 1, 16), None).unwrap().image;
+    for kernel in kernels() {
+        for (threads, tile) in [(1, 1), (2, 7), (2, 45), (1, 16)] {
+            let img = render(&scene, s, opts(kernel, threads, tile), None).unwrap().image;
+            assert_eq!(img, reference, "{kernel:?}, {threads} threads, tile {tile}");
+        }
+    }
+}
+
+#[test]
+fn a_resumed_render_is_the_render_with_more_samples() {
+    let scene = preset("final").unwrap();
+    for kernel in kernels() {
+        let o = opts(kernel, 2, 16);
+        let full = render(&scene, settings(13), o, None).unwrap();
+        for first in [2, 4, 13] {
+            let job = Job { split: Split::WHOLE, resume: None };
+            let (_, done) = shard::render_part(&scene, settings(first), o, &job, None).unwrap();
+            let done = Part::from_bytes(&done.to_bytes(), Path::new("done.rtfilm")).unwrap();
+            let job = Job { split: Split::WHOLE, resume: Some((PathBuf::from("done.rtfilm"), done)) };
+            let (r, film) = shard::render_part(&scene, settings(13), o, &job, None).unwrap();
+            assert_eq!(r.image, full.image, "{kernel:?}: resumed from {first} spp");
+            assert_eq!(film.header.counters.rays, full.stats.rays);
+            assert_eq!(film.header.samples, [0, 13]);
+        }
+    }
+    // One sample per pixel goes through pixel centres, so it is not the start
+    // of a jittered render: resuming it is refused.
+    let job = Job { split: Split::WHOLE, resume: None };
+    let (_, one) = shard::render_part(&scene, settings(1), opts(KernelChoice::Simd, 2, 16), &job, None).unwrap();
+    let job = Job { split: Split::WHOLE, resume: Some((PathBuf::from("one.rtfilm"), one)) };
+    let e = shard::check(&scene, &settings(8), &opts(KernelChoice::Simd, 2, 16), &job).unwrap_err().to_string();
+    assert!(e.contains("one.rtfilm") && e.contains("pixel_jitter"), "{e}");
+}
+
+#[test]
+fn adaptive_renders_split_by_rows_exactly_and_refuse_sample_splits() {
+    let scene = preset("ch09-glass").unwrap();
+    let s = settings(64);
+    let o = RenderOptions { adaptive: Some(Adaptive::new(0.2, 8).unwrap()), ..opts(KernelChoice::Simd, 2, 16) };
+    let one = render(&scene, s, o, None).unwrap();
+    assert!(one.stats.samples < 37 * 21 * 64, "some pixels stop early");
+    let parts: Vec<_> =
+        (1..=3).map(|k| shard_part(&scene, s, o, Split { kind: SplitKind::Rows, shard: k, of: 3 })).collect();
+    assert!(parts[0].1.header.moments);
+    let merged = part::merge(&parts).unwrap();
+    assert_eq!(merged.film.image(), one.image);
+    assert_eq!(merged.header.counters.samples, one.stats.samples);
+    let job = Job { split: Split { kind: SplitKind::Samples, shard: 1, of: 2 }, resume: None };
+    let e = shard::check(&scene, &s, &o, &job).unwrap_err().to_string();
+    assert!(e.starts_with("--split:") && e.contains("--split rows"), "{e}");
+}
+
+// The command line.
+
+struct Run {
+    code: i32,
+    stdout: String,
+    stderr: String,
+}
+
+fn rtow(dir: &Path, args: &[&str]) -> Run {
+    let out = Command::new(BIN).args(args).current_dir(dir).output().expect("rtow runs");
+    Run {
+        code: out.status.code().expect("rtow exited"),
+        stdout: String::from_utf8(out.stdout).unwrap(),
+        stderr: String::from_utf8(out.stderr).unwrap(),
+    }
+}
+
+fn ok(r: &Run) {
+    assert_eq!(r.code, 0, "stderr: {}", r.stderr);
+}
+
+/// Exit status 2, one `error:` line naming `file`, and no output written.
+fn refused(dir: &Path, args: &[&str], file: &str) -> String {
+    let r = rtow(dir, args);
+    assert!(!r.stderr.contains("panicked"), "{args:?}: {}", r.stderr);
+    assert_eq!(r.code, 2, "{args:?}: {}", r.stderr);
+    assert_eq!(r.stderr.lines().count(), 1, "{args:?}: {}", r.stderr);
+    assert!(r.stderr.starts_with("error: ") && r.stderr.contains(file), "{args:?}: {} does not name {file}", r.stderr);
+    assert!(!dir.join("out.png").exists(), "{args:?} wrote an output");
+    r.stderr
+}
+
+const SMALL: [&str; 8] = ["--width", "40", "--height", "24", "--spp", "6", "--depth", "10"];
+
+fn hash_in(path: &Path) -> String {
+    let v: serde_json::Value = serde_json::from_str(&std::fs::read_to_string(path).unwrap()).unwrap();
+    v["image_hash"].as_str().unwrap().to_string()
+}
+
+#[test]
+fn rtow_merge_writes_the_one_process_image_and_resume_continues() {
+    let dir = tempfile::tempdir().unwrap();
+    let d = dir.path();
+    let run = |extra: &[&str]| {
+        let mut a = vec!["render", "final", "-q"];
+        a.extend_from_slice(&SMALL);
+        a.extend_from_slice(extra);
+        rtow(d, &a)
+    };
+    ok(&run(&["-o", "one.png", "--stats-json", "one.json", "--float", "one.pfm"]));
+    for k in 1..=3 {
+        ok(&run(&["--shard", &format!("{k}/3"), "-o", &format!("s{k}.rtfilm")]));
+        ok(&run(&[
+            "--split",
+            "rows",
+            "--kernel",
+            "scalar",
+            "--shard",
+            &format!("{k}/3"),
+            "-o",
+            &format!("r{k}.rtfilm"),
+        ]));
+    }
+    // A shard rerun writes the identical file.
+    let before = std::fs::read(d.join("s2.rtfilm")).unwrap();
+    ok(&run(&["--shard", "2/3", "--threads", "1", "--tile", "3", "-o", "s2.rtfilm"]));
+    assert_eq!(std::fs::read(d.join("s2.rtfilm")).unwrap(), before);
+    for (parts, out) in [(["s3.rtfilm", "s1.rtfilm", "s2.rtfilm"], "m"), (["r1.rtfilm", "r2.rtfilm", "r3.rtfilm"], "r")]
+    {
+        let (png, json, pfm) = (format!("{out}.png"), format!("{out}.json"), format!("{out}.pfm"));
+        let mut a = vec!["merge"];
+        a.extend_from_slice(&parts);
+        a.extend_from_slice(&["-o", &png, "--stats-json", &json, "--float", &pfm]);
+        let r = rtow(d, &a);
+        ok(&r);
+        assert!(r.stdout.contains("merged 3 part(s)"), "{}", r.stdout);
+        assert_eq!(hash_in(&d.join(&json)), hash_in(&d.join("one.json")));
+        assert_eq!(std::fs::read(d.join(&png)).unwrap(), std::fs::read(d.join("one.png")).unwrap());
+        assert_eq!(std::fs::read(d.join(&pfm)).unwrap(), std::fs::read(d.join("one.pfm")).unwrap());
+    }
+    // Resume: from a render's own film, and from merged shards written as a film.
+    let mut a = vec!["render", "final", "-q"];
+    a.extend_from_slice(&SMALL[..4]);
+    a.extend_from_slice(&["--spp", "2", "--depth", "10", "-o", "two.rtfilm"]);
+    ok(&rtow(d, &a));
+    ok(&rtow(d, &["merge", "s1.rtfilm", "s2.rtfilm", "s3.rtfilm", "-o", "six.rtfilm", "-q"]));
+    ok(&run(&["--resume", "two.rtfilm", "-o", "resumed.png", "--stats-json", "resumed.json"]));
+    assert_eq!(hash_in(&d.join("resumed.json")), hash_in(&d.join("one.json")));
+    let mut a = vec!["render", "final", "-q"];
+    a.extend_from_slice(&SMALL[..4]);
+    a.extend_from_slice(&["--spp", "9", "--depth", "10", "--resume", "six.rtfilm", "-o", "nine.png"]);
+    ok(&rtow(d, &a));
+}
+
+#[test]
+fn rtow_merge_refuses_what_would_not_be_the_image() {
+    let dir = tempfile::tempdir().unwrap();
+    let d = dir.path();
+    let render = |extra: &[&str]| {
+        let mut a = vec!["render", "final", "-q"];
+        a.extend_from_slice(&SMALL);
+        a.extend_from_slice(extra);
+        ok(&rtow(d, &a));
+    };
+    for k in 1..=4 {
+        render(&["--shard", &format!("{k}/4"), "-o", &format!("p{k}.rtfilm")]);
+    }
+    render(&["--shard", "2/4", "--seed", "9", "-o", "seed9.rtfilm"]);
+    render(&["--shard", "2/4", "--rr", "-o", "rr.rtfilm"]);
+    render(&["--shard", "2/4", "--split", "rows", "-o", "rows2.rtfilm"]);
+    render(&["--shard", "2/5", "-o", "of5.rtfilm"]);
+    let mut a = vec!["render", "ch09-glass", "-q"];
+    a.extend_from_slice(&SMALL);
+    a.extend_from_slice(&["--shard", "2/4", "-o", "glass2.rtfilm"]);
+    ok(&rtow(d, &a));
+    let good = std::fs::read(d.join("p2.rtfilm")).unwrap();
+    std::fs::write(d.join("truncated.rtfilm"), &good[..good.len() - 100]).unwrap();
+    let mut bad = good.clone();
+    let at = bad.len() - 50;
+    bad[at] ^= 1;
+    std::fs::write(d.join("corrupt.rtfilm"), &bad).unwrap();
+    let mut future = good.clone();
+    future[8..12].copy_from_slice(&(part::VERSION + 1).to_le_bytes());
+    std::fs::write(d.join("future.rtfilm"), &future).unwrap();
+    std::fs::write(d.join("empty.rtfilm"), b"").unwrap();
+
+    let merge =
+        |second: &str| refused(d, &["merge", "p1.rtfilm", second, "p3.rtfilm", "p4.rtfilm", "-o", "out.png"], second);
+    assert!(merge("seed9.rtfilm").contains("seed = 9"));
+    assert!(merge("rr.rtfilm").contains("russian_roulette = after"));
+    assert!(merge("glass2.rtfilm").contains("different scene"));
+    assert!(merge("rows2.rtfilm").contains("by rows"));
+    assert!(merge("of5.rtfilm").contains("2/5"));
+    assert!(merge("truncated.rtfilm").contains("truncated"));
+    assert!(merge("corrupt.rtfilm").contains("corrupted"));
+    assert!(merge("future.rtfilm").contains("newer"));
+    assert!(merge("empty.rtfilm").contains("not an rtow partial film"));
+    assert!(merge("missing.rtfilm").contains("cannot read"));
+    // Duplicates (the same shard twice, under another name too) and missing shards.
+    std::fs::copy(d.join("p3.rtfilm"), d.join("copy3.rtfilm")).unwrap();
+    let e = refused(
+        d,
+        &["merge", "p1.rtfilm", "p2.rtfilm", "p3.rtfilm", "copy3.rtfilm", "p4.rtfilm", "-o", "out.png"],
+        "copy3.rtfilm",
+    );
+    assert!(e.contains("duplicate") && e.contains("p3.rtfilm"), "{e}");
+    let e = refused(d, &["merge", "p1.rtfilm", "p3.rtfilm", "-o", "out.png"], "p1.rtfilm");
+    assert!(e.contains("missing shards 2, 4 of 4"), "{e}");
+    // Render-side refusals: a shard to a PNG, adaptive with a sample split, a resume of another render.
+    let mut a = vec!["render", "final"];
+    a.extend_from_slice(&SMALL);
+    let with = |extra: &[&'static str]| -> Vec<&'static str> { [a.as_slice(), extra].concat() };
+    refused(d, &with(&["--shard", "1/2", "-o", "out.png"]), "--shard");
+    refused(d, &with(&["--shard", "1/2", "--adaptive", "0.1", "-o", "out.rtfilm"]), "--split rows");
+    refused(d, &with(&["--shard", "3/2", "-o", "out.rtfilm"]), "--shard");
+    refused(d, &with(&["--seed", "1", "--resume", "p1.rtfilm", "-o", "out.png"]), "p1.rtfilm");
+    let e = refused(d, &["render", "ch01-gradient", "--width", "8", "--height", "8", "-o", "out.rtfilm"], "no film");
+    assert!(e.contains("gradient"), "{e}");
+    assert!(!d.join("out.rtfilm").exists());
+}
