@@ -24,7 +24,7 @@
 
 use super::intersect::{sphere_disc, sphere_t, Closest};
 use super::spheres::{Spheres, MISS};
-use crate::probe::{Probe, Work};
+use crate::probe::{Probe, Work, WorkTally};
 use crate::real::{Real, Wide};
 use crate::vec3::V3;
 use std::mem::MaybeUninit;
@@ -299,6 +299,7 @@ impl Bvh {
 
     /// The closest hit of one ray, one box and one sphere at a time (scalar kernel).
     pub fn closest_hit_scalar<P: Probe>(&self, o: V3<f32>, d: V3<f32>, probe: &mut P) -> (u32, f32) {
+        let mut tally = WorkTally::<P>::new();
         let inv = inv_dir(d);
         let mut best = Closest::<f32>::none();
         let mut stack = Stack::new();
@@ -306,13 +307,13 @@ impl Bvh {
             if entry > best.t * PRUNE_SCALE {
                 continue;
             }
-            probe.work(Work::Node, 1);
+            tally.work(Work::Node, 1);
             let node = &self.nodes[ni as usize];
             for k in 0..8 {
                 if node.count[k] == EMPTY {
                     continue;
                 }
-                probe.work(Work::Box, 1);
+                tally.work(Work::Box, 1);
                 let (near, far) = slab(
                     V3::new(node.min[0][k], node.min[1][k], node.min[2][k]),
                     V3::new(node.max[0][k], node.max[1][k], node.max[2][k]),
@@ -328,17 +329,19 @@ impl Bvh {
                         let start = node.child[k] as usize;
                         for j in start..start + count as usize {
                             let (c, r2) = self.sphere(j);
-                            best.test(o, d, c, r2, self.index[j], probe);
+                            best.test(o, d, c, r2, self.index[j], &mut tally);
                         }
                     }
                 }
             }
         }
+        tally.flush(probe);
         (best.index, best.t)
     }
 
     /// The closest hit of one ray: 8 child boxes, or 8 leaf spheres, per `f32x8` test.
     pub fn closest_hit_wide<P: Probe>(&self, o: V3<f32>, d: V3<f32>, probe: &mut P) -> (u32, f32) {
+        let mut tally = WorkTally::<P>::new();
         let inv = inv_dir(d);
         let (o8, d8) = (splat3(o), splat3(d));
         let inv8 = splat3(inv);
@@ -348,8 +351,8 @@ impl Bvh {
             if entry > best.t * PRUNE_SCALE {
                 continue;
             }
-            probe.work(Work::Node, 1);
-            probe.work(Work::Box, 8);
+            tally.work(Work::Node, 1);
+            tally.work(Work::Box, 8);
             let node = &self.nodes[ni as usize];
             let bmin = V3::new(f32x8::new(node.min[0]), f32x8::new(node.min[1]), f32x8::new(node.min[2]));
             let bmax = V3::new(f32x8::new(node.max[0]), f32x8::new(node.max[1]), f32x8::new(node.max[2]));
@@ -369,7 +372,7 @@ impl Bvh {
                         inner[ninner] = (node.child[k], near[k]);
                         ninner += 1;
                     }
-                    cnt => self.leaf_wide(node.child[k] as usize, cnt as usize, o8, d8, &mut best, probe),
+                    cnt => self.leaf_wide(node.child[k] as usize, cnt as usize, o8, d8, &mut best, &mut tally),
                 }
             }
             inner[..ninner].sort_unstable_by(|a, b| b.1.total_cmp(&a.1));
@@ -377,6 +380,7 @@ impl Bvh {
                 stack.push(e);
             }
         }
+        tally.flush(probe);
         (best.index, best.t)
     }
 
@@ -405,6 +409,7 @@ impl Bvh {
     /// is entered when any live ray (bit k of `live`) enters its box; a leaf's
     /// spheres are each broadcast against the packet, as in brute force.
     pub fn closest_hit_packet<W: Wide, P: Probe>(&self, o: V3<W>, d: V3<W>, live: u32, probe: &mut P) -> (W::U32, W) {
+        let mut tally = WorkTally::<P>::new();
         let inv = inv_dir(d);
         let live_mask = W::mask_from_bits(live);
         let mut best = Closest::<W>::none();
@@ -412,14 +417,14 @@ impl Bvh {
         let exit = W::splat(EXIT_SCALE);
         let prune = W::splat(PRUNE_SCALE);
         while let Some((ni, _)) = stack.pop() {
-            probe.work(Work::Node, 1);
+            tally.work(Work::Node, 1);
             let node = &self.nodes[ni as usize];
             for k in 0..8 {
                 let count = node.count[k];
                 if count == EMPTY {
                     continue;
                 }
-                probe.work(Work::Box, 1);
+                tally.work(Work::Box, 1);
                 let bmin = V3::new(node.min[0][k], node.min[1][k], node.min[2][k]);
                 let bmax = V3::new(node.max[0][k], node.max[1][k], node.max[2][k]);
                 let (near, far) = slab(V3::splat3(bmin.to_array()), V3::splat3(bmax.to_array()), o, inv);
@@ -434,10 +439,11 @@ impl Bvh {
                 let start = node.child[k] as usize;
                 for j in start..start + count as usize {
                     let (c, r2) = self.sphere(j);
-                    best.test(o, d, c, r2, self.index[j], probe);
+                    best.test(o, d, c, r2, self.index[j], &mut tally);
                 }
             }
         }
+        tally.flush(probe);
         (best.index, best.t)
     }
 

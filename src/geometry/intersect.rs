@@ -50,7 +50,7 @@
 //!   origin off the surface by more than the bound on `c'`.
 
 use super::spheres::{Spheres, MISS};
-use crate::probe::{Probe, Work};
+use crate::probe::{Probe, Work, WorkTally};
 use crate::real::{Mask, Real};
 use crate::vec3::V3;
 
@@ -125,10 +125,12 @@ impl<R: Real> Closest<R> {
 #[inline]
 pub fn closest_hit<R: Real, P: Probe>(s: &Spheres, o: V3<R>, d: V3<R>, probe: &mut P) -> (R::U32, R) {
     let mut best = Closest::none();
+    let mut tally = WorkTally::<P>::new();
     for i in 0..s.len {
         let c = V3::new(R::splat(s.cx[i]), R::splat(s.cy[i]), R::splat(s.cz[i]));
-        best.test(o, d, c, R::splat(s.r2[i]), i as u32, probe);
+        best.test(o, d, c, R::splat(s.r2[i]), i as u32, &mut tally);
     }
+    tally.flush(probe);
     (best.index, best.t)
 }
 
