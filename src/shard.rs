@@ -33,6 +33,7 @@ pub fn identity(scene: &Scene, settings: &Settings, opts: &RenderOptions) -> Ide
     set("max_depth", settings.max_depth.to_string());
     set("seed", settings.seed.to_string());
     set("pixel_jitter", plan.jitter.to_string());
+    set("sampler", opts.sampler.name().to_string());
     set("russian_roulette", if opts.rr { format!("after {} rays", opts.rr_after) } else { "off".into() });
     set(
         "adaptive",

@@ -239,6 +239,7 @@ fn rtow_merge_refuses_what_would_not_be_the_image() {
     }
     render(&["--shard", "2/4", "--seed", "9", "-o", "seed9.rtfilm"]);
     render(&["--shard", "2/4", "--rr", "-o", "rr.rtfilm"]);
+    render(&["--shard", "2/4", "--sampler", "sobol-pixel", "-o", "sampler.rtfilm"]);
     render(&["--shard", "2/4", "--split", "rows", "-o", "rows2.rtfilm"]);
     render(&["--shard", "2/5", "-o", "of5.rtfilm"]);
     let mut a = vec!["render", "ch09-glass", "-q"];
@@ -260,6 +261,7 @@ fn rtow_merge_refuses_what_would_not_be_the_image() {
         |second: &str| refused(d, &["merge", "p1.rtfilm", second, "p3.rtfilm", "p4.rtfilm", "-o", "out.png"], second);
     assert!(merge("seed9.rtfilm").contains("seed = 9"));
     assert!(merge("rr.rtfilm").contains("russian_roulette = after"));
+    assert!(merge("sampler.rtfilm").contains("sampler = sobol-pixel"));
     assert!(merge("glass2.rtfilm").contains("different scene"));
     assert!(merge("rows2.rtfilm").contains("by rows"));
     assert!(merge("of5.rtfilm").contains("2/5"));

@@ -294,7 +294,10 @@ mod tests {
         assert_eq!((v.rr, v.adaptive), (Some(ROULETTE_AFTER_RAYS), Some(0.05)));
         assert_eq!(Variant::parse(&v.name()).unwrap(), v);
         let v = Variant::parse("sobol+rr").unwrap();
-        assert_eq!((v.sampler, v.rr, v.name().as_str()), (crate::sampling::Sampler::SOBOL, Some(ROULETTE_AFTER_RAYS), "sobol+rr"));
+        assert_eq!(
+            (v.sampler, v.rr, v.name().as_str()),
+            (crate::sampling::Sampler::SOBOL, Some(ROULETTE_AFTER_RAYS), "sobol+rr")
+        );
         assert_eq!(Variant::parse(&v.name()).unwrap(), v);
         let v = Variant::parse("rr+sobol-lens+adaptive:0.05").unwrap();
         assert_eq!(v.name(), "sobol-lens+rr+adaptive:0.05");
