@@ -1,7 +1,7 @@
 //! The samplers: Sobol renders are bit-identical across kernels, threads and
 //! tiles like independent ones; Sobol is unbiased (the mean over many seeds is
 //! the independent sampler's mean, per pixel); its noise is lower; the
-//! independent sampler is what a render uses by default; the choice reaches the
+//! Sobol sampler is what a render uses by default; the choice reaches the
 //! stats and is read from scene files.
 
 mod common;
@@ -76,13 +76,13 @@ fn sobol_images_do_not_depend_on_threads_or_tiles() {
 }
 
 #[test]
-fn the_default_sampler_is_independent_and_sobol_differs() {
+fn the_default_sampler_is_sobol_and_independent_differs() {
     let sc = scene::preset("ch07-diffuse").unwrap();
     let s = settings(24, 14, 4, 10, 1);
     let dflt = render_accel(&sc, s, Simd, 2, 16, AccelChoice::Auto);
     let ind = run(&sc, s, Simd, Sampler::Independent, false, 2, 16);
     let sob = run(&sc, s, Simd, Sampler::SOBOL, false, 2, 16);
-    assert_identical(&dflt.image, &ind.image, "default vs independent");
+    assert_identical(&dflt.image, &sob.image, "default vs sobol");
     assert_ne!(ind.image.hash(), sob.image.hash());
     let json = serde_json::to_value(&sob.stats).unwrap();
     assert_eq!(json["sampler"], "sobol");
