@@ -1,5 +1,6 @@
-//! criterion benchmarks: the scalar reference against the SIMD path, at every
-//! lane width this build has (8; and 16 on AVX-512 builds).
+//! criterion benchmarks: the scalar reference against the SIMD path at both
+//! lane widths (8; and 16, which is one 512-bit register on AVX-512 builds and
+//! two 256-bit halves otherwise).
 //!
 //! `cargo bench` (a few minutes on 2 cores). Groups:
 //! - `intersect`: closest hit over the final scene's spheres (brute force), one
@@ -85,9 +86,7 @@ fn intersect(c: &mut Criterion) {
         })
     });
     intersect_wide::<f32x8>(&mut g, &prep, &r);
-    if rtow::render::HAS_SIMD16 {
-        intersect_wide::<f32x16>(&mut g, &prep, &r);
-    }
+    intersect_wide::<f32x16>(&mut g, &prep, &r);
     g.finish();
 }
 
@@ -107,9 +106,7 @@ fn kernels(g: &mut BenchmarkGroup<criterion::measurement::WallTime>, prep: &Prep
         });
     }
     wide_kernel::<f32x8>(g, prep, prefix);
-    if rtow::render::HAS_SIMD16 {
-        wide_kernel::<f32x16>(g, prep, prefix);
-    }
+    wide_kernel::<f32x16>(g, prep, prefix);
 }
 
 fn wide_kernel<W: Wide>(g: &mut BenchmarkGroup<criterion::measurement::WallTime>, prep: &Prepared, prefix: &str) {

@@ -340,9 +340,6 @@ fn bounce<W: Wide, P: Probe, S: PathSampler>(
 ) -> u64 {
     let n = ws.cur.len;
     probe.rays(depth, n as u32);
-    if depth > 0 && REORDER {
-        reorder(ws);
-    }
     for i in (0..n).step_by(W::LANES) {
         let live = (n - i).min(W::LANES);
         let (o, d) = (Paths::v3::<W>(&ws.cur.o, i), Paths::v3::<W>(&ws.cur.d, i));
@@ -387,51 +384,6 @@ fn bounce<W: Wide, P: Probe, S: PathSampler>(
     ws.queue = queues;
     std::mem::swap(&mut ws.cur, &mut ws.next);
     n as u64
-}
-
-/// Reorder secondary rays before intersection (an experiment, off: see docs/performance.md).
-const REORDER: bool = option_env!("RTOW_REORDER").is_some();
-/// Bins of the reordering key: direction octant x a 4 x 4 cell of the origin.
-const REORDER_BINS: usize = 128;
-
-/// Reorders the live paths by the direction of their next ray (a counting sort
-/// over octant and a coarse azimuth/elevation cell), so that a packet's rays
-/// point the same way. Paths carry their result slot, so the image is unchanged.
-fn reorder(ws: &mut Workspace) {
-    let n = ws.cur.len;
-    let cur = &ws.cur;
-    let key = |i: usize| -> usize {
-        let (x, y, z) = (cur.d[0][i], cur.d[1][i], cur.d[2][i]);
-        let oct = (x < 0.0) as usize | ((y < 0.0) as usize) << 1 | ((z < 0.0) as usize) << 2;
-        let cell = |a: f32| ((a * 0.5).floor() as i64 & 3) as usize;
-        let (ox, oz) = (cell(cur.o[0][i]), cell(cur.o[2][i]));
-        oct << 4 | ox << 2 | oz
-    };
-    let mut count = [0usize; REORDER_BINS];
-    for i in 0..n {
-        count[key(i)] += 1;
-    }
-    let mut start = [0usize; REORDER_BINS];
-    for b in 1..REORDER_BINS {
-        start[b] = start[b - 1] + count[b - 1];
-    }
-    let next = &mut ws.next;
-    for i in 0..n {
-        let k = key(i);
-        let j = start[k];
-        start[k] += 1;
-        for a in 0..3 {
-            next.o[a][j] = cur.o[a][i];
-            next.d[a][j] = cur.d[a][i];
-            next.thr[a][j] = cur.thr[a][i];
-        }
-        for w in 0..4 {
-            next.rng[w][j] = cur.rng[w][i];
-        }
-        next.slot[j] = cur.slot[i];
-    }
-    next.len = n;
-    std::mem::swap(&mut ws.cur, &mut ws.next);
 }
 
 /// Calls `f` with each packet of W indices of `queue` (the last one padded by
