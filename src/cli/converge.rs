@@ -128,18 +128,19 @@ pub fn run(a: ConvergeArgs) -> Result<()> {
                     "efficiency"
                 );
             }
+            let c = r.cells(px);
             say!(
-                "  {:<6} {:<18} {:>6} {:>9.3} {:>9.2} {:>8.1} {:>10.5} {:>10.3e} {:>+10.5} {:>11.4e}",
-                r.kernel.name(),
-                r.variant.name(),
-                r.spp,
-                r.seconds,
-                r.rays as f64 / r.seconds / 1e6,
-                r.samples as f64 / px,
-                r.rmse,
-                r.relmse,
-                r.mean_rel_error,
-                r.efficiency()
+                "  {:<6} {:<18} {:>6} {:>9} {:>9} {:>8} {:>10} {:>10} {:>10} {:>11}",
+                c[0],
+                c[1],
+                c[2],
+                c[3],
+                c[4],
+                c[5],
+                c[6],
+                c[7],
+                c[8],
+                c[9]
             )
         }
     })?;

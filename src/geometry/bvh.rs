@@ -291,10 +291,23 @@ impl Bvh {
         self.nodes.len()
     }
 
-    /// Leaf-order slot `j` as a broadcast centre and squared radius.
+    /// The spheres of a leaf (leaf-order slots `start..start + count`), each
+    /// broadcast against the rays: the leaf test of the scalar and the packet
+    /// walks (the sphere test and the tie rule are [`Closest::test`]'s).
     #[inline(always)]
-    fn sphere<R: Real>(&self, j: usize) -> (V3<R>, R) {
-        (V3::new(R::splat(self.cx[j]), R::splat(self.cy[j]), R::splat(self.cz[j])), R::splat(self.r2[j]))
+    fn leaf<R: Real, P: Probe>(
+        &self,
+        start: usize,
+        count: usize,
+        o: V3<R>,
+        d: V3<R>,
+        best: &mut Closest<R>,
+        probe: &mut P,
+    ) {
+        for j in start..start + count {
+            let c = V3::new(R::splat(self.cx[j]), R::splat(self.cy[j]), R::splat(self.cz[j]));
+            best.test(o, d, c, R::splat(self.r2[j]), self.index[j], probe);
+        }
     }
 
     /// The closest hit of one ray, one box and one sphere at a time (scalar kernel).
@@ -325,13 +338,7 @@ impl Bvh {
                 }
                 match node.count[k] {
                     0 => stack.push((node.child[k], near)),
-                    count => {
-                        let start = node.child[k] as usize;
-                        for j in start..start + count as usize {
-                            let (c, r2) = self.sphere(j);
-                            best.test(o, d, c, r2, self.index[j], &mut tally);
-                        }
-                    }
+                    count => self.leaf(node.child[k] as usize, count as usize, o, d, &mut best, &mut tally),
                 }
             }
         }
@@ -436,11 +443,7 @@ impl Bvh {
                     stack.push((node.child[k], 0.0));
                     continue;
                 }
-                let start = node.child[k] as usize;
-                for j in start..start + count as usize {
-                    let (c, r2) = self.sphere(j);
-                    best.test(o, d, c, r2, self.index[j], &mut tally);
-                }
+                self.leaf(node.child[k] as usize, count as usize, o, d, &mut best, &mut tally);
             }
         }
         tally.flush(probe);

@@ -67,4 +67,22 @@ impl Row {
     pub fn label(&self) -> String {
         format!("{}/{}", self.kernel.name(), self.variant.name())
     }
+
+    /// The row's cells as every table prints them (console and markdown):
+    /// kernel, variant, spp, seconds, Mrays/s, samples per pixel (of `pixels`),
+    /// RMSE, relMSE, mean signed relative error, efficiency.
+    pub fn cells(&self, pixels: f64) -> [String; 10] {
+        [
+            self.kernel.name().to_string(),
+            self.variant.name(),
+            self.spp.to_string(),
+            format!("{:.3}", self.seconds),
+            format!("{:.2}", self.rays as f64 / self.seconds / 1e6),
+            format!("{:.1}", self.samples as f64 / pixels.max(1.0)),
+            format!("{:.5}", self.rmse),
+            format!("{:.3e}", self.relmse),
+            format!("{:+.5}", self.mean_rel_error),
+            format!("{:.4e}", self.efficiency()),
+        ]
+    }
 }

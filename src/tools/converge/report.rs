@@ -174,20 +174,7 @@ impl Report {
         s += "|---|---|---:|---:|---:|---:|---:|---:|---:|---:|\n";
         let px = (self.width as f64 * self.height as f64).max(1.0);
         for r in &self.rows {
-            let _ = writeln!(
-                s,
-                "| {} | {} | {} | {:.3} | {:.2} | {:.1} | {:.5} | {:.3e} | {:+.5} | {:.4e} |",
-                r.kernel.name(),
-                r.variant.name(),
-                r.spp,
-                r.seconds,
-                r.rays as f64 / r.seconds / 1e6,
-                r.samples as f64 / px,
-                r.rmse,
-                r.relmse,
-                r.mean_rel_error,
-                r.efficiency()
-            );
+            let _ = writeln!(s, "| {} |", r.cells(px).join(" | "));
         }
         let reach = self.reach_lines();
         if let Some((head, rest)) = reach.split_first() {
