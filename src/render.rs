@@ -45,8 +45,10 @@ impl Kernel {
         }
     }
 
-    /// The kernel a choice runs on this build: `simd` is the widest the build
-    /// has; `simd16` needs a build with AVX-512 (`f32x16` in one register).
+    /// The kernel a choice runs on this build: `simd` is 16 lanes where
+    /// `f32x16` is one register (AVX-512), 8 otherwise; `simd8` and `simd16`
+    /// run on every build (without AVX-512, 16 lanes are two 8-lane halves:
+    /// the same image, measured slower). An `Err` is kept for builds that lack one.
     pub fn resolve(choice: KernelChoice) -> Result<Kernel> {
         match choice {
             KernelChoice::Scalar => Ok(Kernel::Scalar),
@@ -58,7 +60,7 @@ impl Kernel {
     }
 }
 
-/// Whether this build has the 16-lane kernel (AVX-512F: `f32x16` is one register).
+/// Whether `f32x16` is one register in this build (AVX-512F): then `simd` runs 16 lanes.
 pub const HAS_SIMD16: bool = cfg!(target_feature = "avx512f");
 
 /// The SIMD instruction set this binary was compiled for (`wide` picks its
@@ -79,10 +81,10 @@ pub const fn isa() -> &'static str {
     }
 }
 
-/// The widest kernel of this build, e.g. "simd16 (AVX-512 (x86-64-v4))", for `--version`.
+/// The instruction set and the kernel `simd` runs, for `--version`.
 pub fn build_description() -> String {
-    let widest = if HAS_SIMD16 { "simd16 (f32x16)" } else { "simd8 (f32x8)" };
-    format!("SIMD: {}, widest kernel {widest}", isa())
+    let simd = if HAS_SIMD16 { "simd16 (f32x16)" } else { "simd8 (f32x8)" };
+    format!("SIMD: {}, kernel simd = {simd}", isa())
 }
 
 /// Progress reported after each finished tile.
