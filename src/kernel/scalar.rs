@@ -4,7 +4,7 @@
 use super::{normal_colour, sky};
 use crate::estimator::{roulette, roulette_applies};
 use crate::film::TileFilm;
-use crate::geometry::{spawn, surface, MISS};
+use crate::geometry::{spawn, surface, Surface, MISS};
 use crate::material::{dielectric, lambertian, metal, Kind};
 use crate::plan::{Mode, Prepared};
 use crate::probe::{PathId, Probe};
@@ -15,6 +15,7 @@ use std::ops::Range;
 /// Renders samples `samples` of every pixel of `tile`, in sample order; returns
 /// the rays traced. With adaptive sampling a pixel stops at the first decision
 /// point where its error estimate is low enough.
+#[cfg_attr(feature = "phases", inline(never))]
 pub fn render_tile<P: Probe>(prep: &Prepared, tile: &mut TileFilm, samples: Range<u32>, probe: &mut P) -> u64 {
     match prep.estimator.sampler {
         Sampler::Independent => render_tile_with(prep, Independent, tile, samples, probe),
@@ -53,6 +54,50 @@ fn render_tile_with<S: PathSampler, P: Probe>(
     rays
 }
 
+/// The camera ray through pixel (x, y) (out of line in `phases` builds, for profiles).
+#[cfg_attr(not(feature = "phases"), inline(always))]
+#[cfg_attr(feature = "phases", inline(never))]
+fn camera_ray(prep: &Prepared, x: u32, y: u32, rng: &mut impl Stream<f32>) -> (V3<f32>, V3<f32>) {
+    prep.camera.ray(x as f32, y as f32, rng)
+}
+
+/// The closest hit of one ray (out of line in `phases` builds).
+#[cfg_attr(not(feature = "phases"), inline(always))]
+#[cfg_attr(feature = "phases", inline(never))]
+fn closest_hit<P: Probe>(prep: &Prepared, o: V3<f32>, d: V3<f32>, probe: &mut P) -> (u32, f32) {
+    prep.closest_hit(o, d, probe)
+}
+
+/// The scattered direction and attenuation of a path that hit material
+/// (`kind`, `row`) at `srf`, or `None` when it is absorbed (out of line in
+/// `phases` builds).
+#[cfg_attr(not(feature = "phases"), inline(always))]
+#[cfg_attr(feature = "phases", inline(never))]
+fn scatter(
+    prep: &Prepared,
+    kind: Kind,
+    row: usize,
+    d: V3<f32>,
+    srf: &Surface<f32>,
+    depth: u32,
+    rng: &mut impl Stream<f32>,
+) -> Option<(V3<f32>, [f32; 3])> {
+    let m = &prep.materials;
+    rng.seek(layout::scatter(depth));
+    Some(match kind {
+        Kind::Lambertian => (lambertian(srf.n, rng), m.lambertian[row]),
+        Kind::Metal => {
+            let (albedo, fuzz) = m.metal[row];
+            let (dir, alive) = metal(d, srf.n, fuzz, rng);
+            if !alive {
+                return None;
+            }
+            (dir, albedo)
+        }
+        Kind::Dielectric => (dielectric(d, srf.n, srf.front, m.dielectric[row], rng), [1.0; 3]),
+    })
+}
+
 /// The radiance of one path through pixel (x, y), and the rays it traced.
 pub fn trace<P: Probe>(
     prep: &Prepared,
@@ -63,13 +108,13 @@ pub fn trace<P: Probe>(
     probe: &mut P,
 ) -> ([f32; 3], u32) {
     let sp = &prep.spheres;
-    let (o, mut d) = prep.camera.ray(x as f32, y as f32, rng);
+    let (o, mut d) = camera_ray(prep, x, y, rng);
     let mut o = if P::PATHS { probe.camera(id, o, d, 1) } else { o };
     let mut thr = V3::new(1.0f32, 1.0, 1.0);
     for depth in 0..prep.settings.max_depth {
         let rays = depth + 1;
         probe.rays(depth, 1);
-        let (hit, t) = prep.closest_hit(o, d, probe);
+        let (hit, t) = closest_hit(prep, o, d, probe);
         if P::PATHS {
             probe.traced(id, o, d, hit, t, 1);
         }
@@ -83,21 +128,12 @@ pub fn trace<P: Probe>(
         }
         let (kind, row) = (sp.kind[i], sp.row[i] as usize);
         let m = &prep.materials;
-        rng.seek(layout::scatter(depth));
         let (dir, atten) = match prep.plan.mode {
             Mode::Normals => return (normal_colour(srf.n).to_array(), rays),
             Mode::Flat | Mode::Gradient => return (m.flat_colour(kind, row as u32), rays),
-            Mode::Path => match kind {
-                Kind::Lambertian => (lambertian(srf.n, rng), m.lambertian[row]),
-                Kind::Metal => {
-                    let (albedo, fuzz) = m.metal[row];
-                    let (dir, alive) = metal(d, srf.n, fuzz, rng);
-                    if !alive {
-                        return ([0.0; 3], rays);
-                    }
-                    (dir, albedo)
-                }
-                Kind::Dielectric => (dielectric(d, srf.n, srf.front, m.dielectric[row], rng), [1.0; 3]),
+            Mode::Path => match scatter(prep, kind, row, d, &srf, depth, rng) {
+                Some(s) => s,
+                None => return ([0.0; 3], rays),
             },
         };
         thr = thr.mul_elem(V3::from_array(atten));
