@@ -426,7 +426,9 @@ macro_rules! impl_wide {
             }
             #[inline(always)]
             fn mask_from_bits(bits: u32) -> Self {
-                bytemuck::cast($u::new(std::array::from_fn(|k| 0u32.wrapping_sub((bits >> k) & 1))))
+                // Lane k tests its own bit: a broadcast, an and and a compare.
+                let lane_bit = $u::new(std::array::from_fn(|k| 1u32 << k));
+                bytemuck::cast(($u::splat(bits) & lane_bit).simd_eq(lane_bit))
             }
             #[inline(always)]
             fn to_bits(self) -> $u {

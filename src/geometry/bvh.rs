@@ -66,7 +66,9 @@ impl Aabb {
 }
 
 /// A node of the 8-wide tree: 8 child boxes in SoA, each an inner node, a
-/// leaf (a run of up to 8 spheres in leaf order) or empty.
+/// leaf (a run of up to 8 spheres in leaf order) or empty. The children fill
+/// slots `0..nkids`; the empty slots are the last ones, so a walk that tests
+/// one box at a time loops over `nkids` slots and never meets an empty one.
 #[derive(Clone, Copy, Debug)]
 #[repr(C, align(32))]
 pub struct Node8 {
@@ -76,14 +78,42 @@ pub struct Node8 {
     child: [u32; 8],
     /// 0: inner node; 1..=8: leaf with that many spheres; `EMPTY`: no child.
     count: [u8; 8],
+    /// Children (non-empty slots, which come first), 1 to 8; 0 for the root of an empty tree.
+    nkids: u8,
 }
 
 const EMPTY: u8 = u8::MAX;
 
-/// The tree plus the spheres in leaf order (SoA, padded by 8 for whole loads).
+impl Node8 {
+    const EMPTY: Node8 = Node8 { min: [[0.0; 8]; 3], max: [[0.0; 8]; 3], child: [0; 8], count: [EMPTY; 8], nkids: 0 };
+
+    /// The number of children, known to the compiler to be at most 8 (so
+    /// indexing the slot arrays below it needs no bounds check).
+    #[inline(always)]
+    fn kids(&self) -> usize {
+        (self.nkids as usize).min(8)
+    }
+}
+
+/// A leaf's sphere as the one-box-at-a-time walks read it (scalar, packets):
+/// everything the sphere test needs in one record, so a leaf is one slice,
+/// bounds-checked once.
+#[derive(Clone, Copy, Debug)]
+#[repr(C)]
+struct LeafSphere {
+    c: [f32; 3],
+    r2: f32,
+    /// The sphere's index in the scene (the tie rule's order).
+    index: u32,
+}
+
+/// The tree plus the spheres in leaf order: as records for the walks that
+/// test one sphere at a time, and as SoA padded by 8 for whole loads (the
+/// one-ray walk's 8-wide leaf test).
 #[derive(Clone, Debug)]
 pub struct Bvh {
     nodes: Vec<Node8>,
+    leaf: Vec<LeafSphere>,
     cx: Vec<f32>,
     cy: Vec<f32>,
     cz: Vec<f32>,
@@ -227,9 +257,11 @@ impl Bvh {
         if n > 0 {
             b.build(0, n, 0);
         }
-        let mut bvh = Bvh { nodes: Vec::new(), cx: vec![], cy: vec![], cz: vec![], r2: vec![], index: vec![] };
+        let mut bvh =
+            Bvh { nodes: Vec::new(), leaf: vec![], cx: vec![], cy: vec![], cz: vec![], r2: vec![], index: vec![] };
         for &i in &b.order {
             let i = i as usize;
+            bvh.leaf.push(LeafSphere { c: [s.cx[i], s.cy[i], s.cz[i]], r2: s.r2[i], index: i as u32 });
             bvh.cx.push(s.cx[i]);
             bvh.cy.push(s.cy[i]);
             bvh.cz.push(s.cz[i]);
@@ -243,7 +275,7 @@ impl Bvh {
             bvh.r2.push(-1.0); // never hit
             bvh.index.push(MISS);
         }
-        bvh.nodes.push(Node8 { min: [[0.0; 8]; 3], max: [[0.0; 8]; 3], child: [0; 8], count: [EMPTY; 8] });
+        bvh.nodes.push(Node8::EMPTY);
         if n > 0 {
             bvh.collapse(&b.nodes, 0, 0);
         }
@@ -268,6 +300,7 @@ impl Bvh {
             kids.push(bn[k as usize].left);
             kids.push(bn[k as usize].right);
         }
+        self.nodes[at].nkids = kids.len() as u8;
         for (slot, &k) in kids.iter().enumerate() {
             let node = &bn[k as usize];
             for a in 0..3 {
@@ -276,7 +309,7 @@ impl Bvh {
             }
             if node.count == 0 {
                 let child = self.nodes.len();
-                self.nodes.push(Node8 { min: [[0.0; 8]; 3], max: [[0.0; 8]; 3], child: [0; 8], count: [EMPTY; 8] });
+                self.nodes.push(Node8::EMPTY);
                 self.nodes[at].child[slot] = child as u32;
                 self.nodes[at].count[slot] = 0;
                 self.collapse(bn, k, child);
@@ -304,9 +337,9 @@ impl Bvh {
         best: &mut Closest<R>,
         probe: &mut P,
     ) {
-        for j in start..start + count {
-            let c = V3::new(R::splat(self.cx[j]), R::splat(self.cy[j]), R::splat(self.cz[j]));
-            best.test(o, d, c, R::splat(self.r2[j]), self.index[j], probe);
+        for s in &self.leaf[start..start + count] {
+            let c = V3::new(R::splat(s.c[0]), R::splat(s.c[1]), R::splat(s.c[2]));
+            best.test(o, d, c, R::splat(s.r2), s.index, probe);
         }
     }
 
@@ -315,17 +348,14 @@ impl Bvh {
         let mut tally = WorkTally::<P>::new();
         let inv = inv_dir(d);
         let mut best = Closest::<f32>::none();
-        let mut stack = Stack::new();
+        let mut stack = Stack::new((0, 0.0));
         while let Some((ni, entry)) = stack.pop() {
             if entry > best.t * PRUNE_SCALE {
                 continue;
             }
             tally.work(Work::Node, 1);
             let node = &self.nodes[ni as usize];
-            for k in 0..8 {
-                if node.count[k] == EMPTY {
-                    continue;
-                }
+            for k in 0..node.kids() {
                 tally.work(Work::Box, 1);
                 let (near, far) = slab(
                     V3::new(node.min[0][k], node.min[1][k], node.min[2][k]),
@@ -353,7 +383,7 @@ impl Bvh {
         let (o8, d8) = (splat3(o), splat3(d));
         let inv8 = splat3(inv);
         let mut best = Closest::<f32>::none();
-        let mut stack = Stack::new();
+        let mut stack = Stack::new((0, 0.0));
         while let Some((ni, entry)) = stack.pop() {
             if entry > best.t * PRUNE_SCALE {
                 continue;
@@ -365,7 +395,8 @@ impl Bvh {
             let bmax = V3::new(f32x8::new(node.max[0]), f32x8::new(node.max[1]), f32x8::new(node.max[2]));
             let (near, far) = slab(bmin, bmax, o8, inv8);
             let ok = near.le(far * f32x8::splat(EXIT_SCALE)) & near.le(f32x8::splat(best.t * PRUNE_SCALE));
-            let mut mask = ok.to_bitmask();
+            // The empty slots (the last ones) hold zero boxes that a ray may enter.
+            let mut mask = ok.to_bitmask() & ((1u32 << node.kids()) - 1);
             let near = near.to_array();
             // Leaves first (they tighten `best.t`), inner nodes pushed far-to-near.
             let mut inner: [(u32, f32); 8] = [(0, 0.0); 8];
@@ -374,7 +405,6 @@ impl Bvh {
                 let k = mask.trailing_zeros() as usize;
                 mask &= mask - 1;
                 match node.count[k] {
-                    EMPTY => {}
                     0 => {
                         inner[ninner] = (node.child[k], near[k]);
                         ninner += 1;
@@ -415,35 +445,33 @@ impl Bvh {
     /// The closest hits of a packet of rays walking the tree together: a child
     /// is entered when any live ray (bit k of `live`) enters its box; a leaf's
     /// spheres are each broadcast against the packet, as in brute force.
+    /// Lanes not in `live` return `MISS` with `t = -inf`: starting them at
+    /// `best.t = -inf` keeps them out of every box (entries are at least 0)
+    /// without a mask per box test.
     pub fn closest_hit_packet<W: Wide, P: Probe>(&self, o: V3<W>, d: V3<W>, live: u32, probe: &mut P) -> (W::U32, W) {
         let mut tally = WorkTally::<P>::new();
         let inv = inv_dir(d);
-        let live_mask = W::mask_from_bits(live);
-        let mut best = Closest::<W>::none();
-        let mut stack = Stack::new();
+        let mut best = Closest::<W>::live(W::mask_from_bits(live));
+        let mut stack = Stack::new(0u32);
         let exit = W::splat(EXIT_SCALE);
         let prune = W::splat(PRUNE_SCALE);
-        while let Some((ni, _)) = stack.pop() {
+        while let Some(ni) = stack.pop() {
             tally.work(Work::Node, 1);
             let node = &self.nodes[ni as usize];
-            for k in 0..8 {
-                let count = node.count[k];
-                if count == EMPTY {
-                    continue;
-                }
-                tally.work(Work::Box, 1);
+            let kids = node.kids();
+            tally.work(Work::Box, kids as u32);
+            for k in 0..kids {
                 let bmin = V3::new(node.min[0][k], node.min[1][k], node.min[2][k]);
                 let bmax = V3::new(node.max[0][k], node.max[1][k], node.max[2][k]);
                 let (near, far) = slab(V3::splat3(bmin.to_array()), V3::splat3(bmax.to_array()), o, inv);
-                let enter = near.le(far * exit) & near.le(best.t * prune) & live_mask;
+                let enter = near.le(far * exit) & near.le(best.t * prune);
                 if !enter.any() {
                     continue;
                 }
-                if count == 0 {
-                    stack.push((node.child[k], 0.0));
-                    continue;
+                match node.count[k] {
+                    0 => stack.push(node.child[k]),
+                    count => self.leaf(node.child[k] as usize, count as usize, o, d, &mut best, &mut tally),
                 }
-                self.leaf(node.child[k] as usize, count as usize, o, d, &mut best, &mut tally);
             }
         }
         tally.flush(probe);
@@ -483,27 +511,28 @@ impl Bvh {
     }
 }
 
-/// The traversal stack of (node, entry distance), starting with the root.
-/// Uninitialized storage: filling 2 KiB per ray would cost more than the walk.
-struct Stack {
-    items: [MaybeUninit<(u32, f32)>; STACK],
+/// The traversal stack (of nodes, or of (node, entry distance)), starting
+/// with the root. Uninitialized storage: filling 2 KiB per ray would cost
+/// more than the walk.
+struct Stack<T: Copy> {
+    items: [MaybeUninit<T>; STACK],
     len: usize,
 }
 
-impl Stack {
+impl<T: Copy> Stack<T> {
     #[inline(always)]
-    fn new() -> Self {
+    fn new(root: T) -> Self {
         let mut s = Stack { items: [const { MaybeUninit::uninit() }; STACK], len: 1 };
-        s.items[0].write((0, 0.0));
+        s.items[0].write(root);
         s
     }
     #[inline(always)]
-    fn push(&mut self, e: (u32, f32)) {
+    fn push(&mut self, e: T) {
         self.items[self.len].write(e);
         self.len += 1;
     }
     #[inline(always)]
-    fn pop(&mut self) -> Option<(u32, f32)> {
+    fn pop(&mut self) -> Option<T> {
         if self.len == 0 {
             return None;
         }

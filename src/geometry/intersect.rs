@@ -94,6 +94,13 @@ impl<R: Real> Closest<R> {
         Closest { t: R::splat(f32::INFINITY), index: R::u_splat(MISS) }
     }
 
+    /// No hit yet in the lanes of `live`; `t = -inf` in the others, which no
+    /// hit can improve and no box entry (never below 0) can reach.
+    #[inline(always)]
+    pub fn live(live: R::Mask) -> Self {
+        Closest { t: R::select(live, R::splat(f32::INFINITY), R::splat(f32::NEG_INFINITY)), index: R::u_splat(MISS) }
+    }
+
     /// Takes the lanes of `hit` whose `t` beats the current one (ties: lower index).
     #[inline(always)]
     pub fn offer(&mut self, hit: R::Mask, t: R, index: R::U32) {
