@@ -5,7 +5,7 @@
 use crate::camera::{Camera, View};
 use crate::error::Result;
 use crate::estimator::Estimator;
-use crate::geometry::{Bvh, Spheres};
+use crate::geometry::{Bvh, Spheres, Walk};
 use crate::material::{Kind, MaterialTables};
 use crate::plan::{Accel, KindSet, Mode, Plan, Prepared, SkyColours, BVH_CROSSOVER};
 use crate::scene::{Material, Scene};
@@ -76,7 +76,9 @@ pub fn prepare(scene: &Scene, settings: Settings, accel: AccelChoice, estimator:
     let bvh = (plan.accel != Accel::Brute).then(|| {
         // Ray origins lie within the camera's lens of the eye.
         let extent = scene.camera.look_from.iter().fold(0.0f32, |m, x| m.max(x.abs())) + view.lens_radius as f32;
-        Bvh::build(&spheres, extent)
+        // The tree is shaped for the walk that uses it (geometry::bvh::SahCost).
+        let walk = if plan.accel == Accel::BvhRays { Walk::Wide8 } else { Walk::OneByOne };
+        Bvh::build_for(&spheres, extent, walk)
     });
     Ok(Prepared {
         plan,

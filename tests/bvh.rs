@@ -4,7 +4,7 @@
 //! deep trees.
 
 use proptest::prelude::*;
-use rtow::geometry::{closest_hit, Bvh, Spheres};
+use rtow::geometry::{closest_hit, Bvh, Spheres, Walk};
 use rtow::material::Kind;
 use rtow::real::Wide;
 use rtow::vec3::V3;
@@ -28,9 +28,16 @@ fn unit(v: [f32; 3]) -> V3<f32> {
     }
 }
 
-/// Every traversal against brute force, for `rays` (origin, direction).
+/// Every traversal against brute force, for `rays` (origin, direction), on
+/// the trees built for each walk.
 fn check(s: &Spheres, extent: f32, rays: &[(V3<f32>, V3<f32>)]) -> Result<(), TestCaseError> {
-    let bvh = Bvh::build(s, extent);
+    for walk in [Walk::OneByOne, Walk::Wide8] {
+        check_tree(s, &Bvh::build_for(s, extent, walk), rays)?;
+    }
+    Ok(())
+}
+
+fn check_tree(s: &Spheres, bvh: &Bvh, rays: &[(V3<f32>, V3<f32>)]) -> Result<(), TestCaseError> {
     for &(o, d) in rays {
         let (bi, bt) = closest_hit(s, o, d, &mut ());
         let (si, st) = bvh.closest_hit_scalar(o, d, &mut ());
@@ -38,8 +45,8 @@ fn check(s: &Spheres, extent: f32, rays: &[(V3<f32>, V3<f32>)]) -> Result<(), Te
         prop_assert_eq!((bi, bt.to_bits()), (si, st.to_bits()), "scalar BVH");
         prop_assert_eq!((bi, bt.to_bits()), (wi, wt.to_bits()), "one ray, 8-wide nodes");
     }
-    packets::<f32x8>(s, &bvh, rays)?;
-    packets::<f32x16>(s, &bvh, rays)
+    packets::<f32x8>(s, bvh, rays)?;
+    packets::<f32x16>(s, bvh, rays)
 }
 
 fn packets<W: Wide>(s: &Spheres, bvh: &Bvh, rays: &[(V3<f32>, V3<f32>)]) -> Result<(), TestCaseError> {

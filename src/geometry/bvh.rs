@@ -1,7 +1,10 @@
 //! A bounding volume hierarchy over spheres: built with the surface area
-//! heuristic (binned, binary), then collapsed to 8-wide nodes so one ray tests
-//! 8 child boxes at once (`f32x8`), and leaves of up to 8 spheres that one ray
-//! tests at once. The scalar kernel walks the same tree one box at a time.
+//! heuristic (binned, binary), then collapsed to 8-wide nodes with leaves of
+//! up to 8 spheres. The heuristic's costs are those of the walk the tree is
+//! built for ([`Walk`], [`SahCost`]): the packet walk and the scalar kernel
+//! test one child box and one leaf sphere at a time (small leaves pay), the
+//! one-ray walk tests 8 child boxes and 8 leaf spheres at once (`f32x8`; full
+//! leaves pay).
 //!
 //! # Same closest hit as brute force, bit for bit
 //!
@@ -134,7 +137,55 @@ struct BNode {
 
 const BINS: usize = 16;
 
+/// The walk a tree is built for. The two walks pay differently for a node and
+/// for a leaf, so the surface area heuristic that shapes the tree weighs them
+/// as the walk that uses it does ([`SahCost`]).
+#[derive(Clone, Copy, Debug, PartialEq, Eq)]
+pub enum Walk {
+    /// One box and one primitive at a time: the wavefront's packets (each
+    /// child box, then each sphere of an entered leaf, broadcast against the
+    /// packet) and the scalar kernel (one ray).
+    OneByOne,
+    /// One ray against 8 child boxes, then 8 leaf spheres, per `f32x8` test
+    /// (`--accel bvh-ray`).
+    Wide8,
+}
+
+/// The surface area heuristic's costs, in units of one primitive test of the
+/// walk: a binary split costs `inner` plus, for each side, the probability
+/// of entering it (area ratio) times the tests its primitives take.
+#[derive(Clone, Copy, Debug)]
+pub struct SahCost {
+    /// The cost of a binary inner node (its share of the box tests).
+    pub inner: f32,
+    /// Primitives one test takes: 1 for the one-by-one walks, 8 for `Wide8`.
+    /// With more primitive kinds (the next books' quads), a leaf's cost is the
+    /// sum over its kinds of the kind's test cost times its tests.
+    pub per_test: usize,
+}
+
+impl SahCost {
+    /// The costs the walk pays, measured (docs/performance.md, "A tree for the
+    /// walk"): for the one-by-one walks a binary inner node costs 3 sphere
+    /// tests (a sweep of 1, 2, 3, 4 and 6 gave the packet walk 273, 243, 237,
+    /// 239 and 249 traversal instructions per ray on the final scene); for the
+    /// 8-wide walk half an 8-wide leaf test, as before.
+    pub fn of(walk: Walk) -> SahCost {
+        match walk {
+            Walk::OneByOne => SahCost { inner: 3.0, per_test: 1 },
+            Walk::Wide8 => SahCost { inner: 0.5, per_test: 8 },
+        }
+    }
+
+    /// The cost of testing `n` primitives.
+    #[inline]
+    fn leaf(&self, n: usize) -> f32 {
+        n.div_ceil(self.per_test) as f32
+    }
+}
+
 struct Builder<'a> {
+    cost: SahCost,
     boxes: &'a [Aabb],
     centroid: Vec<[f32; 3]>,
     order: Vec<u32>,
@@ -156,9 +207,7 @@ impl Builder<'_> {
         let n = hi - lo;
         let id = self.nodes.len() as u32;
         self.nodes.push(BNode { bounds, left: 0, right: 0, start: lo as u32, count: n as u32 });
-        // Cost model: a leaf of up to 8 spheres costs one 8-wide sphere test (1.0);
-        // an inner level costs one 8-wide box test (0.5) plus its children by area.
-        let leaf_cost = n.div_ceil(8) as f32;
+        let leaf_cost = self.cost.leaf(n);
         if n <= 1 {
             return id;
         }
@@ -197,7 +246,7 @@ impl Builder<'_> {
                 if ln == 0 || rn == 0 {
                     continue;
                 }
-                let cost = 0.5 + (lb.area() * ln.div_ceil(8) as f32 + rb.area() * rn.div_ceil(8) as f32) / area;
+                let cost = self.cost.inner + (lb.area() * self.cost.leaf(ln) + rb.area() * self.cost.leaf(rn)) / area;
                 if best.is_none_or(|(c, _, _)| cost < c) {
                     best = Some((cost, axis, lo_c + split as f32 / scale));
                 }
@@ -236,9 +285,15 @@ impl Builder<'_> {
 }
 
 impl Bvh {
-    /// Builds the tree; `extent` bounds |coordinates| of every ray origin
-    /// (the camera and its lens), used to pad the boxes.
+    /// Builds the tree for the one-by-one walks (packets, scalar); `extent`
+    /// bounds |coordinates| of every ray origin (the camera and its lens),
+    /// used to pad the boxes.
     pub fn build(s: &Spheres, extent: f32) -> Bvh {
+        Bvh::build_for(s, extent, Walk::OneByOne)
+    }
+
+    /// Builds the tree for `walk` (see [`Bvh::build`]).
+    pub fn build_for(s: &Spheres, extent: f32, walk: Walk) -> Bvh {
         let n = s.len;
         let mut d = extent.abs();
         for i in 0..n {
@@ -253,7 +308,13 @@ impl Bvh {
             })
             .collect();
         let centroid = (0..n).map(|i| [s.cx[i], s.cy[i], s.cz[i]]).collect();
-        let mut b = Builder { boxes: &boxes, centroid, order: (0..n as u32).collect(), nodes: Vec::new() };
+        let mut b = Builder {
+            cost: SahCost::of(walk),
+            boxes: &boxes,
+            centroid,
+            order: (0..n as u32).collect(),
+            nodes: Vec::new(),
+        };
         if n > 0 {
             b.build(0, n, 0);
         }
