@@ -234,6 +234,24 @@ pub trait Wide:
     /// `v[idx[k]]` in lane k.
     fn gather(v: &[f32], idx: &[u32]) -> Self;
     fn gather_u(v: &[u32], idx: &[u32]) -> Self::U32;
+    /// `v[idx[k] % N]` in lane k, for a power of two `N`: the index is masked
+    /// (`& (N - 1)`), so it is in bounds by construction and no lane is
+    /// bounds-checked. The mask is one `and` per lane, which the compiler
+    /// drops where it already knows the bits (an index masked before).
+    fn gather_pow2<const N: usize>(v: &[f32; N], idx: &Self::Idx) -> Self;
+    fn gather_u_pow2<const N: usize>(v: &[u32; N], idx: &Self::Idx) -> Self::U32;
+    /// Whole-vector load of `v[j..j + LANES]` with `j = i % N` rounded down to
+    /// a multiple of `LANES` (`i` itself for the multiples of `LANES` below
+    /// `N` that the kernels use), `N` a power of two: in bounds by construction.
+    fn load_pow2<const N: usize>(v: &[f32; N], i: usize) -> Self;
+    fn load_u_pow2<const N: usize>(v: &[u32; N], i: usize) -> Self::U32;
+    fn store_pow2<const N: usize>(self, v: &mut [f32; N], i: usize);
+    fn store_u_pow2<const N: usize>(x: Self::U32, v: &mut [u32; N], i: usize);
+    /// The lanes as indices (an array).
+    fn idx_of(x: Self::U32) -> Self::Idx;
+    /// [`Wide::compress_store_u`] into an array of power-of-two length `N`
+    /// (at least `2 LANES`), at `at <= N - 2 LANES`: no bounds checks.
+    fn compress_store_u_pow2<const N: usize>(x: Self::U32, keep: u32, v: &mut [u32; N], at: usize) -> usize;
     fn u_from_fn(f: impl FnMut(usize) -> u32) -> Self::U32;
     /// The mask with lane k on where bit k of `bits` is set.
     fn mask_from_bits(bits: u32) -> Self;
@@ -284,6 +302,15 @@ const fn compress_table() -> [[u32; 8]; 256] {
 #[inline(always)]
 fn compress8(x: u32x8, keep: u32, v: &mut [u32], at: usize) -> usize {
     let packed = x.shuffle(u32x8::new(COMPRESS[(keep & 0xff) as usize]));
+    v[at..at + 8].copy_from_slice(&packed.to_array());
+    (keep & 0xff).count_ones() as usize
+}
+
+/// [`compress8`] into an array, at `at <= N - 8` (checked once per call by the caller's bound).
+#[inline(always)]
+fn compress8_array<const N: usize>(x: u32x8, keep: u32, v: &mut [u32; N], at: usize) -> usize {
+    let packed = x.shuffle(u32x8::new(COMPRESS[(keep & 0xff) as usize]));
+    let at = at.min(N - 8);
     v[at..at + 8].copy_from_slice(&packed.to_array());
     (keep & 0xff).count_ones() as usize
 }
@@ -419,6 +446,56 @@ macro_rules! impl_wide {
             #[inline(always)]
             fn gather_u(v: &[u32], idx: &[u32]) -> $u {
                 $u::new(std::array::from_fn(|k| v[idx[k] as usize]))
+            }
+            #[inline(always)]
+            fn gather_pow2<const N: usize>(v: &[f32; N], idx: &[u32; $n]) -> Self {
+                const { assert!(N.is_power_of_two()) };
+                $f::new(std::array::from_fn(|k| v[idx[k] as usize & (N - 1)]))
+            }
+            #[inline(always)]
+            fn gather_u_pow2<const N: usize>(v: &[u32; N], idx: &[u32; $n]) -> $u {
+                const { assert!(N.is_power_of_two()) };
+                $u::new(std::array::from_fn(|k| v[idx[k] as usize & (N - 1)]))
+            }
+            #[inline(always)]
+            fn load_pow2<const N: usize>(v: &[f32; N], i: usize) -> Self {
+                const { assert!(N.is_power_of_two() && N >= $n) };
+                let j = i & (N - $n);
+                $f::new(v[j..j + $n].try_into().unwrap())
+            }
+            #[inline(always)]
+            fn load_u_pow2<const N: usize>(v: &[u32; N], i: usize) -> $u {
+                const { assert!(N.is_power_of_two() && N >= $n) };
+                let j = i & (N - $n);
+                $u::new(v[j..j + $n].try_into().unwrap())
+            }
+            #[inline(always)]
+            fn store_pow2<const N: usize>(self, v: &mut [f32; N], i: usize) {
+                const { assert!(N.is_power_of_two() && N >= $n) };
+                let j = i & (N - $n);
+                v[j..j + $n].copy_from_slice(&self.to_array());
+            }
+            #[inline(always)]
+            fn store_u_pow2<const N: usize>(x: $u, v: &mut [u32; N], i: usize) {
+                const { assert!(N.is_power_of_two() && N >= $n) };
+                let j = i & (N - $n);
+                v[j..j + $n].copy_from_slice(&x.to_array());
+            }
+            #[inline(always)]
+            fn idx_of(x: $u) -> [u32; $n] {
+                x.to_array()
+            }
+            #[inline(always)]
+            fn compress_store_u_pow2<const N: usize>(x: $u, keep: u32, v: &mut [u32; N], at: usize) -> usize {
+                const { assert!(N.is_power_of_two() && N >= 2 * $n) };
+                debug_assert!(at <= N - 2 * $n);
+                let lanes: [u32x8; $n / 8] = bytemuck::cast(x);
+                // `min` keeps the stores in bounds for the compiler (a no-op for valid `at`).
+                let mut j = at.min(N - 2 * $n);
+                for (c, half) in lanes.into_iter().enumerate() {
+                    j += compress8_array(half, keep >> (8 * c), v, j);
+                }
+                j - at.min(N - 2 * $n)
             }
             #[inline(always)]
             fn u_from_fn(f: impl FnMut(usize) -> u32) -> $u {

@@ -38,29 +38,45 @@ use std::ops::Range;
 /// Paths in flight per workspace (per thread), at most.
 pub const MAX_PATHS: usize = 2048;
 
-/// Lanes of slack at the end of every array, so the last packet of any width
-/// can be loaded and stored whole (its extra lanes are computed, never used).
-const SLACK: usize = 16;
+/// The length of every per-path array: a power of two with room past
+/// `MAX_PATHS` for a packet of any width, so that
+/// - the last packet can be loaded and stored whole (its extra lanes are
+///   computed, never used), and compaction may write a packet past the kept
+///   lanes;
+/// - an index masked with `CAP - 1` is in bounds by construction: the gathers
+///   by queued index, the loads and stores at a packet's start and the queue
+///   and result writes need no bounds check ([`Wide::gather_pow2`]). Every
+///   index is below `MAX_PATHS` where it is used, so the mask never changes one
+///   (debug builds assert it where the index comes from memory).
+const CAP: usize = 4096;
+const MASK: usize = CAP - 1;
+const _: () = assert!(CAP.is_power_of_two() && CAP >= MAX_PATHS + 16);
+
+/// A per-path array.
+type Arr<T> = Box<[T; CAP]>;
+
+fn arr<T: Copy + std::fmt::Debug>(x: T) -> Arr<T> {
+    vec![x; CAP].into_boxed_slice().try_into().unwrap()
+}
 
 /// The miss queue's index (after one queue per material kind).
 const MISS_QUEUE: usize = Kind::ALL.len();
 
 /// Path state, structure of arrays.
-#[derive(Default)]
 struct Paths {
-    o: [Vec<f32>; 3],
-    d: [Vec<f32>; 3],
-    thr: [Vec<f32>; 3],
-    rng: [Vec<u32>; 4],
+    o: [Arr<f32>; 3],
+    d: [Arr<f32>; 3],
+    thr: [Arr<f32>; 3],
+    rng: [Arr<u32>; 4],
     /// Index of the path's result: `sample_in_batch * active_pixels + active_index`.
-    slot: Vec<u32>,
+    slot: Arr<u32>,
     len: usize,
 }
 
 impl Paths {
-    fn with_capacity(cap: usize) -> Self {
-        let f = || vec![0.0f32; cap + SLACK];
-        let u = || vec![0u32; cap + SLACK];
+    fn new() -> Self {
+        let f = || arr(0.0f32);
+        let u = || arr(0u32);
         Paths {
             o: [f(), f(), f()],
             d: [f(), f(), f()],
@@ -84,21 +100,25 @@ impl Paths {
         slot: W::U,
     ) {
         let at = self.len;
-        let put = |v: &mut Vec<f32>, x: W| W::compress_store_u(x.to_bits(), alive, bytemuck::cast_slice_mut(v), at);
+        debug_assert!(at <= MAX_PATHS);
+        let put = |v: &mut Arr<f32>, x: W| {
+            let v: &mut [u32; CAP] = bytemuck::cast_slice_mut(&mut v[..]).try_into().unwrap();
+            W::compress_store_u_pow2(x.to_bits(), alive, v, at)
+        };
         for (a, (ov, dv, tv)) in [(o.x, d.x, thr.x), (o.y, d.y, thr.y), (o.z, d.z, thr.z)].into_iter().enumerate() {
             put(&mut self.o[a], ov);
             put(&mut self.d[a], dv);
             put(&mut self.thr[a], tv);
         }
         for (w, words) in rng.into_iter().enumerate().take(S::WORDS) {
-            W::compress_store_u(words, alive, &mut self.rng[w], at);
+            W::compress_store_u_pow2(words, alive, &mut self.rng[w], at);
         }
-        self.len = at + W::compress_store_u(slot, alive, &mut self.slot, at);
+        self.len = at + W::compress_store_u_pow2(slot, alive, &mut self.slot, at);
     }
 
     #[inline(always)]
-    fn v3<W: Wide>(v: &[Vec<f32>; 3], i: usize) -> V3<W> {
-        V3::new(W::load(&v[0], i), W::load(&v[1], i), W::load(&v[2], i))
+    fn v3<W: Wide>(v: &[Arr<f32>; 3], i: usize) -> V3<W> {
+        V3::new(W::load_pow2(&v[0], i), W::load_pow2(&v[1], i), W::load_pow2(&v[2], i))
     }
 }
 
@@ -113,8 +133,8 @@ fn lanes3<W: Wide>(f: impl Fn(usize) -> [f32; 3]) -> V3<W> {
 }
 
 #[inline(always)]
-fn v3_gather<W: Wide>(v: &[Vec<f32>; 3], idx: &[u32]) -> V3<W> {
-    V3::new(W::gather(&v[0], idx), W::gather(&v[1], idx), W::gather(&v[2], idx))
+fn v3_gather<W: Wide>(v: &[Arr<f32>; 3], idx: &W::Idx) -> V3<W> {
+    V3::new(W::gather_pow2(&v[0], idx), W::gather_pow2(&v[1], idx), W::gather_pow2(&v[2], idx))
 }
 
 /// Bits `0..n` set.
@@ -131,12 +151,13 @@ fn low_bits(n: usize) -> u32 {
 pub struct Workspace {
     cur: Paths,
     next: Paths,
-    hit: Vec<u32>,
-    t: Vec<f32>,
+    hit: Arr<u32>,
+    t: Arr<f32>,
     /// Indices into `cur`, one queue per material kind (by `Kind as usize`) and one for
-    /// misses, each `MAX_PATHS` long (filled from the front each bounce).
-    queue: [Vec<u32>; MISS_QUEUE + 1],
-    result: Vec<[f32; 3]>,
+    /// misses (filled from the front each bounce).
+    queue: Option<[Arr<u32>; MISS_QUEUE + 1]>,
+    /// Each path's colour, by its slot.
+    result: Arr<[f32; 3]>,
     /// The tile's pixels (row-major local indices) that still take samples.
     active: Vec<u32>,
     /// Probes only: the image index of each active pixel, and the batch's first sample.
@@ -147,12 +168,12 @@ pub struct Workspace {
 impl Default for Workspace {
     fn default() -> Self {
         Workspace {
-            cur: Paths::with_capacity(MAX_PATHS),
-            next: Paths::with_capacity(MAX_PATHS),
-            hit: vec![0; MAX_PATHS + SLACK],
-            t: vec![0.0; MAX_PATHS + SLACK],
-            queue: std::array::from_fn(|_| vec![0; MAX_PATHS]),
-            result: vec![[0.0; 3]; MAX_PATHS],
+            cur: Paths::new(),
+            next: Paths::new(),
+            hit: arr(0),
+            t: arr(0.0),
+            queue: Some(std::array::from_fn(|_| arr(0))),
+            result: arr([0.0; 3]),
             active: Vec::with_capacity(MAX_PATHS),
             pixel: Vec::with_capacity(MAX_PATHS),
             batch_start: 0,
@@ -162,9 +183,9 @@ impl Default for Workspace {
 
 impl Workspace {
     /// The path ids of the paths whose `cur` indices are `idx` (probes only).
-    fn ids<W: Wide>(&self, idx: &[u32]) -> PathId<W> {
+    fn ids<W: Wide>(&self, idx: &W::Idx) -> PathId<W> {
         let na = self.active.len() as u32;
-        let slot = |k: usize| self.cur.slot[idx[k] as usize];
+        let slot = |k: usize| self.cur.slot[idx.as_ref()[k] as usize & MASK];
         PathId {
             pixel: W::u_from_fn(|k| self.pixel[(slot(k) % na) as usize]),
             sample: W::u_from_fn(|k| self.batch_start + slot(k) / na),
@@ -253,9 +274,9 @@ fn render_round<W: Wide, P: Probe, S: PathSampler>(
             }
             rays += bounce::<W, P, S>(prep, sampler, ws, depth, probe);
         }
-        for s in 0..(b1 - b0) as usize {
-            for (j, &local) in ws.active.iter().enumerate() {
-                tile.add(local as usize, ws.result[s * na + j]);
+        for samples in ws.result[..n].chunks_exact(na) {
+            for (&local, &c) in ws.active.iter().zip(samples) {
+                tile.add(local as usize, c);
             }
         }
         b0 = b1;
@@ -285,35 +306,38 @@ fn generate<W: Wide, P: Probe, S: PathSampler>(
         let sample = s0 + (slot / na) as u32;
         let state = sampler.words(st.seed, y as u64 * st.width as u64 + x as u64, sample);
         for (w, word) in state.into_iter().enumerate().take(S::WORDS) {
-            p.rng[w][slot] = word;
+            p.rng[w][slot & MASK] = word;
         }
-        p.thr[0][slot] = x as f32;
-        p.thr[1][slot] = y as f32;
-        p.slot[slot] = slot as u32;
+        p.thr[0][slot & MASK] = x as f32;
+        p.thr[1][slot & MASK] = y as f32;
+        p.slot[slot & MASK] = slot as u32;
     }
     p.len = n;
     for i in (0..n).step_by(W::LANES) {
         let p = &mut ws.cur;
-        let mut rng =
-            sampler.lanes::<W>(std::array::from_fn(
-                |w| if w < S::WORDS { W::load_u(&p.rng[w], i) } else { W::u_splat(0) },
-            ));
-        let (o, d) = prep.camera.ray(W::load(&p.thr[0], i), W::load(&p.thr[1], i), &mut rng);
+        let mut rng = sampler.lanes::<W>(std::array::from_fn(|w| {
+            if w < S::WORDS {
+                W::load_u_pow2(&p.rng[w], i)
+            } else {
+                W::u_splat(0)
+            }
+        }));
+        let (o, d) = prep.camera.ray(W::load_pow2(&p.thr[0], i), W::load_pow2(&p.thr[1], i), &mut rng);
         let o = if P::PATHS {
             let idx: W::Idx = index_run::<W>(i);
-            let id = ws.ids::<W>(idx.as_ref());
+            let id = ws.ids::<W>(&idx);
             probe.camera(id, o, d, low_bits(n - i))
         } else {
             o
         };
         let p = &mut ws.cur;
         for (a, (oa, da)) in [(o.x, d.x), (o.y, d.y), (o.z, d.z)].into_iter().enumerate() {
-            oa.store(&mut p.o[a], i);
-            da.store(&mut p.d[a], i);
-            W::splat(1.0).store(&mut p.thr[a], i);
+            oa.store_pow2(&mut p.o[a], i);
+            da.store_pow2(&mut p.d[a], i);
+            W::splat(1.0).store_pow2(&mut p.thr[a], i);
         }
         for (w, words) in S::lane_words::<W>(&rng).into_iter().enumerate().take(S::WORDS) {
-            W::store_u(words, &mut p.rng[w], i);
+            W::store_u_pow2(words, &mut p.rng[w], i);
         }
     }
 }
@@ -344,67 +368,77 @@ fn bounce<W: Wide, P: Probe, S: PathSampler>(
         let live = (n - i).min(W::LANES);
         let (o, d) = (Paths::v3::<W>(&ws.cur.o, i), Paths::v3::<W>(&ws.cur.d, i));
         let (hit, t) = prep.closest_hits(o, d, low_bits(live), probe);
-        W::store_u(hit, &mut ws.hit, i);
-        t.store(&mut ws.t, i);
+        W::store_u_pow2(hit, &mut ws.hit, i);
+        t.store_pow2(&mut ws.t, i);
         probe.lanes(Stage::Intersect, live as u32, W::LANES as u32);
         if P::PATHS {
             let idx = index_run::<W>(i);
-            probe.traced(ws.ids::<W>(idx.as_ref()), o, d, hit, t, low_bits(live));
+            probe.traced(ws.ids::<W>(&idx), o, d, hit, t, low_bits(live));
         }
     }
     let mut len = [0usize; MISS_QUEUE + 1];
+    let mut queues = ws.queue.take().expect("the queues are put back after every bounce");
     for (i, &h) in ws.hit[..n].iter().enumerate() {
         let q = if h == MISS { MISS_QUEUE } else { prep.spheres.kind[h as usize] as usize };
-        ws.queue[q][len[q]] = i as u32;
+        queues[q][len[q] & MASK] = i as u32;
         len[q] += 1;
     }
-    let queues = std::mem::take(&mut ws.queue);
     ws.next.len = 0;
-    for_packets::<W, P>(&queues[MISS_QUEUE][..len[MISS_QUEUE]], probe, |idx, active, _| {
-        let idx = idx.as_ref();
+    for_packets::<W, P>(&queues[MISS_QUEUE], len[MISS_QUEUE], probe, |idx, active, _| {
         let c = v3_gather::<W>(&ws.cur.thr, idx).mul_elem(sky(&prep.sky, v3_gather::<W>(&ws.cur.d, idx)));
         write_results(ws, idx, active, c);
     });
     for kind in Kind::ALL {
-        let q = &queues[kind as usize][..len[kind as usize]];
+        let (q, qlen) = (&queues[kind as usize], len[kind as usize]);
         match prep.plan.mode {
             Mode::Path if prep.plan.kinds.contains(kind) => {
-                for_packets::<W, P>(q, probe, |idx, active, probe| {
-                    scatter::<W, P, S>(prep, sampler, ws, kind, depth, idx.as_ref(), active, probe)
+                for_packets::<W, P>(q, qlen, probe, |idx, active, probe| {
+                    scatter::<W, P, S>(prep, sampler, ws, kind, depth, idx, active, probe)
                 });
             }
-            Mode::Path => debug_assert!(q.is_empty(), "the plan left out a kind that was hit"),
+            Mode::Path => debug_assert!(qlen == 0, "the plan left out a kind that was hit"),
             mode @ (Mode::Flat | Mode::Normals | Mode::Gradient) => {
-                for_packets::<W, P>(q, probe, |idx, active, probe| {
-                    debug_shade::<W, P>(prep, ws, mode, idx.as_ref(), active, probe)
+                for_packets::<W, P>(q, qlen, probe, |idx, active, probe| {
+                    debug_shade::<W, P>(prep, ws, mode, idx, active, probe)
                 });
             }
         }
     }
-    ws.queue = queues;
+    ws.queue = Some(queues);
     std::mem::swap(&mut ws.cur, &mut ws.next);
     n as u64
 }
 
-/// Calls `f` with each packet of W indices of `queue` (the last one padded by
-/// repeating its first index) and the number of real lanes.
+/// Calls `f` with each packet of W indices of the first `len` entries of
+/// `queue` (the last packet padded by repeating its first index, so every lane
+/// holds a real path) and the number of real lanes. The indices are masked
+/// into the arrays' range (a no-op on indices below `MAX_PATHS`), so the
+/// gathers by them need no bounds checks.
 #[inline(always)]
-fn for_packets<W: Wide, P: Probe>(queue: &[u32], probe: &mut P, mut f: impl FnMut(&W::Idx, usize, &mut P)) {
-    for chunk in queue.chunks(W::LANES) {
-        let mut idx = W::Idx::default();
-        for (k, v) in idx.as_mut().iter_mut().enumerate() {
-            *v = *chunk.get(k).unwrap_or(&chunk[0]);
-        }
-        probe.lanes(Stage::Scatter, chunk.len() as u32, W::LANES as u32);
-        f(&idx, chunk.len(), probe);
+fn for_packets<W: Wide, P: Probe>(
+    queue: &Arr<u32>,
+    len: usize,
+    probe: &mut P,
+    mut f: impl FnMut(&W::Idx, usize, &mut P),
+) {
+    debug_assert!(len <= MAX_PATHS && queue[..len].iter().all(|&i| (i as usize) < MAX_PATHS));
+    for i in (0..len).step_by(W::LANES) {
+        let active = (len - i).min(W::LANES);
+        let run = W::load_u_pow2(queue, i);
+        let first = W::u_splat(queue[i & MASK]);
+        let run = W::u_select(W::mask_from_bits(low_bits(active)), run, first);
+        let idx = W::idx_of(run & W::u_splat(MASK as u32));
+        probe.lanes(Stage::Scatter, active as u32, W::LANES as u32);
+        f(&idx, active, probe);
     }
 }
 
 #[inline(always)]
-fn write_results<W: Wide>(ws: &mut Workspace, idx: &[u32], active: usize, c: V3<W>) {
-    for (k, &i) in idx.iter().enumerate().take(active) {
-        let slot = ws.cur.slot[i as usize] as usize;
-        ws.result[slot] = [c.x.lane(k), c.y.lane(k), c.z.lane(k)];
+fn write_results<W: Wide>(ws: &mut Workspace, idx: &W::Idx, active: usize, c: V3<W>) {
+    let slot = W::idx_of(W::gather_u_pow2(&ws.cur.slot, idx));
+    for (k, &slot) in slot.as_ref().iter().enumerate().take(active) {
+        debug_assert!((slot as usize) < MAX_PATHS);
+        ws.result[slot as usize & MASK] = [c.x.lane(k), c.y.lane(k), c.z.lane(k)];
     }
 }
 
@@ -413,21 +447,18 @@ fn write_results<W: Wide>(ws: &mut Workspace, idx: &[u32], active: usize, c: V3<
 fn surfaces<W: Wide, P: Probe>(
     prep: &Prepared,
     ws: &Workspace,
-    idx: &[u32],
+    idx: &W::Idx,
     active: usize,
     probe: &mut P,
 ) -> (V3<W>, Surface<W>, W::U) {
     let sp = &prep.spheres;
-    let mut sph_idx = W::Idx::default();
-    for (s, &i) in sph_idx.as_mut().iter_mut().zip(idx) {
-        *s = ws.hit[i as usize];
-    }
-    let sph = W::u_from_fn(|k| sph_idx.as_ref()[k]);
+    let sph = W::gather_u_pow2(&ws.hit, idx);
+    let sph_idx = W::idx_of(sph);
     let sph_idx = sph_idx.as_ref();
     let c = V3::new(W::gather(&sp.cx, sph_idx), W::gather(&sp.cy, sph_idx), W::gather(&sp.cz, sph_idx));
     let d = v3_gather::<W>(&ws.cur.d, idx);
     let r = W::gather(&sp.r, sph_idx);
-    let srf = surface(v3_gather::<W>(&ws.cur.o, idx), d, W::gather(&ws.t, idx), c, r);
+    let srf = surface(v3_gather::<W>(&ws.cur.o, idx), d, W::gather_pow2(&ws.t, idx), c, r);
     if P::PATHS {
         probe.shaded(ws.ids::<W>(idx), sph, r, srf.n, srf.front, low_bits(active));
     }
@@ -438,7 +469,7 @@ fn debug_shade<W: Wide, P: Probe>(
     prep: &Prepared,
     ws: &mut Workspace,
     mode: Mode,
-    idx: &[u32],
+    idx: &W::Idx,
     active: usize,
     probe: &mut P,
 ) {
@@ -466,7 +497,7 @@ fn scatter<W: Wide, P: Probe, S: PathSampler>(
     ws: &mut Workspace,
     kind: Kind,
     depth: u32,
-    idx: &[u32],
+    idx: &W::Idx,
     active: usize,
     probe: &mut P,
 ) {
@@ -474,7 +505,7 @@ fn scatter<W: Wide, P: Probe, S: PathSampler>(
     let cur = &ws.cur;
     let mut rng = sampler.lanes::<W>(std::array::from_fn(|w| {
         if w < S::WORDS {
-            W::gather_u(&cur.rng[w], idx)
+            W::gather_u_pow2(&cur.rng[w], idx)
         } else {
             W::u_splat(0)
         }
@@ -516,6 +547,6 @@ fn scatter<W: Wide, P: Probe, S: PathSampler>(
         alive = alive & survives;
     }
     let alive = W::mask_bits(alive) & low_bits(active);
-    let slot = W::gather_u(&cur.slot, idx);
+    let slot = W::gather_u_pow2(&cur.slot, idx);
     ws.next.append::<W, S>(alive, spawn(&srf, dir), dir, thr, S::lane_words::<W>(&rng), slot);
 }
