@@ -71,6 +71,8 @@ pub fn prepare(scene: &Scene, settings: Settings, accel: AccelChoice, estimator:
         spheres.push(s.center, s.radius, kind, row);
     }
     spheres.pad();
+    // The wavefront's per-sphere shading records (geometry::Shade).
+    spheres.shade_with(&materials);
     let view = view(&scene.camera);
     let camera = Camera { lens: plan.lens, ..Camera::new(&view, settings.width, settings.height, plan.jitter) };
     let bvh = (plan.accel != Accel::Brute).then(|| {

@@ -249,6 +249,12 @@ pub trait Wide:
     fn store_u_pow2<const N: usize>(x: Self::U32, v: &mut [u32; N], i: usize);
     /// The lanes as indices (an array).
     fn idx_of(x: Self::U32) -> Self::Idx;
+    /// Rows of 8 floats gathered and transposed: lane k of output `j` is
+    /// `rows[idx[k]][j]` (one whole-row load per lane and an 8x8 transpose,
+    /// instead of 8 gathers). `rows.len()` must be a power of two above every
+    /// index: the index is masked with `len - 1`, in bounds by construction
+    /// (an empty `rows` gives zeros).
+    fn gather_rows8<T: AsRef<[f32; 8]>>(rows: &[T], idx: &Self::Idx) -> [Self; 8];
     /// [`Wide::compress_store_u`] into an array of power-of-two length `N`
     /// (at least `2 LANES`), at `at <= N - 2 LANES`: no bounds checks.
     fn compress_store_u_pow2<const N: usize>(x: Self::U32, keep: u32, v: &mut [u32; N], at: usize) -> usize;
@@ -484,6 +490,20 @@ macro_rules! impl_wide {
             #[inline(always)]
             fn idx_of(x: $u) -> [u32; $n] {
                 x.to_array()
+            }
+            #[inline(always)]
+            fn gather_rows8<T: AsRef<[f32; 8]>>(rows: &[T], idx: &[u32; $n]) -> [Self; 8] {
+                let Some(last) = rows.len().checked_sub(1) else { return [$f::splat(0.0); 8] };
+                debug_assert!(rows.len().is_power_of_two() && idx.iter().all(|&i| (i as usize) <= last));
+                let halves: [[f32x8; 8]; $n / 8] = std::array::from_fn(|h| {
+                    f32x8::transpose(std::array::from_fn(|k| {
+                        f32x8::new(*rows[idx[8 * h + k] as usize & last].as_ref())
+                    }))
+                });
+                std::array::from_fn(|j| {
+                    let parts: [f32x8; $n / 8] = std::array::from_fn(|h| halves[h][j]);
+                    bytemuck::cast(parts)
+                })
             }
             #[inline(always)]
             fn compress_store_u_pow2<const N: usize>(x: $u, keep: u32, v: &mut [u32; N], at: usize) -> usize {

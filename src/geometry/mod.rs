@@ -6,4 +6,4 @@ pub mod spheres;
 
 pub use bvh::{Bvh, SahCost, Walk};
 pub use intersect::{closest_hit, spawn, sphere_disc, sphere_t, surface, Closest, Surface, OFFSET_ULPS};
-pub use spheres::{Spheres, MISS};
+pub use spheres::{Shade, Spheres, MISS};

@@ -1,6 +1,7 @@
-//! Spheres as structure-of-arrays, padded to a multiple of 8.
+//! Spheres as structure-of-arrays, padded to a power of two (at least 8),
+//! and their shading records.
 
-use crate::material::Kind;
+use crate::material::{Kind, MaterialTables};
 
 /// The sphere index of "no hit".
 pub const MISS: u32 = u32::MAX;
@@ -20,6 +21,37 @@ pub struct Spheres {
     pub row: Vec<u32>,
     /// Number of real spheres; the arrays are longer (padding).
     pub len: usize,
+    /// Per sphere (padding included), what shading reads: [`Shade`]. Filled
+    /// by [`Spheres::shade_with`] once the materials are known; empty before.
+    pub shade: Vec<Shade>,
+}
+
+/// What shading reads of a hit sphere, in one aligned 32-byte record, so
+/// that a packet's records load as one vector each and transpose into lanes
+/// ([`crate::real::Wide::gather_rows8`]): the centre, the signed radius and
+/// the material's parameters: the albedo (white for a dielectric) and the
+/// fuzz of a metal or the index of refraction of a dielectric (0 for a
+/// lambertian). The values are copies of the scene's f32s, so shading from
+/// them computes what shading from the SoA arrays and the material tables does.
+#[derive(Clone, Copy, Debug, Default, PartialEq)]
+#[repr(C, align(32))]
+pub struct Shade(pub [f32; 8]);
+
+impl Shade {
+    pub const CX: usize = 0;
+    pub const CY: usize = 1;
+    pub const CZ: usize = 2;
+    pub const R: usize = 3;
+    pub const ALBEDO: usize = 4;
+    /// The metal's fuzz, the dielectric's index of refraction.
+    pub const PARAM: usize = 7;
+}
+
+impl AsRef<[f32; 8]> for Shade {
+    #[inline(always)]
+    fn as_ref(&self) -> &[f32; 8] {
+        &self.0
+    }
 }
 
 impl Spheres {
@@ -35,9 +67,13 @@ impl Spheres {
         self.len += 1;
     }
 
-    /// Pads the arrays to a multiple of 8 with spheres no ray can hit.
+    /// Pads the arrays to a power of two, at least 8, with spheres no ray can
+    /// hit: a sphere index masked with `len - 1` is then in bounds by
+    /// construction, and for the real spheres' indices the mask changes
+    /// nothing (the wavefront's lookups by hit index need no bounds checks).
     pub fn pad(&mut self) {
-        while !self.cx.len().is_multiple_of(8) {
+        let target = self.cx.len().max(8).next_power_of_two();
+        while self.cx.len() < target {
             let n = self.len;
             self.push([0.0; 3], 0.0, Kind::Lambertian, 0);
             self.r2[n] = -1.0;
@@ -62,5 +98,21 @@ impl Spheres {
 
     pub fn is_empty(&self) -> bool {
         self.len == 0
+    }
+
+    /// Fills [`Spheres::shade`] from the material tables (after [`Spheres::pad`]).
+    pub fn shade_with(&mut self, m: &MaterialTables) {
+        self.shade = (0..self.cx.len())
+            .map(|i| {
+                let (albedo, param) = match (i < self.len, self.kind[i]) {
+                    (false, _) => ([0.0; 3], 0.0),
+                    (true, Kind::Lambertian) => (m.lambertian[self.row[i] as usize], 0.0),
+                    (true, Kind::Metal) => m.metal[self.row[i] as usize],
+                    (true, Kind::Dielectric) => ([1.0; 3], m.dielectric[self.row[i] as usize]),
+                };
+                let [a0, a1, a2] = albedo;
+                Shade([self.cx[i], self.cy[i], self.cz[i], self.r[i], a0, a1, a2, param])
+            })
+            .collect();
     }
 }

@@ -26,7 +26,7 @@
 use super::{normal_colour, sky};
 use crate::estimator::{roulette, roulette_applies};
 use crate::film::TileFilm;
-use crate::geometry::{spawn, surface, Surface, MISS};
+use crate::geometry::{spawn, surface, Shade, Surface, MISS};
 use crate::material::{dielectric, lambertian, metal, Kind};
 use crate::plan::{Mode, Prepared};
 use crate::probe::{PathId, Probe, Stage};
@@ -120,16 +120,6 @@ impl Paths {
     fn v3<W: Wide>(v: &[Arr<f32>; 3], i: usize) -> V3<W> {
         V3::new(W::load_pow2(&v[0], i), W::load_pow2(&v[1], i), W::load_pow2(&v[2], i))
     }
-}
-
-/// A colour per lane, from a table lookup per lane.
-#[inline(always)]
-fn lanes3<W: Wide>(f: impl Fn(usize) -> [f32; 3]) -> V3<W> {
-    let mut c = [[0.0f32; 3]; 16];
-    for (k, v) in c.iter_mut().enumerate().take(W::LANES) {
-        *v = f(k);
-    }
-    V3::new(W::from_fn(|k| c[k][0]), W::from_fn(|k| c[k][1]), W::from_fn(|k| c[k][2]))
 }
 
 #[inline(always)]
@@ -378,8 +368,11 @@ fn bounce<W: Wide, P: Probe, S: PathSampler>(
     }
     let mut len = [0usize; MISS_QUEUE + 1];
     let mut queues = ws.queue.take().expect("the queues are put back after every bounce");
+    // The sphere arrays have a power-of-two length above every hit index (`Spheres::pad`).
+    let kind_mask = prep.spheres.kind.len().wrapping_sub(1);
+    debug_assert!(prep.spheres.kind.len().is_power_of_two());
     for (i, &h) in ws.hit[..n].iter().enumerate() {
-        let q = if h == MISS { MISS_QUEUE } else { prep.spheres.kind[h as usize] as usize };
+        let q = if h == MISS { MISS_QUEUE } else { prep.spheres.kind[h as usize & kind_mask] as usize };
         queues[q][len[q] & MASK] = i as u32;
         len[q] += 1;
     }
@@ -442,27 +435,30 @@ fn write_results<W: Wide>(ws: &mut Workspace, idx: &W::Idx, active: usize, c: V3
     }
 }
 
-/// The hit surfaces of a packet of queued paths: (direction, surface, sphere indices).
+/// A packet's hits: the rays' directions, the surfaces, and the hit
+/// spheres' material parameters (albedo, and fuzz or index of refraction).
+struct Hits<W: Wide> {
+    d: V3<W>,
+    srf: Surface<W>,
+    albedo: V3<W>,
+    param: W,
+}
+
+/// The hit surfaces of a packet of queued paths. The hit spheres' shading
+/// records ([`Shade`]) are loaded whole, one per lane, and transposed.
 #[inline(always)]
-fn surfaces<W: Wide, P: Probe>(
-    prep: &Prepared,
-    ws: &Workspace,
-    idx: &W::Idx,
-    active: usize,
-    probe: &mut P,
-) -> (V3<W>, Surface<W>, W::U) {
-    let sp = &prep.spheres;
+fn surfaces<W: Wide, P: Probe>(prep: &Prepared, ws: &Workspace, idx: &W::Idx, active: usize, probe: &mut P) -> Hits<W> {
     let sph = W::gather_u_pow2(&ws.hit, idx);
-    let sph_idx = W::idx_of(sph);
-    let sph_idx = sph_idx.as_ref();
-    let c = V3::new(W::gather(&sp.cx, sph_idx), W::gather(&sp.cy, sph_idx), W::gather(&sp.cz, sph_idx));
+    let rec = W::gather_rows8(&prep.spheres.shade, &W::idx_of(sph));
+    let c = V3::new(rec[Shade::CX], rec[Shade::CY], rec[Shade::CZ]);
+    let r = rec[Shade::R];
     let d = v3_gather::<W>(&ws.cur.d, idx);
-    let r = W::gather(&sp.r, sph_idx);
     let srf = surface(v3_gather::<W>(&ws.cur.o, idx), d, W::gather_pow2(&ws.t, idx), c, r);
     if P::PATHS {
         probe.shaded(ws.ids::<W>(idx), sph, r, srf.n, srf.front, low_bits(active));
     }
-    (d, srf, sph)
+    let a = Shade::ALBEDO;
+    Hits { d, srf, albedo: V3::new(rec[a], rec[a + 1], rec[a + 2]), param: rec[Shade::PARAM] }
 }
 
 fn debug_shade<W: Wide, P: Probe>(
@@ -473,16 +469,11 @@ fn debug_shade<W: Wide, P: Probe>(
     active: usize,
     probe: &mut P,
 ) {
-    let (_, srf, sph) = surfaces::<W, P>(prep, ws, idx, active, probe);
+    let hits = surfaces::<W, P>(prep, ws, idx, active, probe);
     let c = match mode {
-        Mode::Normals => normal_colour(srf.n),
-        Mode::Flat | Mode::Gradient | Mode::Path => {
-            let sp = &prep.spheres;
-            lanes3::<W>(|k| {
-                let i = W::lane_u(sph, k) as usize;
-                prep.materials.flat_colour(sp.kind[i], sp.row[i])
-            })
-        }
+        Mode::Normals => normal_colour(hits.srf.n),
+        // The flat colour (`MaterialTables::flat_colour`): the albedo, white for glass.
+        Mode::Flat | Mode::Gradient | Mode::Path => hits.albedo,
     };
     write_results(ws, idx, active, c);
 }
@@ -501,7 +492,7 @@ fn scatter<W: Wide, P: Probe, S: PathSampler>(
     active: usize,
     probe: &mut P,
 ) {
-    let (d, srf, sph) = surfaces::<W, P>(prep, ws, idx, active, probe);
+    let Hits { d, srf, albedo, param } = surfaces::<W, P>(prep, ws, idx, active, probe);
     let cur = &ws.cur;
     let mut rng = sampler.lanes::<W>(std::array::from_fn(|w| {
         if w < S::WORDS {
@@ -511,28 +502,13 @@ fn scatter<W: Wide, P: Probe, S: PathSampler>(
         }
     }));
     rng.seek(layout::scatter(depth));
-    let mut rows = [0usize; 16];
-    for (k, r) in rows.iter_mut().enumerate().take(W::LANES) {
-        *r = prep.spheres.row[W::lane_u(sph, k) as usize] as usize;
-    }
-    let row = |k: usize| rows[k];
-    let m = &prep.materials;
-    let thr = v3_gather::<W>(&cur.thr, idx);
-    let (dir, thr, alive) = match kind {
-        Kind::Lambertian => {
-            let a = lanes3::<W>(|k| m.lambertian[row(k)]);
-            (lambertian(srf.n, &mut rng), thr.mul_elem(a), W::mask_from_bits(u32::MAX))
-        }
-        Kind::Metal => {
-            let a = lanes3::<W>(|k| m.metal[row(k)].0);
-            let (dir, ok) = metal(d, srf.n, W::from_fn(|k| m.metal[row(k)].1), &mut rng);
-            (dir, thr.mul_elem(a), ok)
-        }
-        Kind::Dielectric => {
-            let ior = W::from_fn(|k| m.dielectric[row(k)]);
-            let one = V3::splat3([1.0; 3]);
-            (dielectric(d, srf.n, srf.front, ior, &mut rng), thr.mul_elem(one), W::mask_from_bits(u32::MAX))
-        }
+    // The albedo of a dielectric's record is white, as the scalar kernel's [1; 3].
+    let thr = v3_gather::<W>(&cur.thr, idx).mul_elem(albedo);
+    let all = W::mask_from_bits(u32::MAX);
+    let (dir, alive) = match kind {
+        Kind::Lambertian => (lambertian(srf.n, &mut rng), all),
+        Kind::Metal => metal(d, srf.n, param, &mut rng),
+        Kind::Dielectric => (dielectric(d, srf.n, srf.front, param, &mut rng), all),
     };
     let zero = W::splat(0.0);
     let dark = thr.x.eq(zero) & thr.y.eq(zero) & thr.z.eq(zero);
