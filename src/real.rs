@@ -72,6 +72,11 @@ pub trait Real:
     fn fast_max(self, o: Self) -> Self;
     /// `self` with the sign bit of `sign` (exact).
     fn copysign(self, sign: Self) -> Self;
+    /// `self * m + a`, fused (one rounding) where the build has FMA, two
+    /// roundings otherwise: for tests whose error is bounded either way (the
+    /// BVH's slab test), never for values that reach the image, which every
+    /// build must compute alike.
+    fn mul_add_bound(self, m: Self, a: Self) -> Self;
     fn lt(self, o: Self) -> Self::Mask;
     fn le(self, o: Self) -> Self::Mask;
     fn gt(self, o: Self) -> Self::Mask;
@@ -139,6 +144,17 @@ impl Real for f32 {
     #[inline(always)]
     fn copysign(self, sign: Self) -> Self {
         f32::copysign(self, sign)
+    }
+    #[inline(always)]
+    fn mul_add_bound(self, m: Self, a: Self) -> Self {
+        #[cfg(target_feature = "fma")]
+        {
+            f32::mul_add(self, m, a)
+        }
+        #[cfg(not(target_feature = "fma"))]
+        {
+            self * m + a
+        }
     }
     #[inline(always)]
     fn lt(self, o: Self) -> bool {
@@ -361,6 +377,11 @@ macro_rules! impl_wide {
             fn copysign(self, sign: Self) -> Self {
                 let s = $f::splat(-0.0);
                 (self & !s) | (sign & s)
+            }
+            #[inline(always)]
+            fn mul_add_bound(self, m: Self, a: Self) -> Self {
+                // `wide` fuses where the build has FMA, and multiplies then adds otherwise.
+                $f::mul_add(self, m, a)
             }
             #[inline(always)]
             fn lt(self, o: Self) -> $f {

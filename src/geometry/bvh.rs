@@ -20,10 +20,17 @@
 //!   within about `8 u (|f| + |r|)` of the true sphere. Every box is therefore
 //!   padded by `PAD * D`, where `D` bounds `|f| + |r|` for every ray of the
 //!   scene (spheres' extent plus the camera's), `PAD = 2^-19 = 32 u`.
-//! * The slab test's own rounding: entry and exit distances carry at most
-//!   `3 u` relative error, so exits are scaled by `1 + 2 gamma_3` (Ize 2013,
-//!   "Robust BVH ray traversal") and a box is pruned only when its entry
-//!   exceeds `best * (1 + 2^-20)`.
+//! * The slab test's own rounding. A face's distance is computed as
+//!   `b * (1/d) + (-(o * (1/d)))`, one fused multiply-add where the build has
+//!   FMA (two roundings otherwise), with `-(o * (1/d))` computed once per ray
+//!   or packet. Against the exact crossing of the face, that is the exact
+//!   crossing of a face moved by at most `u |o|` (the rounding of `o * (1/d)`;
+//!   without FMA also `u |b|`, the product's), at most `u D` in all, which the
+//!   padding covers many times over (the sphere test needs `8 u D` of its
+//!   `32 u D`), times a relative error of at most `3 u` (`1/d`, and the
+//!   rounding of the sum, and of the product without FMA). So exits are scaled
+//!   by `1 + 2 gamma_3` (Ize 2013, "Robust BVH ray traversal") and a box is
+//!   pruned only when its entry exceeds `best * (1 + 2^-20)`.
 
 use super::intersect::{sphere_disc, sphere_t, Closest};
 use super::spheres::{Spheres, MISS};
@@ -407,7 +414,7 @@ impl Bvh {
     /// The closest hit of one ray, one box and one sphere at a time (scalar kernel).
     pub fn closest_hit_scalar<P: Probe>(&self, o: V3<f32>, d: V3<f32>, probe: &mut P) -> (u32, f32) {
         let mut tally = WorkTally::<P>::new();
-        let inv = inv_dir(d);
+        let (inv, noi) = slab_ray(o, d);
         let mut best = Closest::<f32>::none();
         let mut stack = Stack::new((0, 0.0));
         while let Some((ni, entry)) = stack.pop() {
@@ -421,8 +428,8 @@ impl Bvh {
                 let (near, far) = slab(
                     V3::new(node.min[0][k], node.min[1][k], node.min[2][k]),
                     V3::new(node.max[0][k], node.max[1][k], node.max[2][k]),
-                    o,
                     inv,
+                    noi,
                 );
                 if !(near <= far * EXIT_SCALE && near <= best.t * PRUNE_SCALE) {
                     continue;
@@ -440,9 +447,9 @@ impl Bvh {
     /// The closest hit of one ray: 8 child boxes, or 8 leaf spheres, per `f32x8` test.
     pub fn closest_hit_wide<P: Probe>(&self, o: V3<f32>, d: V3<f32>, probe: &mut P) -> (u32, f32) {
         let mut tally = WorkTally::<P>::new();
-        let inv = inv_dir(d);
+        let (inv, noi) = slab_ray(o, d);
         let (o8, d8) = (splat3(o), splat3(d));
-        let inv8 = splat3(inv);
+        let (inv8, noi8) = (splat3(inv), splat3(noi));
         let mut best = Closest::<f32>::none();
         let mut stack = Stack::new((0, 0.0));
         while let Some((ni, entry)) = stack.pop() {
@@ -454,7 +461,7 @@ impl Bvh {
             let node = &self.nodes[ni as usize];
             let bmin = V3::new(f32x8::new(node.min[0]), f32x8::new(node.min[1]), f32x8::new(node.min[2]));
             let bmax = V3::new(f32x8::new(node.max[0]), f32x8::new(node.max[1]), f32x8::new(node.max[2]));
-            let (near, far) = slab(bmin, bmax, o8, inv8);
+            let (near, far) = slab(bmin, bmax, inv8, noi8);
             let ok = near.le(far * f32x8::splat(EXIT_SCALE)) & near.le(f32x8::splat(best.t * PRUNE_SCALE));
             // The empty slots (the last ones) hold zero boxes that a ray may enter.
             let mut mask = ok.to_bitmask() & ((1u32 << node.kids()) - 1);
@@ -511,7 +518,7 @@ impl Bvh {
     /// without a mask per box test.
     pub fn closest_hit_packet<W: Wide, P: Probe>(&self, o: V3<W>, d: V3<W>, live: u32, probe: &mut P) -> (W::U32, W) {
         let mut tally = WorkTally::<P>::new();
-        let inv = inv_dir(d);
+        let (inv, noi) = slab_ray(o, d);
         let mut best = Closest::<W>::live(W::mask_from_bits(live));
         let mut stack = Stack::new(0u32);
         let exit = W::splat(EXIT_SCALE);
@@ -524,7 +531,7 @@ impl Bvh {
             for k in 0..kids {
                 let bmin = V3::new(node.min[0][k], node.min[1][k], node.min[2][k]);
                 let bmax = V3::new(node.max[0][k], node.max[1][k], node.max[2][k]);
-                let (near, far) = slab(V3::splat3(bmin.to_array()), V3::splat3(bmax.to_array()), o, inv);
+                let (near, far) = slab(V3::splat3(bmin.to_array()), V3::splat3(bmax.to_array()), inv, noi);
                 let enter = near.le(far * exit) & near.le(best.t * prune);
                 if !enter.any() {
                     continue;
@@ -616,17 +623,22 @@ fn inv_lanes<R: Real>(x: R) -> R {
     R::splat(1.0) / R::select(x.abs().lt(tiny), tiny.copysign(x), x)
 }
 
+/// What the slab test needs of the rays `o + t d`: `1/d` (see [`inv_lanes`])
+/// and `-(o * (1/d))`.
 #[inline(always)]
-fn inv_dir<R: Real>(d: V3<R>) -> V3<R> {
-    V3::new(inv_lanes(d.x), inv_lanes(d.y), inv_lanes(d.z))
+fn slab_ray<R: Real>(o: V3<R>, d: V3<R>) -> (V3<R>, V3<R>) {
+    let inv = V3::new(inv_lanes(d.x), inv_lanes(d.y), inv_lanes(d.z));
+    (inv, -o.mul_elem(inv))
 }
 
-/// Entry and exit distances of the ray `o + t d` (given `1/d`) through boxes,
-/// entry clamped at 0.
+/// Entry and exit distances of the rays through boxes, entry clamped at 0,
+/// given [`slab_ray`]'s `1/d` and `-(o * (1/d))`: each face's distance is one
+/// fused multiply-add (see the module's error bounds).
 #[inline(always)]
-fn slab<R: Real>(bmin: V3<R>, bmax: V3<R>, o: V3<R>, inv: V3<R>) -> (R, R) {
-    let t0 = (bmin - o).mul_elem(inv);
-    let t1 = (bmax - o).mul_elem(inv);
+fn slab<R: Real>(bmin: V3<R>, bmax: V3<R>, inv: V3<R>, noi: V3<R>) -> (R, R) {
+    let face = |b: R, inv: R, noi: R| b.mul_add_bound(inv, noi);
+    let t0 = V3::new(face(bmin.x, inv.x, noi.x), face(bmin.y, inv.y, noi.y), face(bmin.z, inv.z, noi.z));
+    let t1 = V3::new(face(bmax.x, inv.x, noi.x), face(bmax.y, inv.y, noi.y), face(bmax.z, inv.z, noi.z));
     // No NaN can arise (|1/d| <= 1e30, finite coordinates) and the test only
     // needs to be conservative, so the one-instruction min/max do.
     let near = t0.x.fast_min(t1.x).fast_max(t0.y.fast_min(t1.y)).fast_max(t0.z.fast_min(t1.z)).fast_max(R::splat(0.0));

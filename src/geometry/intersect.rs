@@ -54,21 +54,29 @@ use crate::probe::{Probe, Work, WorkTally};
 use crate::real::{Mask, Real};
 use crate::vec3::V3;
 
-/// First half of the sphere test: `(disc, f, b)`; the ray misses when `disc < 0`.
+/// First half of the sphere test: `(disc, g, b')` with `g = c - o = -f` and
+/// `b' = g.d = -b`; the ray misses when `disc < 0`.
+///
+/// Computed from `g` rather than `f`: rounding is symmetric under negation,
+/// so `g`, `b'` and `l' = g - b' d` are exactly `-f`, `-b` and `-l`, the
+/// discriminant and the roots are bit for bit those of the `f` form (as the
+/// module's bounds state them), and `c - o` takes the centre as the operand
+/// that varies (the origin can stay where it is).
 #[inline(always)]
 pub fn sphere_disc<R: Real>(o: V3<R>, d: V3<R>, c: V3<R>, r2: R) -> (R, V3<R>, R) {
-    let f = o - c;
-    let b = f.dot(d);
-    let l = f - d * b;
-    (r2 - l.dot(l), f, b)
+    let g = c - o;
+    let b = g.dot(d);
+    let l = g - d * b;
+    (r2 - l.dot(l), g, b)
 }
 
-/// Second half: the nearest root with `t > 0`, given `disc >= 0`; the mask says
-/// whether there is one.
+/// Second half, from [`sphere_disc`]'s `(disc, g, b')`: the nearest root with
+/// `t > 0`, given `disc >= 0`; the mask says whether there is one. With
+/// `b = -b'`, `q = -(b + sign(b) sqrt(disc)) = b' + sign(b') sqrt(disc)` exactly.
 #[inline(always)]
-pub fn sphere_t<R: Real>(disc: R, f: V3<R>, b: R, r2: R) -> (R::Mask, R) {
-    let c = f.dot(f) - r2;
-    let q = -(b + disc.sqrt().copysign(b));
+pub fn sphere_t<R: Real>(disc: R, g: V3<R>, b: R, r2: R) -> (R::Mask, R) {
+    let c = g.dot(g) - r2;
+    let q = b + disc.sqrt().copysign(b);
     let t0 = c / q;
     let near = t0.min(q);
     let far = t0.max(q);
