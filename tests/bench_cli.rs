@@ -2,21 +2,20 @@
 //! Exit status 0 when throughput held and the image is the same; 1 when the
 //! image changed or throughput fell by more than the tolerance.
 
-use std::path::Path;
-use std::process::Command;
+mod common;
 
-fn bench(dir: &Path, extra: &[&str]) -> std::process::Output {
+use common::{rtow, Run};
+use std::path::Path;
+
+fn bench(dir: &Path, extra: &[&str]) -> Run {
     bench_spp(dir, "2", extra)
 }
 
-fn bench_spp(dir: &Path, spp: &str, extra: &[&str]) -> std::process::Output {
-    Command::new(env!("CARGO_BIN_EXE_rtow"))
-        .args(["bench", "ch05-ground", "--kernels", "scalar,simd", "--repeat", "1"])
-        .args(["--width", "24", "--height", "14", "--spp", spp, "--threads", "1"])
-        .args(extra)
-        .current_dir(dir)
-        .output()
-        .expect("rtow runs")
+fn bench_spp(dir: &Path, spp: &str, extra: &[&str]) -> Run {
+    let mut args = vec!["bench", "ch05-ground", "--kernels", "scalar,simd", "--repeat", "1"];
+    args.extend(["--width", "24", "--height", "14", "--spp", spp, "--threads", "1"]);
+    args.extend_from_slice(extra);
+    rtow(dir, &args)
 }
 
 fn edit(path: &Path, f: impl Fn(&mut serde_json::Value)) {
@@ -29,7 +28,7 @@ fn edit(path: &Path, f: impl Fn(&mut serde_json::Value)) {
 fn baseline_catches_a_changed_image_and_a_slowdown() {
     let dir = tempfile::tempdir().unwrap();
     let saved = bench(dir.path(), &["--save", "base.json"]);
-    assert!(saved.status.success(), "{}", String::from_utf8_lossy(&saved.stderr));
+    assert!(saved.code == 0, "{}", saved.stderr);
     let base = dir.path().join("base.json");
     let v: serde_json::Value = serde_json::from_str(&std::fs::read_to_string(&base).unwrap()).unwrap();
     let kernels = v["kernels"].as_array().unwrap();
@@ -44,8 +43,8 @@ fn baseline_catches_a_changed_image_and_a_slowdown() {
     // Same code: passes, and says the image is identical (tolerance 100%: timings of
     // sub-millisecond renders are noise; the slowdown verdict is tested below).
     let ok = bench(dir.path(), &["--baseline", "base.json", "--tolerance", "100"]);
-    let out = String::from_utf8_lossy(&ok.stdout).to_string();
-    assert_eq!(ok.status.code(), Some(0), "{out}{}", String::from_utf8_lossy(&ok.stderr));
+    let out = ok.stdout.clone();
+    assert_eq!(ok.code, 0, "{out}{}", ok.stderr);
     assert!(out.contains("identical") && !out.contains("REGRESSION"), "{out}");
 
     // A baseline with another image: exit 1, whatever the speed.
@@ -53,8 +52,8 @@ fn baseline_catches_a_changed_image_and_a_slowdown() {
     std::fs::copy(&base, &changed).unwrap();
     edit(&changed, |v| v["kernels"][1]["image_hash"] = "0123456789abcdef".into());
     let r = bench(dir.path(), &["--baseline", "changed.json", "--tolerance", "100"]);
-    assert_eq!(r.status.code(), Some(1));
-    assert!(String::from_utf8_lossy(&r.stdout).contains("CHANGED"));
+    assert_eq!(r.code, 1);
+    assert!(r.stdout.contains("CHANGED"));
 
     // A baseline 1000x faster: this run is a slowdown beyond 5%: exit 1.
     let fast = dir.path().join("fast.json");
@@ -64,8 +63,8 @@ fn baseline_catches_a_changed_image_and_a_slowdown() {
         v["kernels"][1]["mrays_per_s"] = (m * 1000.0).into();
     });
     let r = bench(dir.path(), &["--baseline", "fast.json"]);
-    assert_eq!(r.status.code(), Some(1));
-    assert!(String::from_utf8_lossy(&r.stdout).contains("REGRESSION"));
+    assert_eq!(r.code, 1);
+    assert!(r.stdout.contains("REGRESSION"));
 
     // A baseline whose algorithm did less work: same image, more work now:
     // exit 1 and said so, even with timings within any tolerance.
@@ -76,17 +75,17 @@ fn baseline_catches_a_changed_image_and_a_slowdown() {
         v["kernels"][1]["work"]["sphere_tests"] = (n / 2).into();
     });
     let r = bench(dir.path(), &["--baseline", "less.json", "--tolerance", "100"]);
-    let out = String::from_utf8_lossy(&r.stdout).to_string();
-    assert_eq!(r.status.code(), Some(1), "{out}");
+    let out = r.stdout.clone();
+    assert_eq!(r.code, 1, "{out}");
     assert!(out.contains("REGRESSION") && out.contains("work changed") && out.contains("image identical"), "{out}");
 
     // A baseline 1000x faster with the same work: a timing change only, labelled so.
     let r = bench(dir.path(), &["--baseline", "fast.json"]);
-    assert!(String::from_utf8_lossy(&r.stdout).contains("timing only"), "{}", String::from_utf8_lossy(&r.stdout));
+    assert!(r.stdout.contains("timing only"), "{}", r.stdout);
 
     // A baseline of other settings is an input error, not a verdict.
     let r = bench_spp(dir.path(), "3", &["--baseline", "base.json"]);
-    let err = String::from_utf8_lossy(&r.stderr);
-    assert_eq!(r.status.code(), Some(2), "{err}");
+    let err = r.stderr;
+    assert_eq!(r.code, 2, "{err}");
     assert!(err.contains("baseline settings"), "{err}");
 }

@@ -4,55 +4,19 @@
 //! what they promise.
 
 mod bad_input;
+mod common;
 
+use common::{failure, listing, rtow, Run};
 use rtow::scene;
-use rtow::{Image, KernelChoice, RenderOptions, Settings};
-use std::path::Path;
-use std::process::Command;
+use rtow::{Image, Job, KernelChoice, Overrides, RenderOptions};
 
-const BIN: &str = env!("CARGO_BIN_EXE_rtow");
 /// A small render: a few milliseconds for any preset.
 const SMALL: [&str; 7] = ["--width", "32", "--height", "18", "--spp", "2", "-q"];
 /// What an output that must survive a failed run holds.
 const SENTINEL: &[u8] = b"not an image; a failed run must leave this file alone";
 
-struct Run {
-    code: i32,
-    stdout: String,
-    stderr: String,
-}
-
-fn rtow(dir: &Path, args: &[&str]) -> Run {
-    let out = Command::new(BIN).args(args).current_dir(dir).output().expect("rtow runs");
-    Run {
-        code: out.status.code().expect("rtow exited (not killed by a signal)"),
-        stdout: String::from_utf8(out.stdout).expect("utf-8 stdout"),
-        stderr: String::from_utf8(out.stderr).expect("utf-8 stderr"),
-    }
-}
-
-/// Asserts that the run failed with `code` and said so in exactly one
-/// `error: ...` line on stderr, and nothing on stdout; returns that line.
-fn failure(r: &Run, code: i32, what: &str) -> String {
-    assert!(!r.stderr.contains("panicked"), "{what}: panic: {}", r.stderr);
-    assert_eq!(r.code, code, "{what}: exit status (stderr: {})", r.stderr);
-    let lines: Vec<&str> = r.stderr.lines().collect();
-    assert_eq!(lines.len(), 1, "{what}: stderr is not one line: {:?}", r.stderr);
-    assert!(lines[0].starts_with("error: "), "{what}: {:?}", lines[0]);
-    assert!(r.stdout.is_empty(), "{what}: stdout: {:?}", r.stdout);
-    lines[0].to_string()
-}
-
 fn success(r: &Run, what: &str) {
     assert_eq!(r.code, 0, "{what}: exit status (stderr: {})", r.stderr);
-}
-
-/// The names in `dir`, sorted (temporary files included: they start with `.rtow-`).
-fn listing(dir: &Path) -> Vec<String> {
-    let mut v: Vec<String> =
-        std::fs::read_dir(dir).unwrap().map(|e| e.unwrap().file_name().to_string_lossy().into_owned()).collect();
-    v.sort();
-    v
 }
 
 #[test]
@@ -87,7 +51,7 @@ fn bad_arguments_exit_2_naming_the_argument_and_write_nothing() {
         (render(&["--width", "0"]), &["width: must be at least 1"]),
         (render(&["--height", "0"]), &["height: must be at least 1"]),
         (render(&["--spp", "0"]), &["spp: must be at least 1"]),
-        (render(&["--depth", "0"]), &["max_depth: must be at least 1"]),
+        (render(&["--depth", "0"]), &["--depth: must be at least 1"]),
         (render(&["--width", "100000", "--height", "100000"]), &["width x height", "memory"]),
         (render(&["--width", "8192", "--height", "8192", "--spp", "4000000000"]), &["spp: 4000000000"]),
         (render(&["--width", "-5"]), &["'-5'"]),
@@ -170,13 +134,14 @@ fn unwritable_outputs_exit_1_before_rendering_and_write_nothing() {
     }
 }
 
-fn small_settings(scene: &scene::Scene) -> Settings {
-    Settings { width: 32, height: 18, spp: 2, ..rtow::default_settings(scene) }
+/// The `SMALL` flags as the library's overrides.
+fn small_settings() -> Overrides {
+    Overrides { width: Some(32), height: Some(18), spp: Some(2), ..Default::default() }
 }
 
-fn render_lib(scene: &scene::Scene, s: Settings, kernel: KernelChoice) -> rtow::Rendered {
+fn render_lib(scene: &scene::Scene, o: Overrides, kernel: KernelChoice) -> rtow::Rendered {
     let opts = RenderOptions { kernel, ..Default::default() };
-    rtow::render(scene, s, opts, None).unwrap()
+    rtow::render(&Job::new(scene, &o, &opts).unwrap(), None).unwrap()
 }
 
 #[test]
@@ -184,7 +149,7 @@ fn a_render_writes_exactly_its_outputs_and_they_match_the_library() {
     let dir = tempfile::tempdir().unwrap();
     let d = dir.path();
     let preset = scene::preset("ch08-fuzz").unwrap();
-    let s = Settings { max_depth: 7, seed: 12345, ..small_settings(&preset) };
+    let s = Overrides { max_depth: Some(7), seed: Some(12345), ..small_settings() };
     let lib = render_lib(&preset, s, KernelChoice::Scalar);
     // Twice: once creating the outputs, once replacing them.
     for round in 0..2 {
@@ -283,7 +248,7 @@ fn stats_json_reports_the_run() {
         }
         let u = |k: &str| v[k].as_u64().unwrap_or_else(|| panic!("{k} is not an integer: {text}"));
         let f = |k: &str| v[k].as_f64().unwrap_or_else(|| panic!("{k} is not a number: {text}"));
-        let resolved = rtow::Kernel::resolve(kernel.parse().unwrap()).unwrap();
+        let resolved = rtow::Kernel::resolve(kernel.parse().unwrap());
         assert_eq!(v["kernel"], resolved.name());
         assert_eq!(u("lanes"), resolved.lanes() as u64);
         assert_eq!(v["isa"], rtow::isa());
@@ -345,7 +310,7 @@ fn exported_presets_render_the_identical_image() {
     };
     for p in scene::presets() {
         let preset = (p.build)();
-        let s = small_settings(&preset);
+        let s = small_settings();
         let want: Vec<Image> = kernels.iter().map(|&(k, _)| render_lib(&preset, s, k).image).collect();
         let want_cli: Vec<_> = kernels.iter().map(|&(_, k)| cli_render(p.name, k)).collect();
         for ext in ["json", "toml"] {
@@ -356,7 +321,7 @@ fn exported_presets_render_the_identical_image() {
             let loaded = scene::load_scene(&d.join(&file)).unwrap_or_else(|e| panic!("{file}: {e}"));
             assert_eq!(loaded, preset, "{file}");
             for (i, &(kernel, name)) in kernels.iter().enumerate() {
-                let got = render_lib(&loaded, small_settings(&loaded), kernel).image;
+                let got = render_lib(&loaded, small_settings(), kernel).image;
                 assert!(got == want[i], "{file}: {name} kernel renders a different image");
                 let (png, stats) = cli_render(&file, name);
                 assert!(png == want_cli[i].0, "{file}: {name}: the binary writes a different PNG");

@@ -19,7 +19,7 @@
 //! `target/tmp/fuzz-failure.<ext>` to be replayed with `rtow render`.
 
 use rtow::scene::{self, Format};
-use rtow::{KernelChoice, Overrides, RenderOptions, Settings};
+use rtow::{Job, KernelChoice, Overrides, RenderOptions};
 use std::path::Path;
 use std::time::{Duration, Instant};
 
@@ -234,24 +234,29 @@ fn generated(rng: &mut Rng) -> (Vec<u8>, Format) {
 /// Runs one input through the whole path; `Err` describes a broken promise.
 fn check(bytes: &[u8], format: Format) -> Result<&'static str, String> {
     let origin = Path::new(if format == Format::Json { "fuzz.json" } else { "fuzz.toml" });
+    // A refusal is exit status 2 with a one-line message.
+    let refusal = |e: rtow::Error| {
+        let msg = e.to_string();
+        if e.exit_code() != 2 || msg.is_empty() || msg.lines().count() != 1 {
+            return Err(format!("bad refusal (exit {}): {msg:?}", e.exit_code()));
+        }
+        Ok("refused")
+    };
     let scene = match scene::scene_from_bytes(bytes, format, origin) {
         Ok(s) => s,
-        Err(e) => {
-            let msg = e.to_string();
-            if e.exit_code() != 2 || msg.is_empty() || msg.lines().count() != 1 {
-                return Err(format!("bad refusal (exit {}): {msg:?}", e.exit_code()));
-            }
-            return Ok("refused");
-        }
+        Err(e) => return refusal(e),
     };
-    let o = Overrides { width: Some(8), height: Some(5), spp: Some(2), max_depth: Some(6), seed: None, book: false };
-    let s = Settings::resolve(&scene.render, &o);
-    s.validate().map_err(|e| format!("tiny settings refused: {e}"))?;
+    let o = Overrides { width: Some(8), height: Some(5), spp: Some(2), max_depth: Some(6), ..Default::default() };
     let mut hashes = Vec::new();
     for kernel in [KernelChoice::Scalar, KernelChoice::Simd] {
         let t = Instant::now();
         let opts = RenderOptions { kernel, threads: Some(1), ..Default::default() };
-        let r = match rtow::render(&scene, s, opts, None) {
+        // Resolving the job checks the scene's values (and the tiny settings).
+        let job = match Job::new(&scene, &o, &opts) {
+            Ok(j) => j,
+            Err(e) => return refusal(e),
+        };
+        let r = match rtow::render(&job, None) {
             Ok(r) => r,
             Err(e) if e.exit_code() == 2 => return Ok("refused by render"),
             Err(e) => return Err(format!("render failed with exit {}: {e}", e.exit_code())),

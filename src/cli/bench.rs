@@ -1,12 +1,12 @@
 //! `rtow bench`: rays/s and work per ray of each kernel; baselines.
 
-use super::args::{kernel_parser, ImageArgs};
-use super::{load, say, tell};
+use super::args::{kernel_parser, ImageArgs, RunArgs};
+use super::{say, tell};
 use clap::Args;
+use rtow::instruments::bench::{self, Baseline, BaselineVerdict, BenchConfig, DEFAULT_REPEAT};
 use rtow::output::Outputs;
-use rtow::tools::bench::{self, Baseline, Verdict};
-use rtow::{Error, KernelChoice, Result};
-use std::path::{Path, PathBuf};
+use rtow::{Job, KernelChoice, Result, SceneSource};
+use std::path::PathBuf;
 
 #[derive(Args)]
 pub struct BenchArgs {
@@ -18,8 +18,10 @@ pub struct BenchArgs {
     kernels: Vec<KernelChoice>,
     #[command(flatten)]
     image: ImageArgs,
+    #[command(flatten)]
+    run: RunArgs,
     /// Timed renders per kernel; the median-time one is reported (plus one render with the work counters on).
-    #[arg(long, default_value_t = 3)]
+    #[arg(long, default_value_t = DEFAULT_REPEAT)]
     repeat: usize,
     /// Write the report as JSON.
     #[arg(long, value_name = "FILE")]
@@ -42,34 +44,21 @@ pub struct BenchArgs {
 
 /// Ok(false): a regression against the baseline (exit status 1).
 pub fn run(a: BenchArgs) -> Result<bool> {
-    rtow::limits::check_threads(a.image.threads)?;
-    let (scene, name) = load(&a.scene)?;
-    let s = a.image.settings(&scene);
-    if a.image.tile != 16 {
-        return Err(Error::invalid("--tile", "rtow bench uses the default tile size"));
-    }
-    if !(a.tolerance >= 0.0) {
-        return Err(Error::invalid("--tolerance", "must be a percentage >= 0"));
-    }
-    let cfg = bench::Config {
-        settings: s,
-        kernels: a.kernels.clone(),
-        threads: a.image.threads,
-        accel: a.image.accel,
-        repeat: a.repeat,
-        sampler: a.image.sampler(&scene),
-    };
+    let source = SceneSource::open(&a.scene)?;
+    let job = Job::from_source(&source, &a.image.overrides(), &a.run.options(KernelChoice::Simd))?;
+    let name = &source.name;
+    let cfg = BenchConfig { kernels: a.kernels.clone(), repeat: a.repeat, tolerance: a.tolerance };
     // Everything is checked before anything is measured.
-    cfg.validate()?;
+    cfg.validate(&job)?;
     let baseline = a.baseline.as_deref().map(Baseline::load).transpose()?;
     if let Some(b) = &baseline {
-        b.check(&name, &s, &a.kernels, cfg.sampler)?;
+        b.check(name, job.settings(), &a.kernels)?;
     }
     // The outputs are one transaction: distinct from each other and from the
     // inputs, checked now, written together after the measurements.
     let mut outputs = Outputs::new();
-    if rtow::scene::preset(&a.scene).is_none() {
-        outputs.input(Path::new(&a.scene), "scene file");
+    if let Some(f) = &source.file {
+        outputs.input(f, "scene file");
     }
     if let Some(b) = &a.baseline {
         outputs.input(b, "baseline");
@@ -81,12 +70,13 @@ pub fn run(a: BenchArgs) -> Result<bool> {
         }
     }
     if a.by_depth {
-        for &k in &a.kernels {
-            say!("{}:", rtow::Kernel::resolve(k)?.name());
-            say!("{}", bench::depth_table(&bench::work_by_depth(&scene, &cfg, k)?).trim_end());
+        for (kernel, rows) in bench::work_by_depth_per_kernel(&job, &cfg)? {
+            say!("{}:", kernel.name());
+            say!("{}", bench::depth_table(&rows).trim_end());
         }
         return Ok(true);
     }
+    let s = job.settings();
     tell!(
         "bench {name}: {}x{} {} spp depth {} seed {}, {} sampler, {} repetition(s) per kernel, built for {}",
         s.width,
@@ -94,11 +84,11 @@ pub fn run(a: BenchArgs) -> Result<bool> {
         s.spp,
         s.max_depth,
         s.seed,
-        cfg.sampler,
+        s.sampler,
         a.repeat,
         rtow::isa()
     );
-    let report = bench::run(&scene, &name, &cfg, |k, i, st| {
+    let report = bench::run(&job, name, &cfg, |k, i, st| {
         tell!("  {} run {}: {:.3} s, {:.2} Mrays/s", k.name(), i + 1, st.seconds, st.mrays_per_s)
     })?;
     say!("{}", report.table().trim_end_matches('\n'));
@@ -107,31 +97,34 @@ pub fn run(a: BenchArgs) -> Result<bool> {
         outputs.stage(id, json.as_bytes())?;
     }
     outputs.commit()?;
+    Ok(baseline.as_ref().is_none_or(|b| print_comparison(&report, b, cfg.tolerance)))
+}
+
+/// Prints the verdict of each kernel against the baseline; false on a regression.
+fn print_comparison(report: &bench::BenchReport, b: &Baseline, tolerance: f64) -> bool {
     let mut ok = true;
-    if let Some(b) = &baseline {
-        for c in bench::compare(&report, b, a.tolerance) {
-            let work = match c.work_change_percent {
-                None => "work: not in the baseline".to_string(),
-                Some(0.0) => "work identical".to_string(),
-                Some(w) => format!("work {w:+.2}%"),
-            };
-            say!(
-                "{:<7} baseline {:.2} Mrays/s -> {:.2} Mrays/s ({:+.1}%), image {}, {work}: {}{}",
-                c.kernel,
-                c.baseline_mrays,
-                c.mrays,
-                c.change_percent,
-                if c.image_same { "identical" } else { "CHANGED" },
-                if c.regressed { "REGRESSION" } else { "ok" },
-                match c.verdict {
-                    Verdict::Same => "",
-                    Verdict::TimingOnly => " (timing only: same image and work)",
-                    Verdict::Work => " (the algorithm's work changed)",
-                    Verdict::Image => " (the image changed)",
-                }
-            );
-            ok &= !c.regressed;
-        }
+    for c in bench::compare(report, b, tolerance) {
+        let work = match c.work_change_percent {
+            None => "work: not in the baseline".to_string(),
+            Some(0.0) => "work identical".to_string(),
+            Some(w) => format!("work {w:+.2}%"),
+        };
+        say!(
+            "{:<7} baseline {:.2} Mrays/s -> {:.2} Mrays/s ({:+.1}%), image {}, {work}: {}{}",
+            c.kernel,
+            c.baseline_mrays,
+            c.mrays,
+            c.change_percent,
+            if c.image_same { "identical" } else { "CHANGED" },
+            if c.regressed { "REGRESSION" } else { "ok" },
+            match c.verdict {
+                BaselineVerdict::Same => "",
+                BaselineVerdict::TimingOnly => " (timing only: same image and work)",
+                BaselineVerdict::Work => " (the algorithm's work changed)",
+                BaselineVerdict::Image => " (the image changed)",
+            }
+        );
+        ok &= !c.regressed;
     }
-    Ok(ok)
+    ok
 }

@@ -8,9 +8,9 @@ mod merge;
 mod render;
 
 use clap::{CommandFactory, FromArgMatches, Parser, Subcommand};
-use rtow::scene::{self, Scene};
+use rtow::scene;
 use rtow::{Error, Result};
-use std::path::{Path, PathBuf};
+use std::path::PathBuf;
 use std::process::ExitCode;
 
 /// `println!` that ignores a closed stdout (e.g. piped into `head`) instead of
@@ -77,26 +77,11 @@ enum Command {
 pub(crate) use say;
 pub(crate) use tell;
 
-/// A preset or a file: the scene and a short name for default outputs.
-pub fn load(spec: &str) -> Result<(Scene, String)> {
-    if let Some(s) = scene::preset(spec) {
-        return Ok((s, spec.to_string()));
-    }
-    let path = Path::new(spec);
-    if path.extension().is_some() || path.exists() {
-        let s = scene::load_scene(path)?;
-        let name = path.file_stem().map(|s| s.to_string_lossy().into_owned()).unwrap_or_else(|| "scene".into());
-        return Ok((s, name));
-    }
-    Err(Error::Input(format!("unknown scene '{spec}': not a preset (see `rtow scenes`) and not a .json/.toml file")))
-}
-
 /// Prints the stress tables; exits with status 1 when a bound is broken.
 fn cmd_stress(quick: bool, seed: u64, threads: Option<usize>) -> Result<bool> {
     use std::io::Write;
-    rtow::limits::check_threads(threads)?;
-    let cfg = rtow::tools::stress::Config { quick, seed, threads };
-    let report = rtow::tools::stress::run(&cfg, &mut |part| tell!("done: {part}"))?;
+    let cfg = rtow::instruments::stress::StressConfig { quick, seed, threads };
+    let report = rtow::instruments::stress::run(&cfg, &mut |part| tell!("done: {part}"))?;
     say!("{}", report.table().trim_end_matches('\n'));
     let _ = std::io::stdout().flush();
     Ok(report.passed())
@@ -120,7 +105,6 @@ fn run(cli: Cli) -> Result<bool> {
         Command::Export { preset, output } => {
             let s = scene::preset(&preset)
                 .ok_or_else(|| Error::Input(format!("unknown preset '{preset}' (see `rtow scenes`)")))?;
-            rtow::output::check_extension(&output, &["json", "toml"], "-o")?;
             scene::save_scene(&s, &output).map(|_| true)
         }
     }
@@ -152,9 +136,18 @@ fn clap_exit(e: clap::Error) -> ! {
     std::process::exit(2)
 }
 
+/// An error as the command line says it: a setting named by its flag.
+fn message(e: &Error) -> String {
+    match e {
+        Error::Invalid { field, message } => format!("{}: {message}", args::flag_of(field).unwrap_or(field)),
+        Error::InFile { path, error } => format!("{}: {}", path.display(), message(error)),
+        e => e.to_string(),
+    }
+}
+
 pub fn main() -> ExitCode {
     rtow::output::install_signal_cleanup();
-    let version = format!("{} ({})", env!("CARGO_PKG_VERSION"), rtow::render::build_description());
+    let version = format!("{} ({})", env!("CARGO_PKG_VERSION"), rtow::build_description());
     let version: &'static str = Box::leak(version.into_boxed_str());
     let cli = match Cli::command().version(version).try_get_matches().and_then(|m| Cli::from_arg_matches(&m)) {
         Ok(c) => c,
@@ -164,7 +157,7 @@ pub fn main() -> ExitCode {
         Ok(true) => ExitCode::SUCCESS,
         Ok(false) => ExitCode::from(1),
         Err(e) => {
-            tell!("error: {e}");
+            tell!("error: {}", message(&e));
             ExitCode::from(e.exit_code() as u8)
         }
     }

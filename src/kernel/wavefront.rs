@@ -24,14 +24,15 @@
 //! Memory is bounded: a workspace holds at most `MAX_PATHS` paths.
 
 use super::{normal_colour, sky};
+use crate::choice::Mode;
 use crate::estimator::{roulette, roulette_applies};
 use crate::film::TileFilm;
 use crate::geometry::{spawn, surface, Surface, MISS};
 use crate::material::{dielectric, lambertian, metal, Kind};
-use crate::plan::{Mode, Prepared};
+use crate::plan::Prepared;
 use crate::probe::{PathId, Probe, Stage};
-use crate::real::Wide;
-use crate::sampling::{layout, Independent, PathSampler, Sampler, Sobol, Stream};
+use crate::real::{Wide, MAX_LANES};
+use crate::sampling::{layout, PathSampler, Stream};
 use crate::vec3::V3;
 use std::ops::Range;
 
@@ -40,7 +41,7 @@ pub const MAX_PATHS: usize = 2048;
 
 /// Lanes of slack at the end of every array, so the last packet of any width
 /// can be loaded and stored whole (its extra lanes are computed, never used).
-const SLACK: usize = 16;
+const SLACK: usize = MAX_LANES;
 
 /// The miss queue's index (after one queue per material kind).
 const MISS_QUEUE: usize = Kind::ALL.len();
@@ -105,7 +106,7 @@ impl Paths {
 /// A colour per lane, from a table lookup per lane.
 #[inline(always)]
 fn lanes3<W: Wide>(f: impl Fn(usize) -> [f32; 3]) -> V3<W> {
-    let mut c = [[0.0f32; 3]; 16];
+    let mut c = [[0.0f32; 3]; MAX_LANES];
     for (k, v) in c.iter_mut().enumerate().take(W::LANES) {
         *v = f(k);
     }
@@ -173,27 +174,14 @@ impl Workspace {
 }
 
 /// Renders samples `samples` of every pixel of `tile` (at most `MAX_PATHS`
-/// pixels); returns the rays traced.
+/// pixels), with the paths' values drawn by `sampler`; returns the rays traced.
 ///
 /// Samples are rendered in rounds that end at the adaptive decision points
 /// (one round without adaptive sampling). After each round, pixels whose error
 /// estimate is low enough leave the active list; the next round traces only
 /// the others, so fewer active pixels get more samples per batch and the
 /// packets stay full.
-pub fn render_tile<W: Wide, P: Probe>(
-    prep: &Prepared,
-    ws: &mut Workspace,
-    tile: &mut TileFilm,
-    samples: Range<u32>,
-    probe: &mut P,
-) -> u64 {
-    match prep.estimator.sampler {
-        Sampler::Independent => render_tile_with::<W, P, _>(prep, Independent, ws, tile, samples, probe),
-        Sampler::Sobol { dims } => render_tile_with::<W, P, _>(prep, Sobol { dims }, ws, tile, samples, probe),
-    }
-}
-
-fn render_tile_with<W: Wide, P: Probe, S: PathSampler>(
+pub fn render_tile<W: Wide, P: Probe, S: PathSampler>(
     prep: &Prepared,
     sampler: S,
     ws: &mut Workspace,
@@ -480,7 +468,7 @@ fn scatter<W: Wide, P: Probe, S: PathSampler>(
         }
     }));
     rng.seek(layout::scatter(depth));
-    let mut rows = [0usize; 16];
+    let mut rows = [0usize; MAX_LANES];
     for (k, r) in rows.iter_mut().enumerate().take(W::LANES) {
         *r = prep.spheres.row[W::lane_u(sph, k) as usize] as usize;
     }

@@ -51,7 +51,8 @@ impl Format {
     }
 }
 
-/// Parses and validates a scene file's bytes: a UTF-8 byte-order mark is
+/// Parses a scene file's bytes (values are checked when a render job is
+/// resolved, or by [`Scene::validate`]): a UTF-8 byte-order mark is
 /// skipped; bytes that are not UTF-8 are reported with their offset, line and
 /// column; more than [`Format::max_bytes`] are refused before parsing.
 pub fn scene_from_bytes(bytes: &[u8], format: Format, origin: &Path) -> Result<Scene> {
@@ -69,8 +70,10 @@ pub fn scene_from_bytes(bytes: &[u8], format: Format, origin: &Path) -> Result<S
     scene_from_str(text, format, origin)
 }
 
-/// Parses and validates a scene; `origin` names the source in errors. A
-/// leading byte-order mark is skipped (JSON and TOML alike).
+/// Parses a scene; `origin` names the source in errors. A leading
+/// byte-order mark is skipped (JSON and TOML alike). The sphere list is
+/// bounded while it is read ([`crate::limits::MAX_SPHERES`]); the values are
+/// checked by [`Scene::validate`] (which resolving a render job runs).
 pub fn scene_from_str(text: &str, format: Format, origin: &Path) -> Result<Scene> {
     let text = text.strip_prefix('\u{feff}').unwrap_or(text);
     let parse_err = |message: String| Error::Parse { path: origin.to_path_buf(), message };
@@ -98,7 +101,6 @@ pub fn scene_from_str(text: &str, format: Format, origin: &Path) -> Result<Scene
                 .map_err(|e| toml_err(text, e.inner(), &field_prefix(e.path()), &parse_err))?
         }
     };
-    scene.validate()?;
     Ok(scene)
 }
 
@@ -121,7 +123,8 @@ fn strip_position(s: &str) -> String {
     }
 }
 
-/// Reads, parses and validates a scene file (.json or .toml).
+/// Reads and parses a scene file (.json or .toml), reading at most
+/// [`Format::max_bytes`].
 pub fn load_scene(path: &Path) -> Result<Scene> {
     let format = Format::from_path(path)?;
     let bytes = crate::limits::read_bounded(path, format.max_bytes(), "scene file")?;

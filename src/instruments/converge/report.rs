@@ -1,13 +1,13 @@
 //! The outputs of `rtow converge`: CSV, markdown, the comparison lines, files.
 
-use super::curve::{compare, Comparison, Cost, Curve};
-use super::Report;
+use super::curve::{compare, Cost, Curve, CurveComparison};
+use super::ConvergeReport;
+use crate::choice::KernelChoice;
 use crate::error::{Error, Result};
-use crate::settings::KernelChoice;
 use std::fmt::Write as _;
 use std::path::{Path, PathBuf};
 
-impl Report {
+impl ConvergeReport {
     /// One curve per (kernel, variant), in the order measured.
     pub fn curves(&self) -> Vec<Curve> {
         self.curves_by(Cost::Seconds)
@@ -32,12 +32,12 @@ impl Report {
 
     /// Every configuration against the first one, and, for every other kernel,
     /// its variants against its own first variant.
-    pub fn comparisons(&self) -> Vec<Comparison> {
+    pub fn comparisons(&self) -> Vec<CurveComparison> {
         self.comparisons_by(Cost::Seconds)
     }
 
-    /// [`Report::comparisons`] with `cost` in place of seconds.
-    pub fn comparisons_by(&self, cost: Cost) -> Vec<Comparison> {
+    /// [`ConvergeReport::comparisons`] with `cost` in place of seconds.
+    pub fn comparisons_by(&self, cost: Cost) -> Vec<CurveComparison> {
         let curves = self.curves_by(cost);
         let mut out = Vec::new();
         let Some(first) = curves.first() else {

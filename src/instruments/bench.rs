@@ -8,42 +8,51 @@
 //! settings, so a change in them is a change in the algorithm, whatever the
 //! machine's load; a change in time alone is labelled as such.
 
+use crate::choice::KernelChoice;
 use crate::error::{Error, Result};
+use crate::job::{Job, RenderOptions, DEFAULT_TILE};
+use crate::kernel::Kernel;
 use crate::probe::WorkCounters;
-use crate::render::{render, render_counted, Kernel, Stats};
+use crate::render::{render, render_counted, Stats};
 use crate::sampling::Sampler;
-use crate::scene::Scene;
-use crate::settings::{AccelChoice, KernelChoice, RenderOptions, Settings};
+use crate::settings::Settings;
 use serde::{Deserialize, Serialize};
 use std::path::Path;
 
-/// What to measure.
+/// Timed renders per kernel by default.
+pub const DEFAULT_REPEAT: usize = 3;
+
+/// What to measure: each of `kernels` on a job's scene, settings and options.
 #[derive(Clone, Debug)]
-pub struct Config {
-    pub settings: Settings,
+pub struct BenchConfig {
     pub kernels: Vec<KernelChoice>,
-    pub threads: Option<usize>,
-    pub accel: AccelChoice,
     /// Timed renders per kernel; the median one is reported.
     pub repeat: usize,
-    /// The sampler every render uses.
-    pub sampler: Sampler,
+    /// Allowed throughput drop against a baseline, in percent.
+    pub tolerance: f64,
 }
 
-impl Config {
-    /// Checks everything before any render: settings, kernels this build has, repeat.
-    pub fn validate(&self) -> Result<()> {
-        self.settings.validate()?;
+impl BenchConfig {
+    /// Checks everything before any render (the job's own values were checked when it was made).
+    pub fn validate(&self, job: &Job) -> Result<()> {
         if self.repeat == 0 {
             return Err(Error::invalid("repeat", "must be at least 1"));
         }
         if self.kernels.is_empty() {
             return Err(Error::invalid("kernels", "name at least one kernel"));
         }
-        for &k in &self.kernels {
-            Kernel::resolve(k)?;
+        if !(self.tolerance >= 0.0) {
+            return Err(Error::invalid("tolerance", "must be a percentage >= 0"));
+        }
+        if job.options().tile != DEFAULT_TILE {
+            return Err(Error::invalid("tile", format!("benchmarks use the default tile size, {DEFAULT_TILE}")));
         }
         Ok(())
+    }
+
+    /// `job` with each kernel.
+    fn jobs(&self, job: &Job) -> Result<Vec<Job>> {
+        self.kernels.iter().map(|&kernel| job.with_options(&RenderOptions { kernel, ..*job.options() })).collect()
     }
 }
 
@@ -88,33 +97,26 @@ pub struct BenchReport {
     pub kernels: Vec<BenchEntry>,
 }
 
-/// Renders `scene` `repeat` times with each kernel (median kept), then once
-/// more with the work counters on.
+/// Renders `job`'s scene `repeat` times with each kernel (median kept), then
+/// once more with the work counters on.
 pub fn run(
-    scene: &Scene,
+    job: &Job,
     name: &str,
-    cfg: &Config,
+    cfg: &BenchConfig,
     mut on_run: impl FnMut(Kernel, usize, &Stats),
 ) -> Result<BenchReport> {
-    cfg.validate()?;
+    cfg.validate(job)?;
     let mut entries = Vec::new();
-    for &choice in &cfg.kernels {
-        let kernel = Kernel::resolve(choice)?;
-        let opts = RenderOptions {
-            kernel: choice,
-            threads: cfg.threads,
-            accel: cfg.accel,
-            sampler: cfg.sampler,
-            ..Default::default()
-        };
+    for job in cfg.jobs(job)? {
+        let kernel = job.kernel();
         let mut runs = Vec::new();
         for i in 0..cfg.repeat {
-            let r = render(scene, cfg.settings, opts, None)?;
+            let r = render(&job, None)?;
             r.stats.check_finite()?;
             on_run(kernel, i, &r.stats);
             runs.push(r.stats);
         }
-        let counted = render_counted(scene, cfg.settings, opts, None)?.stats;
+        let counted = render_counted(&job, None)?.stats;
         let runs_seconds: Vec<f64> = runs.iter().map(|s| s.seconds).collect();
         for s in runs.iter().chain([&counted]) {
             if s.image_hash != runs[0].image_hash || s.rays != runs[0].rays {
@@ -227,7 +229,8 @@ impl Baseline {
 
     /// Checks, before anything is measured, that this baseline measured the same
     /// scene and settings and has at least one of `kernels`.
-    pub fn check(&self, scene: &str, s: &Settings, kernels: &[KernelChoice], sampler: Sampler) -> Result<()> {
+    pub fn check(&self, scene: &str, s: &Settings, kernels: &[KernelChoice]) -> Result<()> {
+        let sampler = s.sampler;
         if self.scene != scene {
             return Err(Error::Input(format!("baseline is of scene '{}', this run of '{scene}'", self.scene)));
         }
@@ -235,7 +238,7 @@ impl Baseline {
             let theirs = b.sampler.as_deref().unwrap_or(Sampler::Independent.name());
             if theirs != sampler.name() {
                 return Err(Error::Input(format!(
-                    "baseline sampler {theirs} differs from this run's {} (--sampler)",
+                    "baseline sampler {theirs} differs from this run's {}",
                     sampler.name()
                 )));
             }
@@ -248,7 +251,7 @@ impl Baseline {
                 )));
             }
         }
-        let names: Vec<&str> = kernels.iter().filter_map(|&k| Kernel::resolve(k).ok()).map(Kernel::name).collect();
+        let names: Vec<&str> = kernels.iter().map(|&k| Kernel::resolve(k).name()).collect();
         if !self.kernels.iter().any(|b| names.contains(&b.kernel.as_str())) {
             return Err(Error::Input(format!(
                 "the baseline has none of the kernels measured ({}; it has {})",
@@ -262,7 +265,7 @@ impl Baseline {
 
 /// What changed against the baseline, for one kernel.
 #[derive(Clone, Copy, Debug, PartialEq, Eq)]
-pub enum Verdict {
+pub enum BaselineVerdict {
     /// Same image, same work, throughput within the tolerance.
     Same,
     /// Same image and work, throughput beyond the tolerance: a timing change
@@ -276,7 +279,7 @@ pub enum Verdict {
 
 /// The verdict of one kernel against the baseline.
 #[derive(Clone, Debug, PartialEq)]
-pub struct Comparison {
+pub struct BaselineComparison {
     pub kernel: String,
     pub baseline_mrays: f64,
     pub mrays: f64,
@@ -286,7 +289,7 @@ pub struct Comparison {
     /// Relative change of the total traversal work (nodes + box + sphere tests),
     /// percent; `None` when the baseline has no counters.
     pub work_change_percent: Option<f64>,
-    pub verdict: Verdict,
+    pub verdict: BaselineVerdict,
     /// Exit status 1: the image changed, the work grew, or throughput fell beyond the tolerance.
     pub regressed: bool,
 }
@@ -296,7 +299,7 @@ fn total(w: &WorkCounters) -> u64 {
 }
 
 /// Compares a fresh report with a baseline (checked with [`Baseline::check`]).
-pub fn compare(report: &BenchReport, base: &Baseline, tolerance_percent: f64) -> Vec<Comparison> {
+pub fn compare(report: &BenchReport, base: &Baseline, tolerance_percent: f64) -> Vec<BaselineComparison> {
     let mut out = Vec::new();
     for e in &report.kernels {
         let s = &e.stats;
@@ -313,15 +316,15 @@ pub fn compare(report: &BenchReport, base: &Baseline, tolerance_percent: f64) ->
         let work_changed = matches!((b.work, s.work), (Some(bw), Some(sw)) if bw != sw);
         let slower = change < -tolerance_percent;
         let verdict = if !image_same {
-            Verdict::Image
+            BaselineVerdict::Image
         } else if work_changed {
-            Verdict::Work
+            BaselineVerdict::Work
         } else if change.abs() > tolerance_percent {
-            Verdict::TimingOnly
+            BaselineVerdict::TimingOnly
         } else {
-            Verdict::Same
+            BaselineVerdict::Same
         };
-        out.push(Comparison {
+        out.push(BaselineComparison {
             kernel: s.kernel.to_string(),
             baseline_mrays: b.mrays_per_s,
             mrays: s.mrays_per_s,
@@ -350,14 +353,16 @@ pub struct DepthRow {
     pub roots_per_packet: f64,
 }
 
-/// The work at each ray depth of one render with `kernel` (how coherence is lost bounce by bounce).
-pub fn work_by_depth(scene: &Scene, cfg: &Config, kernel: KernelChoice) -> Result<Vec<DepthRow>> {
-    cfg.validate()?;
-    let lanes = Kernel::resolve(kernel)?.lanes() as u64;
-    let opts =
-        RenderOptions { kernel, threads: cfg.threads, accel: cfg.accel, sampler: cfg.sampler, ..Default::default() };
-    let (_, probes) =
-        crate::render::render_probed(scene, cfg.settings, opts, None, &crate::probe::WorkByDepth::default)?;
+/// [`work_by_depth`] for each of the configuration's kernels.
+pub fn work_by_depth_per_kernel(job: &Job, cfg: &BenchConfig) -> Result<Vec<(Kernel, Vec<DepthRow>)>> {
+    cfg.validate(job)?;
+    cfg.jobs(job)?.iter().map(|j| Ok((j.kernel(), work_by_depth(j)?))).collect()
+}
+
+/// The work at each ray depth of one render of `job` (how coherence is lost bounce by bounce).
+pub fn work_by_depth(job: &Job) -> Result<Vec<DepthRow>> {
+    let lanes = job.kernel().lanes() as u64;
+    let (_, probes) = crate::render::render_probed(job, None, &crate::probe::WorkByDepth::default)?;
     let mut all = crate::probe::WorkByDepth::default();
     probes.iter().for_each(|p| all.merge(p));
     Ok(all
