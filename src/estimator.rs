@@ -60,6 +60,15 @@ impl Roulette {
             None => "off".into(),
         }
     }
+
+    /// What [`Roulette::describe`] wrote (`None`: text it never writes).
+    pub fn from_description(text: &str) -> Option<Option<Roulette>> {
+        if text == "off" {
+            return Some(None);
+        }
+        let n = text.strip_prefix("after ")?.strip_suffix(" rays")?.parse().ok()?;
+        Roulette::new(n).ok().map(Some)
+    }
 }
 
 /// Russian roulette on a path's throughput `thr` (after the bounce's albedo):
@@ -127,6 +136,23 @@ impl Adaptive {
         Ok(Adaptive { threshold, min_spp })
     }
 
+    /// How the film identity describes it.
+    pub fn describe(adaptive: Option<Adaptive>) -> String {
+        match adaptive {
+            Some(a) => format!("threshold {} from {} spp", a.threshold, a.min_spp),
+            None => "off".into(),
+        }
+    }
+
+    /// What [`Adaptive::describe`] wrote (`None`: text it never writes).
+    pub fn from_description(text: &str) -> Option<Option<Adaptive>> {
+        if text == "off" {
+            return Some(None);
+        }
+        let (t, m) = text.strip_prefix("threshold ")?.strip_suffix(" spp")?.split_once(" from ")?;
+        Adaptive::new(t.parse().ok()?, m.parse().ok()?).ok().map(Some)
+    }
+
     /// The next decision point after `done` samples, or `spp` if there is none
     /// before it: the kernels render samples `done..round_end(done)` and then
     /// (if more remain) ask [`Adaptive::converged`].
@@ -188,6 +214,20 @@ mod tests {
     use super::*;
     use crate::sampling::{path_state, ScalarStream, Xoshiro128PlusX8};
     use wide::{f32x8, u32x8};
+
+    #[test]
+    fn descriptions_read_back() {
+        for r in [None, Some(Roulette { after_rays: 1 }), Some(Roulette::default())] {
+            assert_eq!(Roulette::from_description(&Roulette::describe(r)), Some(r));
+        }
+        for a in [None, Some(Adaptive::new(0.02, 64).unwrap()), Some(Adaptive::new(1e-7, 2).unwrap())] {
+            assert_eq!(Adaptive::from_description(&Adaptive::describe(a)), Some(a));
+        }
+        for bad in ["", "after 0 rays", "after x rays", "threshold -1 from 64 spp", "threshold 0.1 from 1 spp", "on"] {
+            assert_eq!(Roulette::from_description(bad).flatten(), None, "{bad}");
+            assert!(Adaptive::from_description(bad).flatten().is_none(), "{bad}");
+        }
+    }
 
     #[test]
     fn decision_points_double_from_min() {

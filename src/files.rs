@@ -6,10 +6,15 @@
 //! statistics, and the order of the checks.
 
 use crate::error::{Error, Result};
-use crate::film::part::{self, is_part_path, Part, Split, SplitKind};
+use crate::estimator::{Adaptive, Roulette};
+use crate::film::part::{self, is_part_path, Header, Part, Split, SplitKind};
 use crate::job::Job;
 use crate::output::{check_extension, OutputId, Outputs};
+use crate::plan::Plan;
+use crate::probe::WorkCounters;
+use crate::provenance::Provenance;
 use crate::render::{render, render_counted, Progress, Rendered, Stats};
+use crate::sampling::Sampler;
 use crate::scene::SceneSource;
 use crate::shard::{self, FilmRequest};
 use rayon::prelude::*;
@@ -144,10 +149,137 @@ pub fn render_to_files(req: &RenderRequest, progress: Option<&(dyn Fn(Progress) 
         outputs.stage(id, &r.image.file_bytes(f, 1.0, files.names.float)?)?;
     }
     if let Some(id) = stats_id {
-        outputs.stage(id, json(&r.stats).as_bytes())?;
+        outputs.stage(id, json(&StatsFile::of_render(&r.stats, req.split)).as_bytes())?;
     }
     outputs.commit()?;
     Ok(r.stats)
+}
+
+/// The schema of every statistics file rtow writes (`render --stats-json`
+/// and `merge --stats-json`), named by its `schema` field; docs/figures.md
+/// lists the fields. A merge fills what its parts carry: the render's
+/// settings, counters and image; its seconds are the merge's; what only a
+/// render knows (kernel, lanes, rate, work counters, plan) is `null`.
+#[derive(Clone, Debug, Serialize)]
+pub struct StatsFile {
+    /// [`STATS_SCHEMA`].
+    pub schema: &'static str,
+    /// `render` or `merge`.
+    pub command: &'static str,
+    pub rays: u64,
+    /// Samples traced (accepted and rejected).
+    pub samples: u64,
+    /// Render: the render alone (scene preparation apart). Merge: the whole
+    /// merge (reading, merging, writing; see `merge`).
+    pub seconds: f64,
+    pub prepare_seconds: Option<f64>,
+    pub mrays_per_s: Option<f64>,
+    pub kernel: Option<&'static str>,
+    pub lanes: Option<u32>,
+    pub threads: usize,
+    /// The instruction set of the build that wrote the file.
+    pub isa: &'static str,
+    pub width: u32,
+    pub height: u32,
+    pub spp: u32,
+    pub max_depth: u32,
+    pub seed: u64,
+    pub russian_roulette: Option<Roulette>,
+    pub adaptive: Option<Adaptive>,
+    pub sampler: Sampler,
+    pub rejected_samples: u64,
+    pub work: Option<WorkCounters>,
+    pub image_hash: String,
+    pub plan: Option<Plan>,
+    /// Render: the piece rendered (`none`: the whole image). Merge: the
+    /// parts' split (`shard` 1 of `of` parts).
+    pub split: Split,
+    /// A merge's parts and the split of its seconds; `null` for a render.
+    pub merge: Option<MergeTimes>,
+    pub provenance: Provenance,
+}
+
+/// The value of [`StatsFile::schema`].
+pub const STATS_SCHEMA: &str = "rtow-stats/1";
+
+/// What a merge spent its time on.
+#[derive(Clone, Copy, Debug, Serialize)]
+pub struct MergeTimes {
+    pub parts: usize,
+    pub read_seconds: f64,
+    pub merge_seconds: f64,
+    pub write_seconds: f64,
+}
+
+impl StatsFile {
+    /// A render's statistics, of the piece `split`.
+    pub fn of_render(st: &Stats, split: Split) -> StatsFile {
+        StatsFile {
+            schema: STATS_SCHEMA,
+            command: "render",
+            rays: st.rays,
+            samples: st.samples,
+            seconds: st.seconds,
+            prepare_seconds: Some(st.prepare_seconds),
+            mrays_per_s: Some(st.mrays_per_s),
+            kernel: Some(st.kernel),
+            lanes: Some(st.lanes),
+            threads: st.threads,
+            isa: st.isa,
+            width: st.width,
+            height: st.height,
+            spp: st.spp,
+            max_depth: st.max_depth,
+            seed: st.seed,
+            russian_roulette: st.russian_roulette,
+            adaptive: st.adaptive,
+            sampler: st.sampler,
+            rejected_samples: st.rejected_samples,
+            work: st.work,
+            image_hash: st.image_hash.clone(),
+            plan: Some(st.plan.clone()),
+            split,
+            merge: None,
+            provenance: Provenance::collect(),
+        }
+    }
+
+    /// A merge's statistics.
+    pub fn of_merge(st: &MergeStats) -> StatsFile {
+        StatsFile {
+            schema: STATS_SCHEMA,
+            command: "merge",
+            rays: st.rays,
+            samples: st.samples,
+            seconds: st.seconds,
+            prepare_seconds: None,
+            mrays_per_s: None,
+            kernel: None,
+            lanes: None,
+            threads: st.threads,
+            isa: crate::kernel::isa(),
+            width: st.width,
+            height: st.height,
+            spp: st.spp,
+            max_depth: st.max_depth,
+            seed: st.seed,
+            russian_roulette: st.russian_roulette,
+            adaptive: st.adaptive,
+            sampler: st.sampler,
+            rejected_samples: st.rejected_samples,
+            work: None,
+            image_hash: st.image_hash.clone(),
+            plan: None,
+            split: Split { kind: st.split, shard: 1, of: st.parts as u32 },
+            merge: Some(MergeTimes {
+                parts: st.parts,
+                read_seconds: st.read_seconds,
+                merge_seconds: st.merge_seconds,
+                write_seconds: st.write_seconds,
+            }),
+            provenance: Provenance::collect(),
+        }
+    }
 }
 
 /// Pretty JSON with a final newline.
@@ -155,7 +287,7 @@ fn json<T: Serialize>(v: &T) -> String {
     serde_json::to_string_pretty(v).expect("statistics serialize") + "\n"
 }
 
-/// What a merge did.
+/// What a merge did, and the settings of the render its parts are of.
 #[derive(Clone, Debug, Serialize)]
 pub struct MergeStats {
     pub parts: usize,
@@ -163,6 +295,13 @@ pub struct MergeStats {
     pub width: u32,
     pub height: u32,
     pub spp: u32,
+    pub max_depth: u32,
+    pub seed: u64,
+    pub sampler: Sampler,
+    pub russian_roulette: Option<Roulette>,
+    pub adaptive: Option<Adaptive>,
+    /// Worker threads of the merge.
+    pub threads: usize,
     pub rays: u64,
     pub samples: u64,
     pub rejected_samples: u64,
@@ -207,12 +346,19 @@ pub fn merge_to_files(parts: &[PathBuf], files: &RenderFiles) -> Result<MergeSta
         outputs.stage(id, &image.file_bytes(f, 1.0, files.names.float)?)?;
     }
     let h = &merged.header;
+    let s = RenderSettings::of(h).map_err(|m| Error::Input(format!("{}: {m}", parts[0].display())))?;
     let mut stats = MergeStats {
         parts: parts.len(),
         split: read_parts[0].1.header.split.kind,
         width: h.width,
         height: h.height,
         spp: h.spp,
+        max_depth: s.max_depth,
+        seed: s.seed,
+        sampler: s.sampler,
+        russian_roulette: s.roulette,
+        adaptive: s.adaptive,
+        threads: rayon::current_num_threads(),
         rays: h.counters.rays,
         samples: h.counters.samples,
         rejected_samples: h.counters.rejected_samples,
@@ -225,10 +371,42 @@ pub fn merge_to_files(parts: &[PathBuf], files: &RenderFiles) -> Result<MergeSta
     stats.write_seconds = t2.elapsed().as_secs_f64();
     stats.seconds = t0.elapsed().as_secs_f64();
     if let Some(id) = stats_id {
-        outputs.stage(id, json(&stats).as_bytes())?;
+        outputs.stage(id, json(&StatsFile::of_merge(&stats)).as_bytes())?;
     }
     outputs.commit()?;
     Ok(stats)
+}
+
+/// At most the first 40 characters of `v` (a message quotes no more of an input).
+fn clip(v: &str) -> String {
+    match v.char_indices().nth(40) {
+        Some((i, _)) => format!("{}...", &v[..i]),
+        None => v.to_string(),
+    }
+}
+
+/// The settings a partial film's header carries, as the statistics name them.
+struct RenderSettings {
+    max_depth: u32,
+    seed: u64,
+    sampler: Sampler,
+    roulette: Option<Roulette>,
+    adaptive: Option<Adaptive>,
+}
+
+impl RenderSettings {
+    fn of(h: &Header) -> std::result::Result<RenderSettings, String> {
+        let get = |k: &str| h.settings.get(k).map(String::as_str).ok_or(format!("the header has no setting '{k}'"));
+        let bad = |k: &str, v: &str| format!("the header's {k} '{}' is not one rtow writes", clip(v));
+        let (d, s, sm, rr, ad) = (get("max_depth")?, get("seed")?, get("sampler")?, get("russian_roulette")?, get("adaptive")?);
+        Ok(RenderSettings {
+            max_depth: d.parse().map_err(|_| bad("max_depth", d))?,
+            seed: s.parse().map_err(|_| bad("seed", s))?,
+            sampler: sm.parse().map_err(|_| bad("sampler", sm))?,
+            roulette: Roulette::from_description(rr).ok_or_else(|| bad("russian_roulette", rr))?,
+            adaptive: Adaptive::from_description(ad).ok_or_else(|| bad("adaptive", ad))?,
+        })
+    }
 }
 
 /// The default name of a render's output: `<scene name>.png`.

@@ -67,6 +67,7 @@ mod material;
 pub mod output;
 mod plan;
 mod probe;
+pub mod provenance;
 mod real;
 mod render;
 mod sampling;

@@ -137,7 +137,7 @@ fn clap_exit(e: clap::Error) -> ! {
 }
 
 /// An error as the command line says it: a setting named by its flag.
-fn message(e: &Error) -> String {
+pub(crate) fn message(e: &Error) -> String {
     match e {
         Error::Invalid { field, message } => format!("{}: {message}", args::flag_of(field).unwrap_or(field)),
         Error::InFile { path, error } => format!("{}: {}", path.display(), message(error)),
@@ -147,7 +147,7 @@ fn message(e: &Error) -> String {
 
 pub fn main() -> ExitCode {
     rtow::output::install_signal_cleanup();
-    let version = format!("{} ({})", env!("CARGO_PKG_VERSION"), rtow::build_description());
+    let version = format!("{}\n{}", rtow::provenance::version(), rtow::build_description());
     let version: &'static str = Box::leak(version.into_boxed_str());
     let cli = match Cli::command().version(version).try_get_matches().and_then(|m| Cli::from_arg_matches(&m)) {
         Ok(c) => c,

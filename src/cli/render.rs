@@ -3,7 +3,7 @@
 //! a whole render to be resumed (`--resume`) or merged later.
 
 use super::args::{choice, kernel_parser, EstimatorArgs, ImageArgs, OutputArgs, RunArgs};
-use super::say;
+use super::{say, tell};
 use clap::Args;
 use indicatif::{ProgressBar, ProgressStyle};
 use rtow::files::{self, RenderRequest};
@@ -90,6 +90,9 @@ pub fn run(a: RenderArgs) -> Result<()> {
     let source = SceneSource::open(&a.scene)?;
     let options = a.estimator.options(a.run.options(a.kernel))?;
     let job = Job::from_source(&source, &a.image.overrides(), &options)?;
+    for w in job.warnings() {
+        tell!("warning: {}", super::message(w));
+    }
     let split = match &a.shard {
         Some(k) => Split::parse(k, a.split)?,
         None => Split::WHOLE,

@@ -142,6 +142,29 @@ impl RenderOptions {
         }
         Ok(())
     }
+
+    /// The options that act on `settings`, and a warning for each one asked
+    /// for that would not: adaptive sampling decides first after `min_spp`
+    /// samples, so with `spp <= min_spp` it never stops a pixel and is off
+    /// (the image is the one without it, bit for bit).
+    fn effective(&self, settings: &Settings) -> (RenderOptions, Vec<Error>) {
+        let mut run = *self;
+        let mut warnings = Vec::new();
+        if let Some(a) = self.adaptive {
+            if settings.spp <= a.min_spp {
+                run.adaptive = None;
+                warnings.push(Error::invalid(
+                    "adaptive.min_spp",
+                    format!(
+                        "adaptive sampling decides first after {} samples per pixel, but this render takes only {}: \
+                         it is off (the image is the one without it); ask for more than {} samples or decide earlier",
+                        a.min_spp, settings.spp, a.min_spp
+                    ),
+                ));
+            }
+        }
+        (run, warnings)
+    }
 }
 
 /// A render job: a scene with its settings, options, kernel and plan,
@@ -152,7 +175,10 @@ pub struct Job {
     scene: Scene,
     scene_hash: u64,
     settings: Settings,
+    /// The options that run (see [`Job::warnings`]) and those asked for.
     options: RenderOptions,
+    requested: RenderOptions,
+    warnings: Vec<Error>,
     kernel: Kernel,
     plan: Plan,
     prepared: OnceLock<(Prepared, f64)>,
@@ -175,7 +201,7 @@ impl Job {
     /// The same scene and options with other overrides (the instruments vary
     /// the sample count, the seed or the sampler).
     pub fn with_overrides(&self, overrides: &Overrides) -> Result<Job> {
-        Job::new(&self.scene, overrides, &self.options)
+        Job::new(&self.scene, overrides, &self.requested)
     }
 
     /// The same scene and settings with other options (another kernel, say).
@@ -196,6 +222,8 @@ impl Job {
         let settings = overrides.resolve(&scene.render);
         settings.validate()?;
         options.validate()?;
+        let requested = *options;
+        let (options, warnings) = options.effective(&settings);
         let plan = prepare::plan(scene, &settings, options.accel);
         let mut hash = Fnv1a::default();
         // Writing into a hash cannot fail, and every scene value serializes.
@@ -204,7 +232,9 @@ impl Job {
             scene: scene.clone(),
             scene_hash: hash.0,
             settings,
-            options: *options,
+            options,
+            requested,
+            warnings,
             kernel: Kernel::resolve(options.kernel),
             plan,
             prepared: OnceLock::new(),
@@ -224,8 +254,18 @@ impl Job {
         &self.settings
     }
 
+    /// The options that run: those asked for, less any that cannot act
+    /// on these settings (each one named by [`Job::warnings`]).
     pub fn options(&self) -> &RenderOptions {
         &self.options
+    }
+
+    /// What was asked for but does not run, and why (an option that has no
+    /// effect on these settings): a setting's name and a message, as
+    /// [`Error::Invalid`], for the caller to show as a warning. The
+    /// statistics report what ran.
+    pub fn warnings(&self) -> &[Error] {
+        &self.warnings
     }
 
     /// The kernel that runs (`simd` resolved to this build's lane width).
@@ -293,13 +333,7 @@ impl Job {
         set("pixel_jitter", self.plan.jitter.to_string());
         set("sampler", s.sampler.name().to_string());
         set("russian_roulette", Roulette::describe(self.options.roulette));
-        set(
-            "adaptive",
-            match self.options.adaptive {
-                Some(a) => format!("threshold {} from {} spp", a.threshold, a.min_spp),
-                None => "off".into(),
-            },
-        );
+        set("adaptive", Adaptive::describe(self.options.adaptive));
         Identity { scene_hash: self.scene_hash, width: s.width, height: s.height, settings: map }
     }
 }
@@ -341,6 +375,26 @@ mod tests {
         let rr = Some(Roulette { after_rays: 0 });
         assert!(refuse(RenderOptions { roulette: rr, ..Default::default() }).starts_with("roulette.after_rays:"));
         assert!(refuse(RenderOptions { threads: Some(0), ..Default::default() }).starts_with("threads:"));
+    }
+
+    #[test]
+    fn adaptive_sampling_that_cannot_act_is_off_and_says_so() {
+        let scene = preset("ch07-diffuse").unwrap();
+        let opts = RenderOptions { adaptive: Some(Adaptive::new(0.05, 16).unwrap()), ..Default::default() };
+        for (spp, on) in [(8, false), (16, false), (17, true)] {
+            let o = Overrides { spp: Some(spp), ..Default::default() };
+            let job = Job::new(&scene, &o, &opts).unwrap();
+            assert_eq!(job.options().adaptive.is_some(), on, "spp {spp}");
+            assert_eq!(job.warnings().len(), usize::from(!on), "spp {spp}");
+            if !on {
+                let w = job.warnings()[0].to_string();
+                assert!(w.starts_with("adaptive.min_spp:") && w.contains(&format!("takes only {spp}:")), "{w}");
+                assert_eq!(job.identity().settings["adaptive"], "off");
+            }
+            // Another sample count starts again from what was asked for.
+            let more = job.with_overrides(&Overrides { spp: Some(64), ..Default::default() }).unwrap();
+            assert!(more.options().adaptive.is_some() && more.warnings().is_empty());
+        }
     }
 
     #[test]
