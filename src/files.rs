@@ -377,14 +377,6 @@ pub fn merge_to_files(parts: &[PathBuf], files: &RenderFiles) -> Result<MergeSta
     Ok(stats)
 }
 
-/// At most the first 40 characters of `v` (a message quotes no more of an input).
-fn clip(v: &str) -> String {
-    match v.char_indices().nth(40) {
-        Some((i, _)) => format!("{}...", &v[..i]),
-        None => v.to_string(),
-    }
-}
-
 /// The settings a partial film's header carries, as the statistics name them.
 struct RenderSettings {
     max_depth: u32,
@@ -397,7 +389,7 @@ struct RenderSettings {
 impl RenderSettings {
     fn of(h: &Header) -> std::result::Result<RenderSettings, String> {
         let get = |k: &str| h.settings.get(k).map(String::as_str).ok_or(format!("the header has no setting '{k}'"));
-        let bad = |k: &str, v: &str| format!("the header's {k} '{}' is not one rtow writes", clip(v));
+        let bad = |k: &str, v: &str| format!("the header's {k} '{}' is not one rtow writes", crate::output::clip(v));
         let (d, s, sm, rr, ad) = (get("max_depth")?, get("seed")?, get("sampler")?, get("russian_roulette")?, get("adaptive")?);
         Ok(RenderSettings {
             max_depth: d.parse().map_err(|_| bad("max_depth", d))?,

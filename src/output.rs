@@ -145,6 +145,20 @@ fn same_file(a: &Path, b: &Path) -> bool {
     same_inode(a, b) || matches!((identity(a), identity(b)), (Some(x), Some(y)) if x == y)
 }
 
+/// At most the first 40 characters of an input's text, for a message (an
+/// error line never repeats an unbounded input).
+pub fn clip(text: &str) -> String {
+    clip_to(text, 40)
+}
+
+/// At most the first `n` characters of `text`, `...` marking a cut.
+pub fn clip_to(text: &str, n: usize) -> String {
+    match text.char_indices().nth(n) {
+        Some((i, _)) => format!("{}...", &text[..i]),
+        None => text.to_string(),
+    }
+}
+
 /// Checks that the extension of `path` is one of `allowed` (lower case,
 /// without the dot); otherwise a usage error (exit status 2) naming them.
 pub fn check_extension(path: &Path, allowed: &[&str], flag: &str) -> Result<()> {

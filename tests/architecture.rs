@@ -15,7 +15,7 @@ const LAYERS: &[(&str, &[&str])] = &[
     ("user side", &["scene"]),
     ("kernel side", &["probe", "film", "material", "geometry", "camera", "estimator", "plan", "kernel"]),
     ("bridge", &["job"]),
-    ("driver", &["render", "shard", "files"]),
+    ("driver", &["render", "shard", "files", "provenance"]),
     ("instruments", &["instruments"]),
 ];
 

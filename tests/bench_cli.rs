@@ -12,10 +12,28 @@ fn bench(dir: &Path, extra: &[&str]) -> Run {
 }
 
 fn bench_spp(dir: &Path, spp: &str, extra: &[&str]) -> Run {
-    let mut args = vec!["bench", "ch05-ground", "--kernels", "scalar,simd", "--repeat", "1"];
+    let mut args = vec!["bench", "ch05-ground", "--kernels", "scalar,simd"];
     args.extend(["--width", "24", "--height", "14", "--spp", spp, "--threads", "1"]);
+    if !extra.contains(&"--repeat") {
+        args.extend(["--repeat", "1"]);
+    }
     args.extend_from_slice(extra);
     rtow(dir, &args)
+}
+
+/// A kernel entry of a baseline made `factor` times faster, consistently
+/// (rate, median seconds and every run).
+fn faster(k: &mut serde_json::Value, factor: f64) {
+    let m = k["mrays_per_s"].as_f64().unwrap();
+    k["mrays_per_s"] = (m * factor).into();
+    let rays = k["rays"].as_f64().unwrap();
+    k["seconds"] = (rays / (m * factor) / 1e6).into();
+    let runs: Vec<f64> = k["runs_seconds"].as_array().unwrap().iter().map(|t| t.as_f64().unwrap() / factor).collect();
+    let mut sorted = runs.clone();
+    sorted.sort_by(f64::total_cmp);
+    k["seconds"] = sorted[sorted.len() / 2].into();
+    k["mrays_per_s"] = (rays / sorted[sorted.len() / 2] / 1e6).into();
+    k["runs_seconds"] = runs.into();
 }
 
 fn edit(path: &Path, f: impl Fn(&mut serde_json::Value)) {
@@ -58,10 +76,7 @@ fn baseline_catches_a_changed_image_and_a_slowdown() {
     // A baseline 1000x faster: this run is a slowdown beyond 5%: exit 1.
     let fast = dir.path().join("fast.json");
     std::fs::copy(&base, &fast).unwrap();
-    edit(&fast, |v| {
-        let m = v["kernels"][1]["mrays_per_s"].as_f64().unwrap();
-        v["kernels"][1]["mrays_per_s"] = (m * 1000.0).into();
-    });
+    edit(&fast, |v| faster(&mut v["kernels"][1], 1000.0));
     let r = bench(dir.path(), &["--baseline", "fast.json"]);
     assert_eq!(r.code, 1);
     assert!(r.stdout.contains("REGRESSION"));
@@ -71,8 +86,11 @@ fn baseline_catches_a_changed_image_and_a_slowdown() {
     let less = dir.path().join("less.json");
     std::fs::copy(&base, &less).unwrap();
     edit(&less, |v| {
-        let n = v["kernels"][1]["work"]["sphere_tests"].as_u64().unwrap();
-        v["kernels"][1]["work"]["sphere_tests"] = (n / 2).into();
+        // Half the sphere tests, and so at most half the square roots.
+        for k in ["sphere_tests", "roots"] {
+            let n = v["kernels"][1]["work"][k].as_u64().unwrap();
+            v["kernels"][1]["work"][k] = (n / 2).into();
+        }
     });
     let r = bench(dir.path(), &["--baseline", "less.json", "--tolerance", "100"]);
     let out = r.stdout.clone();
@@ -88,4 +106,91 @@ fn baseline_catches_a_changed_image_and_a_slowdown() {
     let err = r.stderr;
     assert_eq!(r.code, 2, "{err}");
     assert!(err.contains("baseline settings"), "{err}");
+}
+
+#[test]
+fn gate_work_passes_a_slowdown_and_a_baseline_of_other_threads_is_refused() {
+    let dir = tempfile::tempdir().unwrap();
+    let d = dir.path();
+    assert_eq!(bench(d, &["--repeat", "2", "--save", "base.json"]).code, 0);
+    let fast = d.join("fast.json");
+    std::fs::copy(d.join("base.json"), &fast).unwrap();
+    edit(&fast, |v| faster(&mut v["kernels"][1], 1000.0));
+    // Gated on time: a regression; gated on the work: the same image and work pass.
+    let r = bench(d, &["--repeat", "2", "--baseline", "fast.json"]);
+    assert_eq!(r.code, 1, "{}", r.stdout);
+    assert!(r.stdout.contains("CI"), "a noise estimate from 2 runs a side: {}", r.stdout);
+    let r = bench(d, &["--repeat", "2", "--baseline", "fast.json", "--gate", "work"]);
+    assert_eq!(r.code, 0, "{}{}", r.stdout, r.stderr);
+    assert!(r.stdout.contains("timing only, slower") && r.stdout.contains("not gated"), "{}", r.stdout);
+    // The same settings on another thread count: refused like other settings (exit 2).
+    let mut args = vec!["bench", "ch05-ground", "--kernels", "scalar,simd", "--repeat", "1"];
+    args.extend(["--width", "24", "--height", "14", "--spp", "2", "--threads", "2", "--baseline", "base.json"]);
+    let r = rtow(d, &args);
+    assert_eq!(r.code, 2, "{}", r.stderr);
+    assert!(r.stderr.contains("1 thread(s), this run on 2"), "{}", r.stderr);
+}
+
+#[test]
+fn baselines_with_impossible_figures_are_refused() {
+    let dir = tempfile::tempdir().unwrap();
+    let d = dir.path();
+    assert_eq!(bench(d, &["--repeat", "2", "--save", "base.json"]).code, 0);
+    type Edit = fn(&mut serde_json::Value);
+    let cases: [(&str, Edit, &str); 8] = [
+        ("zero rate", |k| k["mrays_per_s"] = 0.0.into(), "Mrays/s"),
+        ("rate and time disagree", |k| k["mrays_per_s"] = (k["mrays_per_s"].as_f64().unwrap() * 2.0).into(), "disagree"),
+        ("negative time", |k| k["seconds"] = (-1.0).into(), "not a measurement"),
+        ("no rays", |k| k["rays"] = 0.into(), "not a measurement"),
+        ("a run of 0 s", |k| k["runs_seconds"][0] = 0.0.into(), "runs_seconds"),
+        ("no threads", |k| k["threads"] = 0.into(), "thread"),
+        ("bad hash", |k| k["image_hash"] = "xyz".into(), "image hash"),
+        ("more roots than sphere tests", |k| k["work"]["roots"] = (k["work"]["sphere_tests"].as_u64().unwrap() + 1).into(), "work counters"),
+    ];
+    for (what, f, needle) in cases {
+        let path = d.join("bad.json");
+        std::fs::copy(d.join("base.json"), &path).unwrap();
+        edit(&path, |v| f(&mut v["kernels"][1]));
+        let r = bench(d, &["--baseline", "bad.json"]);
+        assert_eq!(r.code, 2, "{what}: {}", r.stderr);
+        let line = r.stderr.trim();
+        assert!(line.lines().count() == 1 && line.contains("bad.json") && line.contains(needle), "{what}: {line}");
+    }
+}
+
+/// The verdicts from real runs of this machine: the same runs as a baseline
+/// are within noise (never a regression); a baseline ten times faster is a
+/// regression gated on time and passes gated on the work.
+#[test]
+fn the_verdict_knows_the_noise_of_the_runs() {
+    use rtow::instruments::bench::{self, Baseline, BaselineVerdict, BenchConfig, Gate};
+    let scene = rtow::scene::preset("ch07-diffuse").unwrap();
+    let o = rtow::Overrides { width: Some(32), height: Some(18), spp: Some(2), ..Default::default() };
+    let opts = rtow::RenderOptions { threads: Some(1), ..Default::default() };
+    let job = rtow::Job::new(&scene, &o, &opts).unwrap();
+    let cfg = BenchConfig {
+        kernels: vec![rtow::KernelChoice::Simd8],
+        repeat: 5,
+        tolerance: 0.0,
+        gate: Gate::Time,
+    };
+    let report = bench::run(&job, "ch07-diffuse", &cfg, |_, _, _| {}).unwrap();
+    let saved = |scale: f64| -> Baseline {
+        let mut v: serde_json::Value = serde_json::from_str(&report.to_json()).unwrap();
+        faster(&mut v["kernels"][0], scale);
+        Baseline::from_bytes(v.to_string().as_bytes(), Path::new("b.json")).unwrap()
+    };
+    let runs = &report.kernels[0].runs_seconds;
+    let c = &bench::compare(&report, &saved(1.0), 0.0, Gate::Time)[0];
+    let ci = c.change_ci.expect("5 runs a side give an interval");
+    assert!((ci.level - (1.0 - 8.0 / 252.0)).abs() < 1e-12, "{ci:?}");
+    assert!(ci.lo <= c.change_percent && c.change_percent <= ci.hi && !c.regressed, "{c:?}");
+    if runs.iter().any(|&t| t != runs[0]) {
+        assert_eq!(c.verdict, BaselineVerdict::WithinNoise, "{c:?}");
+    }
+    let c = &bench::compare(&report, &saved(10.0), 5.0, Gate::Time)[0];
+    assert!(c.regressed && c.verdict == BaselineVerdict::TimingOnly && c.change_ci.unwrap().hi < -5.0, "{c:?}");
+    assert!(!bench::compare(&report, &saved(10.0), 5.0, Gate::Work)[0].regressed);
+    let c = &bench::compare(&report, &saved(0.1), 5.0, Gate::Time)[0];
+    assert!(!c.regressed && c.verdict == BaselineVerdict::TimingOnly && c.change_percent > 0.0, "{c:?}");
 }

@@ -1,9 +1,9 @@
 //! `rtow bench`: rays/s and work per ray of each kernel; baselines.
 
-use super::args::{kernel_parser, ImageArgs, RunArgs};
+use super::args::{choice, kernel_parser, ImageArgs, RunArgs};
 use super::{say, tell};
 use clap::Args;
-use rtow::instruments::bench::{self, Baseline, BaselineVerdict, BenchConfig, DEFAULT_REPEAT};
+use rtow::instruments::bench::{self, Baseline, BaselineVerdict, BenchConfig, Gate, DEFAULT_REPEAT, DEFAULT_TOLERANCE};
 use rtow::output::Outputs;
 use rtow::{Job, KernelChoice, Result, SceneSource};
 use std::path::PathBuf;
@@ -29,13 +29,19 @@ pub struct BenchArgs {
     /// Save the report as a baseline for later runs.
     #[arg(long, value_name = "FILE")]
     save: Option<PathBuf>,
-    /// Compare with a saved baseline: exit status 1 if the image changed, the work
-    /// per ray grew, or throughput fell by more than the tolerance.
+    /// Compare with a saved baseline of the same scene, settings and thread count:
+    /// exit status 1 if the image changed, the work per ray grew, or (--gate time)
+    /// throughput fell by more than the tolerance beyond the noise of the runs.
     #[arg(long, value_name = "FILE")]
     baseline: Option<PathBuf>,
     /// Allowed throughput drop against the baseline, in percent.
-    #[arg(long, default_value_t = 5.0)]
+    #[arg(long, default_value_t = DEFAULT_TOLERANCE, allow_negative_numbers = true)]
     tolerance: f64,
+    /// What a comparison with --baseline fails on: time (the image, the work, and a
+    /// slowdown the noise cannot explain) or work (the image and the exact work
+    /// counters only: for a noisy CI; timings are still printed).
+    #[arg(long, value_parser = choice::<Gate>(Gate::NAMES), default_value = "time")]
+    gate: Gate,
     /// Instead of timing: the traversal work per packet at each ray depth (how
     /// coherence is lost bounce by bounce), for each kernel, from one counted render.
     #[arg(long)]
@@ -47,12 +53,12 @@ pub fn run(a: BenchArgs) -> Result<bool> {
     let source = SceneSource::open(&a.scene)?;
     let job = Job::from_source(&source, &a.image.overrides(), &a.run.options(KernelChoice::Simd))?;
     let name = &source.name;
-    let cfg = BenchConfig { kernels: a.kernels.clone(), repeat: a.repeat, tolerance: a.tolerance };
+    let cfg = BenchConfig { kernels: a.kernels.clone(), repeat: a.repeat, tolerance: a.tolerance, gate: a.gate };
     // Everything is checked before anything is measured.
     cfg.validate(&job)?;
     let baseline = a.baseline.as_deref().map(Baseline::load).transpose()?;
     if let Some(b) = &baseline {
-        b.check(name, job.settings(), &a.kernels)?;
+        b.check(name, job.settings(), job.threads(), &a.kernels)?;
     }
     // The outputs are one transaction: distinct from each other and from the
     // inputs, checked now, written together after the measurements.
@@ -97,20 +103,25 @@ pub fn run(a: BenchArgs) -> Result<bool> {
         outputs.stage(id, json.as_bytes())?;
     }
     outputs.commit()?;
-    Ok(baseline.as_ref().is_none_or(|b| print_comparison(&report, b, cfg.tolerance)))
+    Ok(baseline.as_ref().is_none_or(|b| print_comparison(&report, b, &cfg)))
 }
 
 /// Prints the verdict of each kernel against the baseline; false on a regression.
-fn print_comparison(report: &bench::BenchReport, b: &Baseline, tolerance: f64) -> bool {
+fn print_comparison(report: &bench::BenchReport, b: &Baseline, cfg: &BenchConfig) -> bool {
     let mut ok = true;
-    for c in bench::compare(report, b, tolerance) {
+    for c in bench::compare(report, b, cfg.tolerance, cfg.gate) {
         let work = match c.work_change_percent {
             None => "work: not in the baseline".to_string(),
             Some(0.0) => "work identical".to_string(),
             Some(w) => format!("work {w:+.2}%"),
         };
+        let noise = match c.change_ci {
+            Some(ci) => format!("{:.0}% CI {:+.1}% to {:+.1}%", 100.0 * ci.level, ci.lo, ci.hi),
+            None => "no noise estimate: give both runs --repeat 2 or more".to_string(),
+        };
+        let timing = if c.change_percent < 0.0 { "slower" } else { "faster" };
         say!(
-            "{:<7} baseline {:.2} Mrays/s -> {:.2} Mrays/s ({:+.1}%), image {}, {work}: {}{}",
+            "{:<7} baseline {:.2} Mrays/s -> {:.2} Mrays/s ({:+.1}%, {noise}), image {}, {work}: {}{}",
             c.kernel,
             c.baseline_mrays,
             c.mrays,
@@ -118,10 +129,13 @@ fn print_comparison(report: &bench::BenchReport, b: &Baseline, tolerance: f64) -
             if c.image_same { "identical" } else { "CHANGED" },
             if c.regressed { "REGRESSION" } else { "ok" },
             match c.verdict {
-                BaselineVerdict::Same => "",
-                BaselineVerdict::TimingOnly => " (timing only: same image and work)",
-                BaselineVerdict::Work => " (the algorithm's work changed)",
-                BaselineVerdict::Image => " (the image changed)",
+                BaselineVerdict::Same => format!(" (within the {}% tolerance)", cfg.tolerance),
+                BaselineVerdict::WithinNoise => " (within noise: the runs cannot tell this change from the machine's noise)".into(),
+                BaselineVerdict::TimingOnly if cfg.gate == Gate::Work =>
+                    format!(" (timing only, {timing}: same image and work; not gated with --gate work)"),
+                BaselineVerdict::TimingOnly => format!(" (timing only, {timing}: same image and work)"),
+                BaselineVerdict::Work => " (the algorithm's work changed)".into(),
+                BaselineVerdict::Image => " (the image changed)".into(),
             }
         );
         ok &= !c.regressed;

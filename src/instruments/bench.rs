@@ -6,13 +6,19 @@
 //! Timed renders run with the probe off (`()`); one more render per kernel runs
 //! with [`WorkCounters`] on. The counters are deterministic for a seed and the
 //! settings, so a change in them is a change in the algorithm, whatever the
-//! machine's load; a change in time alone is labelled as such.
+//! machine's load. Timings are not: each kernel reports the spread of its
+//! runs, and against a baseline the change in throughput comes with a
+//! confidence interval ([`super::noise`]); a change the interval cannot tell
+//! from noise is reported as such, and [`Gate::Work`] gates on the image and
+//! the work alone (what a noisy CI should use).
 
+use super::noise::{self, Interval, Spread};
 use crate::choice::KernelChoice;
 use crate::error::{Error, Result};
 use crate::job::{Job, RenderOptions, DEFAULT_TILE};
 use crate::kernel::Kernel;
 use crate::probe::WorkCounters;
+use crate::provenance::Provenance;
 use crate::render::{render, render_counted, Stats};
 use crate::sampling::Sampler;
 use crate::settings::Settings;
@@ -21,6 +27,37 @@ use std::path::Path;
 
 /// Timed renders per kernel by default.
 pub const DEFAULT_REPEAT: usize = 3;
+/// Allowed throughput drop against a baseline by default, in percent.
+pub const DEFAULT_TOLERANCE: f64 = 5.0;
+/// The value of [`BenchReport::schema`].
+pub const BENCH_SCHEMA: &str = "rtow-bench/1";
+
+/// What a comparison with a baseline fails on.
+#[derive(Clone, Copy, Debug, Default, PartialEq, Eq)]
+pub enum Gate {
+    /// The image, the work, and a slowdown beyond the tolerance that the
+    /// noise cannot explain.
+    #[default]
+    Time,
+    /// The image and the exact work counters only: independent of the
+    /// machine's load, for a noisy CI. Timings are still reported.
+    Work,
+}
+
+impl Gate {
+    pub const NAMES: &'static [&'static str] = &["time", "work"];
+}
+
+impl std::str::FromStr for Gate {
+    type Err = String;
+    fn from_str(s: &str) -> std::result::Result<Self, String> {
+        match s {
+            "time" => Ok(Gate::Time),
+            "work" => Ok(Gate::Work),
+            _ => Err(format!("'{s}' is not one of {}", Gate::NAMES.join(", "))),
+        }
+    }
+}
 
 /// What to measure: each of `kernels` on a job's scene, settings and options.
 #[derive(Clone, Debug)]
@@ -30,6 +67,8 @@ pub struct BenchConfig {
     pub repeat: usize,
     /// Allowed throughput drop against a baseline, in percent.
     pub tolerance: f64,
+    /// What a comparison with a baseline fails on.
+    pub gate: Gate,
 }
 
 impl BenchConfig {
@@ -41,8 +80,8 @@ impl BenchConfig {
         if self.kernels.is_empty() {
             return Err(Error::invalid("kernels", "name at least one kernel"));
         }
-        if !(self.tolerance >= 0.0) {
-            return Err(Error::invalid("tolerance", "must be a percentage >= 0"));
+        if !(self.tolerance >= 0.0 && self.tolerance.is_finite()) {
+            return Err(Error::invalid("tolerance", format!("must be a percentage >= 0, got {}", self.tolerance)));
         }
         if job.options().tile != DEFAULT_TILE {
             return Err(Error::invalid("tile", format!("benchmarks use the default tile size, {DEFAULT_TILE}")));
@@ -51,7 +90,7 @@ impl BenchConfig {
     }
 
     /// `job` with each kernel.
-    fn jobs(&self, job: &Job) -> Result<Vec<Job>> {
+    pub(crate) fn jobs(&self, job: &Job) -> Result<Vec<Job>> {
         self.kernels.iter().map(|&kernel| job.with_options(&RenderOptions { kernel, ..*job.options() })).collect()
     }
 }
@@ -77,8 +116,8 @@ impl PerRay {
     }
 }
 
-/// One kernel's measurement: the median run's stats, the exact work, and the
-/// speedup over scalar.
+/// One kernel's measurement: the median run's stats, the exact work, the
+/// spread of the runs and the speedup over scalar.
 #[derive(Clone, Debug, Serialize)]
 pub struct BenchEntry {
     #[serde(flatten)]
@@ -88,13 +127,21 @@ pub struct BenchEntry {
     pub speedup: Option<f64>,
     /// Seconds of every timed repetition, in run order.
     pub runs_seconds: Vec<f64>,
+    /// Their minimum, median and maximum, and a confidence interval for the median.
+    pub spread: Spread,
 }
 
+/// What `rtow bench` measured, and where (the JSON `--json` and `--save` write).
 #[derive(Clone, Debug, Serialize)]
 pub struct BenchReport {
+    /// [`BENCH_SCHEMA`].
+    pub schema: &'static str,
     pub scene: String,
     pub repeat: usize,
+    /// Worker threads of every render.
+    pub threads: usize,
     pub kernels: Vec<BenchEntry>,
+    pub provenance: Provenance,
 }
 
 /// Renders `job`'s scene `repeat` times with each kernel (median kept), then
@@ -106,6 +153,7 @@ pub fn run(
     mut on_run: impl FnMut(Kernel, usize, &Stats),
 ) -> Result<BenchReport> {
     cfg.validate(job)?;
+    let provenance = Provenance::collect();
     let mut entries = Vec::new();
     for job in cfg.jobs(job)? {
         let kernel = job.kernel();
@@ -133,7 +181,8 @@ pub fn run(
         let work = counted.work.expect("a counted render has counters");
         median.work = Some(work);
         let work_per_ray = PerRay::new(&work, median.rays);
-        entries.push(BenchEntry { stats: median, work_per_ray, speedup: None, runs_seconds });
+        let spread = Spread::of(&runs_seconds);
+        entries.push(BenchEntry { stats: median, work_per_ray, speedup: None, runs_seconds, spread });
     }
     let scalar = entries.iter().find(|e| e.stats.kernel == "scalar").map(|e| e.stats.mrays_per_s);
     if let Some(base) = scalar {
@@ -141,18 +190,29 @@ pub fn run(
             e.speedup = Some(e.stats.mrays_per_s / base);
         }
     }
-    Ok(BenchReport { scene: name.to_string(), repeat: cfg.repeat, kernels: entries })
+    let threads = entries.first().map_or_else(|| job.threads(), |e| e.stats.threads);
+    Ok(BenchReport {
+        schema: BENCH_SCHEMA,
+        scene: name.to_string(),
+        repeat: cfg.repeat,
+        threads,
+        kernels: entries,
+        provenance,
+    })
 }
 
 impl BenchReport {
     /// The table `rtow bench` prints.
     pub fn table(&self) -> String {
+        let level = self.kernels.iter().find_map(|e| e.spread.median_ci).map(|c| c.level);
+        let ci_head = level.map_or("median CI".to_string(), |l| format!("{:.0}% CI", 100.0 * l));
         let mut t = format!(
-            "{:<7} {:>12} {:>9} {:>9} {:>8} {:>7} {:>7} {:>7} {:>7} {:>7} {:>7}  {}\n",
+            "{:<7} {:>12} {:>9} {:>9} {:>13} {:>8} {:>7} {:>7} {:>7} {:>7} {:>7} {:>7}  {}\n",
             "kernel",
             "rays",
             "seconds",
             "Mrays/s",
+            ci_head,
             "speedup",
             "isect%",
             "scat%",
@@ -166,12 +226,16 @@ impl BenchReport {
             let s = &e.stats;
             let (isect, scatter) = s.work.map_or((None, None), |w| w.occupancy());
             let w = &e.work_per_ray;
+            let rate = |secs: f64| s.rays as f64 / secs / 1e6;
+            // A time interval is a rate interval the other way round.
+            let ci = e.spread.median_ci.map_or("-".to_string(), |c| format!("{:.2}-{:.2}", rate(c.hi), rate(c.lo)));
             t += &format!(
-                "{:<7} {:>12} {:>9.3} {:>9.2} {:>8} {:>7} {:>7} {:>7.2} {:>7.2} {:>7.2} {:>7.2}  {}\n",
+                "{:<7} {:>12} {:>9.3} {:>9.2} {:>13} {:>8} {:>7} {:>7} {:>7.2} {:>7.2} {:>7.2} {:>7.2}  {}\n",
                 s.kernel,
                 s.rays,
                 s.seconds,
                 s.mrays_per_s,
+                ci,
                 e.speedup.map_or("-".to_string(), |x| format!("{x:.2}x")),
                 pct(isect),
                 pct(scatter),
@@ -182,7 +246,12 @@ impl BenchReport {
                 s.image_hash
             );
         }
-        t += "(work per ray: node visits, box tests, sphere tests and square roots, per packet or per ray as the kernel issues them)\n";
+        t += &format!(
+            "(seconds and Mrays/s: the median of {} run(s); CI: a distribution-free confidence interval for the median \
+             rate, from the order statistics of the runs; work per ray: node visits, box tests, sphere tests and square \
+             roots, per packet or per ray as the kernel issues them)\n",
+            self.repeat
+        );
         t
     }
 
@@ -199,7 +268,11 @@ fn pct(x: Option<f64>) -> String {
 #[derive(Clone, Debug, Deserialize)]
 pub struct BaselineEntry {
     pub kernel: String,
+    pub rays: u64,
+    /// The median run's seconds and rate.
+    pub seconds: f64,
     pub mrays_per_s: f64,
+    pub threads: usize,
     pub image_hash: String,
     pub width: u32,
     pub height: u32,
@@ -212,33 +285,134 @@ pub struct BaselineEntry {
     /// The sampler (absent in baselines saved before there was a choice: independent).
     #[serde(default)]
     pub sampler: Option<String>,
+    /// Every timed run (absent in the oldest baselines: no noise estimate then).
+    #[serde(default)]
+    pub runs_seconds: Option<Vec<f64>>,
 }
 
+/// A saved `rtow bench --save` report, as a comparison reads it.
 #[derive(Clone, Debug, Deserialize)]
 pub struct Baseline {
     pub scene: String,
     pub kernels: Vec<BaselineEntry>,
 }
 
+/// Relative difference of two positive numbers.
+fn rel_diff(a: f64, b: f64) -> f64 {
+    (a - b).abs() / a.abs().max(b.abs())
+}
+
 impl Baseline {
     pub fn load(path: &Path) -> Result<Baseline> {
         let bytes = crate::limits::read_bounded(path, crate::limits::MAX_BASELINE_BYTES, "baseline")?;
-        serde_json::from_slice(&bytes)
-            .map_err(|e| Error::Parse { path: path.to_path_buf(), message: format!("not a rtow bench baseline: {e}") })
+        Baseline::from_bytes(&bytes, path)
     }
 
-    /// Checks, before anything is measured, that this baseline measured the same
-    /// scene and settings and has at least one of `kernels`.
-    pub fn check(&self, scene: &str, s: &Settings, kernels: &[KernelChoice]) -> Result<()> {
+    /// Parses a baseline read from `path` and refuses impossible figures
+    /// (every error names `path`; exit status 2).
+    pub fn from_bytes(bytes: &[u8], path: &Path) -> Result<Baseline> {
+        let b: Baseline = serde_json::from_slice(bytes).map_err(|e| {
+            // serde quotes the offending input: a bounded part of it, and the position.
+            let text = e.to_string();
+            let text = text.rsplit_once(" at line ").map_or(text.as_str(), |(t, _)| t);
+            let message = format!(
+                "not a rtow bench baseline: {} (line {}, column {})",
+                crate::output::clip_to(text, 160),
+                e.line(),
+                e.column()
+            );
+            Error::Parse { path: path.to_path_buf(), message }
+        })?;
+        b.validate().map_err(|m| Error::Parse { path: path.to_path_buf(), message: m })?;
+        Ok(b)
+    }
+
+    /// Every figure possible and consistent with the others: a measurement
+    /// that could not have been made is refused, not compared.
+    fn validate(&self) -> std::result::Result<(), String> {
+        if self.kernels.is_empty() {
+            return Err("the baseline has no kernel".into());
+        }
+        for (i, b) in self.kernels.iter().enumerate() {
+            let k = &b.kernel;
+            let bad = |m: String| format!("kernel {}: {m}", crate::output::clip(k));
+            let lanes = match k.as_str() {
+                "scalar" => 1,
+                "simd8" => 8,
+                "simd16" => 16,
+                _ => return Err(format!("kernels[{i}]: unknown kernel '{}'", crate::output::clip(k))),
+            };
+            if self.kernels[..i].iter().any(|o| &o.kernel == k) {
+                return Err(bad("measured twice".into()));
+            }
+            if !(b.rays > 0 && b.seconds.is_finite() && b.seconds > 0.0) {
+                return Err(bad(format!("{} rays in {} s is not a measurement", b.rays, b.seconds)));
+            }
+            if !(b.mrays_per_s.is_finite() && b.mrays_per_s > 0.0)
+                || rel_diff(b.mrays_per_s, b.rays as f64 / b.seconds / 1e6) > 1e-6
+            {
+                return Err(bad(format!(
+                    "{} Mrays/s is not {} rays in {} s: the figures disagree",
+                    b.mrays_per_s, b.rays, b.seconds
+                )));
+            }
+            if let Some(runs) = &b.runs_seconds {
+                if runs.is_empty() || runs.iter().any(|t| !(t.is_finite() && *t > 0.0)) {
+                    return Err(bad("runs_seconds must be positive times".into()));
+                }
+                let mut sorted = runs.clone();
+                sorted.sort_by(f64::total_cmp);
+                if rel_diff(sorted[sorted.len() / 2], b.seconds) > 1e-9 {
+                    return Err(bad(format!("{} s is not the median of its runs {runs:?}", b.seconds)));
+                }
+            }
+            if !(1..=crate::limits::MAX_THREADS).contains(&b.threads) {
+                return Err(bad(format!("{} threads is not a thread count", b.threads)));
+            }
+            if b.image_hash.len() != 16 || !b.image_hash.bytes().all(|c| c.is_ascii_hexdigit()) {
+                return Err(bad(format!("'{}' is not an image hash", crate::output::clip(&b.image_hash))));
+            }
+            let samples = b.width as u64 * b.height as u64 * b.spp as u64;
+            if samples == 0 || b.max_depth == 0 || b.rays < samples || b.rays > samples.saturating_mul(b.max_depth as u64) {
+                return Err(bad(format!(
+                    "{} rays cannot come from {}x{} pixels, {} spp and depth {}",
+                    b.rays, b.width, b.height, b.spp, b.max_depth
+                )));
+            }
+            if let Some(w) = b.work {
+                // A packet has `lanes` lanes and at least one of them active.
+                let lanes_ok = |active: u64, total: u64| {
+                    active <= total && total <= active.saturating_mul(lanes) && total % lanes == 0
+                };
+                if w.roots > w.sphere_tests
+                    || w.box_tests > w.nodes.saturating_mul(8)
+                    || !lanes_ok(w.isect_active, w.isect_lanes)
+                    || !lanes_ok(w.scatter_active, w.scatter_lanes)
+                    || (lanes > 1 && w.isect_active != b.rays)
+                {
+                    return Err(bad("the work counters contradict each other or the rays".into()));
+                }
+            }
+        }
+        Ok(())
+    }
+
+    /// Checks, before anything is measured, that this baseline measured the
+    /// same scene and settings with as many threads and has at least one of `kernels`.
+    pub fn check(&self, scene: &str, s: &Settings, threads: usize, kernels: &[KernelChoice]) -> Result<()> {
         let sampler = s.sampler;
         if self.scene != scene {
-            return Err(Error::Input(format!("baseline is of scene '{}', this run of '{scene}'", self.scene)));
+            return Err(Error::Input(format!(
+                "baseline is of scene '{}', this run of '{scene}'",
+                crate::output::clip(&self.scene)
+            )));
         }
         for b in &self.kernels {
             let theirs = b.sampler.as_deref().unwrap_or(Sampler::Independent.name());
             if theirs != sampler.name() {
                 return Err(Error::Input(format!(
-                    "baseline sampler {theirs} differs from this run's {}",
+                    "baseline sampler {} differs from this run's {}",
+                    crate::output::clip(theirs),
                     sampler.name()
                 )));
             }
@@ -248,6 +422,13 @@ impl Baseline {
                 return Err(Error::Input(format!(
                     "baseline settings {}x{} {} spp depth {} seed {} differ from this run's {}x{} {} spp depth {} seed {}",
                     b.width, b.height, b.spp, b.max_depth, b.seed, s.width, s.height, s.spp, s.max_depth, s.seed
+                )));
+            }
+            if b.threads != threads {
+                return Err(Error::Input(format!(
+                    "baseline {} kernel ran on {} thread(s), this run on {threads}: rates on other thread counts \
+                     do not compare (set --threads {})",
+                    b.kernel, b.threads, b.threads
                 )));
             }
         }
@@ -268,8 +449,13 @@ impl Baseline {
 pub enum BaselineVerdict {
     /// Same image, same work, throughput within the tolerance.
     Same,
+    /// Same image and work; the throughput interval reaches past the
+    /// tolerance but also inside it: the runs cannot tell this change from
+    /// the machine's noise.
+    WithinNoise,
     /// Same image and work, throughput beyond the tolerance: a timing change
-    /// only (load, machine, code generation), not the algorithm.
+    /// only (load, machine, code generation), not the algorithm. Faster or
+    /// slower: see [`BaselineComparison::change_percent`].
     TimingOnly,
     /// The work per ray changed: the algorithm did more (a regression) or less.
     Work,
@@ -283,14 +469,20 @@ pub struct BaselineComparison {
     pub kernel: String,
     pub baseline_mrays: f64,
     pub mrays: f64,
-    /// Relative change in throughput, percent (negative: slower).
+    /// Relative change in throughput, percent (negative: slower): the
+    /// Hodges-Lehmann estimate over every pair of runs when both sides have
+    /// two runs or more, else the change of the medians.
     pub change_percent: f64,
+    /// A confidence interval for `change_percent` (percent) and its level
+    /// (`None` with fewer than two runs on a side).
+    pub change_ci: Option<Interval>,
     pub image_same: bool,
     /// Relative change of the total traversal work (nodes + box + sphere tests),
     /// percent; `None` when the baseline has no counters.
     pub work_change_percent: Option<f64>,
     pub verdict: BaselineVerdict,
-    /// Exit status 1: the image changed, the work grew, or throughput fell beyond the tolerance.
+    /// Exit status 1: the image changed, the work grew, or (gate `time`)
+    /// throughput fell beyond the tolerance by more than the noise explains.
     pub regressed: bool,
 }
 
@@ -299,14 +491,23 @@ fn total(w: &WorkCounters) -> u64 {
 }
 
 /// Compares a fresh report with a baseline (checked with [`Baseline::check`]).
-pub fn compare(report: &BenchReport, base: &Baseline, tolerance_percent: f64) -> Vec<BaselineComparison> {
+pub fn compare(report: &BenchReport, base: &Baseline, tolerance_percent: f64, gate: Gate) -> Vec<BaselineComparison> {
     let mut out = Vec::new();
+    let t = tolerance_percent / 100.0;
     for e in &report.kernels {
         let s = &e.stats;
         let Some(b) = base.kernels.iter().find(|b| b.kernel == s.kernel) else {
             continue;
         };
-        let change = 100.0 * (s.mrays_per_s / b.mrays_per_s - 1.0);
+        // Rate ratio (this run over the baseline), from the times of the runs.
+        let runs = b.runs_seconds.as_deref().unwrap_or(&[]);
+        let noise = noise::ratio(runs, &e.runs_seconds).map(|(time, ci)| {
+            (1.0 / time, Interval { lo: 1.0 / ci.hi, hi: 1.0 / ci.lo, level: ci.level })
+        });
+        let (ratio, ci) = match noise {
+            Some((r, ci)) => (r, Some(ci)),
+            None => (s.mrays_per_s / b.mrays_per_s, None),
+        };
         let image_same = b.image_hash == s.image_hash;
         let work = match (b.work, s.work) {
             (Some(bw), Some(sw)) if bw != sw => Some(100.0 * (total(&sw) as f64 / total(&bw).max(1) as f64 - 1.0)),
@@ -314,25 +515,33 @@ pub fn compare(report: &BenchReport, base: &Baseline, tolerance_percent: f64) ->
             _ => None,
         };
         let work_changed = matches!((b.work, s.work), (Some(bw), Some(sw)) if bw != sw);
-        let slower = change < -tolerance_percent;
+        // Slower beyond the tolerance: the whole interval, or without one the estimate.
+        let (lo, hi) = ci.map_or((ratio, ratio), |c| (c.lo, c.hi));
+        let slower = hi < 1.0 - t;
+        let timing = if lo >= 1.0 - t && hi <= 1.0 + t {
+            BaselineVerdict::Same
+        } else if slower || lo > 1.0 + t {
+            BaselineVerdict::TimingOnly
+        } else {
+            BaselineVerdict::WithinNoise
+        };
         let verdict = if !image_same {
             BaselineVerdict::Image
         } else if work_changed {
             BaselineVerdict::Work
-        } else if change.abs() > tolerance_percent {
-            BaselineVerdict::TimingOnly
         } else {
-            BaselineVerdict::Same
+            timing
         };
         out.push(BaselineComparison {
             kernel: s.kernel.to_string(),
             baseline_mrays: b.mrays_per_s,
             mrays: s.mrays_per_s,
-            change_percent: change,
+            change_percent: 100.0 * (ratio - 1.0),
+            change_ci: ci.map(|c| Interval { lo: 100.0 * (c.lo - 1.0), hi: 100.0 * (c.hi - 1.0), level: c.level }),
             image_same,
             work_change_percent: work,
             verdict,
-            regressed: !image_same || work.is_some_and(|w| w > 0.0) || slower,
+            regressed: !image_same || work.is_some_and(|w| w > 0.0) || (gate == Gate::Time && slower),
         });
     }
     out

@@ -5,6 +5,7 @@
 
 pub mod bench;
 pub mod converge;
+pub mod noise;
 pub mod stress;
 
 /// Probes: what the kernels let an instrument see (a type parameter with

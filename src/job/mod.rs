@@ -268,6 +268,12 @@ impl Job {
         &self.warnings
     }
 
+    /// The worker threads a render of this job runs on (`None` in the
+    /// options: one per core, or as `RAYON_NUM_THREADS` says).
+    pub fn threads(&self) -> usize {
+        self.options.threads.unwrap_or_else(rayon::current_num_threads)
+    }
+
     /// The kernel that runs (`simd` resolved to this build's lane width).
     pub fn kernel(&self) -> Kernel {
         self.kernel
