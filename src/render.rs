@@ -317,8 +317,22 @@ fn each_tile<P: Probe + Send, T>(
         .par_iter_mut()
         .map_init(init, |state, tile| {
             let mut probe = make();
-            report(render(state, tile, &mut probe));
+            report(tile_work(&render, state, tile, &mut probe));
             probe
         })
         .collect()
+}
+
+/// One tile through its kernel: the render loop. Kept out of line (one call
+/// per tile costs nothing measurable) so that `rtow bench --instructions`
+/// counts the render loop's instructions apart from the rest of the process
+/// (`instruments::callgrind::RENDER_LOOP` names it).
+#[inline(never)]
+fn tile_work<T, P>(
+    render: &impl Fn(&mut T, &mut TileFilm, &mut P) -> u64,
+    state: &mut T,
+    tile: &mut TileFilm,
+    probe: &mut P,
+) -> u64 {
+    render(state, tile, probe)
 }

@@ -4,8 +4,10 @@ use super::args::{choice, kernel_parser, ImageArgs, RunArgs};
 use super::{say, tell};
 use clap::Args;
 use rtow::instruments::bench::{self, Baseline, BaselineVerdict, BenchConfig, Gate, DEFAULT_REPEAT, DEFAULT_TOLERANCE};
-use rtow::output::Outputs;
-use rtow::{Job, KernelChoice, Result, SceneSource};
+use rtow::instruments::instructions::{self, InstructionsBaseline};
+use rtow::output::{OutputId, Outputs};
+use rtow::{Error, Job, KernelChoice, Result, SceneSource};
+use std::ffi::OsString;
 use std::path::PathBuf;
 
 #[derive(Args)]
@@ -46,6 +48,15 @@ pub struct BenchArgs {
     /// coherence is lost bounce by bounce), for each kernel, from one counted render.
     #[arg(long)]
     by_depth: bool,
+    /// Instead of timing: instructions per ray of each kernel, counted exactly by
+    /// valgrind's callgrind (this executable re-run under it, once per kernel):
+    /// deterministic on any load; --save / --baseline compare counts exactly. A build
+    /// with the `phases` feature also splits the render loop by phase.
+    #[arg(long, conflicts_with_all = ["by_depth", "gate", "tolerance", "repeat"])]
+    instructions: bool,
+    /// The process --instructions counts: render once, print the result.
+    #[arg(long, hide = true)]
+    instructions_child: bool,
 }
 
 /// Ok(false): a regression against the baseline (exit status 1).
@@ -54,27 +65,23 @@ pub fn run(a: BenchArgs) -> Result<bool> {
     let job = Job::from_source(&source, &a.image.overrides(), &a.run.options(KernelChoice::Simd))?;
     let name = &source.name;
     let cfg = BenchConfig { kernels: a.kernels.clone(), repeat: a.repeat, tolerance: a.tolerance, gate: a.gate };
+    if a.instructions_child {
+        // The process `--instructions` counts: one render of one kernel, no output file.
+        let kernel = a.kernels.first().copied().unwrap_or(KernelChoice::Simd);
+        let job = job.with_options(&rtow::RenderOptions { kernel, ..*job.options() })?;
+        say!("{}", instructions::child_render(&job)?);
+        return Ok(true);
+    }
     // Everything is checked before anything is measured.
     cfg.validate(&job)?;
+    if a.instructions {
+        return count_instructions(&a, &source, &job);
+    }
     let baseline = a.baseline.as_deref().map(Baseline::load).transpose()?;
     if let Some(b) = &baseline {
         b.check(name, job.settings(), job.threads(), &a.kernels)?;
     }
-    // The outputs are one transaction: distinct from each other and from the
-    // inputs, checked now, written together after the measurements.
-    let mut outputs = Outputs::new();
-    if let Some(f) = &source.file {
-        outputs.input(f, "scene file");
-    }
-    if let Some(b) = &a.baseline {
-        outputs.input(b, "baseline");
-    }
-    let mut ids = Vec::new();
-    for (path, flag) in [(&a.json, "--json"), (&a.save, "--save")] {
-        if let Some(p) = path {
-            ids.push(outputs.add(p, flag)?);
-        }
-    }
+    let (mut outputs, ids) = outputs(&a, &source)?;
     if a.by_depth {
         for (kernel, rows) in bench::work_by_depth_per_kernel(&job, &cfg)? {
             say!("{}:", kernel.name());
@@ -104,6 +111,109 @@ pub fn run(a: BenchArgs) -> Result<bool> {
     }
     outputs.commit()?;
     Ok(baseline.as_ref().is_none_or(|b| print_comparison(&report, b, &cfg)))
+}
+
+/// The outputs are one transaction: distinct from each other and from the
+/// inputs, checked now, written together after the measurements.
+fn outputs(a: &BenchArgs, source: &SceneSource) -> Result<(Outputs, Vec<OutputId>)> {
+    let mut outputs = Outputs::new();
+    if let Some(f) = &source.file {
+        outputs.input(f, "scene file");
+    }
+    if let Some(b) = &a.baseline {
+        outputs.input(b, "baseline");
+    }
+    let mut ids = Vec::new();
+    for (path, flag) in [(&a.json, "--json"), (&a.save, "--save")] {
+        if let Some(p) = path {
+            ids.push(outputs.add(p, flag)?);
+        }
+    }
+    Ok((outputs, ids))
+}
+
+/// `--instructions`: each kernel counted under callgrind; against a baseline, exactly.
+fn count_instructions(a: &BenchArgs, source: &SceneSource, job: &Job) -> Result<bool> {
+    let baseline = a.baseline.as_deref().map(InstructionsBaseline::load).transpose()?;
+    if let Some(b) = &baseline {
+        b.check(&source.name, job.settings(), job.threads(), &a.kernels)?;
+    }
+    let (mut outputs, ids) = outputs(a, source)?;
+    let program = std::env::current_exe().map_err(|e| Error::System(format!("cannot find this executable: {e}")))?;
+    // The counted process: this very command line's job, one kernel, rendered once.
+    let child_args = |job: &Job| -> Vec<OsString> {
+        let s = job.settings();
+        let mut v: Vec<String> = vec!["bench".into(), a.scene.clone()];
+        for (flag, value) in [
+            ("--width", s.width.to_string()),
+            ("--height", s.height.to_string()),
+            ("--spp", s.spp.to_string()),
+            ("--depth", s.max_depth.to_string()),
+            ("--seed", s.seed.to_string()),
+            ("--sampler", s.sampler.name().to_string()),
+            ("--threads", job.threads().to_string()),
+            ("--accel", job.options().accel.name().to_string()),
+            ("--kernels", job.kernel().name().to_string()),
+        ] {
+            v.push(flag.into());
+            v.push(value);
+        }
+        v.push("--instructions-child".into());
+        v.into_iter().map(OsString::from).collect()
+    };
+    let s = job.settings();
+    tell!(
+        "bench --instructions {}: {}x{} {} spp depth {} seed {}, {} sampler, {} thread(s), built for {}; \
+         each kernel under callgrind (about 50x slower than a plain render)",
+        source.name,
+        s.width,
+        s.height,
+        s.spp,
+        s.max_depth,
+        s.seed,
+        s.sampler,
+        job.threads(),
+        rtow::isa()
+    );
+    let report = instructions::count(job, &source.name, &a.kernels, &program, child_args, |e| {
+        tell!("  {}: {} instructions, {:.2} per ray", e.kernel, e.instructions, e.per_ray)
+    })?;
+    say!("{}", report.table().trim_end_matches('\n'));
+    let json = report.to_json();
+    for id in ids {
+        outputs.stage(id, json.as_bytes())?;
+    }
+    outputs.commit()?;
+    let Some(b) = baseline else { return Ok(true) };
+    if b.provenance.rustc != report.provenance.rustc {
+        say!(
+            "note: the baseline was built with {}, this run with {}: counts depend on the compiler",
+            rtow::output::clip(&b.provenance.rustc),
+            report.provenance.rustc
+        );
+    }
+    let mut ok = true;
+    for c in instructions::compare(&report, &b) {
+        let delta = c.instructions as i128 - c.baseline as i128;
+        let verdict = match (c.image_same, delta) {
+            (false, _) => "REGRESSION (the image changed)".to_string(),
+            (true, 0) => "ok (identical)".to_string(),
+            (true, d) if d > 0 => format!("REGRESSION ({d:+} instructions)"),
+            (true, d) => format!("ok ({d:+} instructions)"),
+        };
+        say!(
+            "{:<7} baseline {} -> {} instructions ({:.2} -> {:.2} per ray, {:+.3}%), image {}: {verdict}",
+            c.kernel,
+            c.baseline,
+            c.instructions,
+            c.baseline_per_ray,
+            c.per_ray,
+            100.0 * (c.instructions as f64 / c.baseline as f64 - 1.0),
+            if c.image_same { "identical" } else { "CHANGED" },
+        );
+        ok &= !c.regressed;
+    }
+    Ok(ok)
 }
 
 /// Prints the verdict of each kernel against the baseline; false on a regression.

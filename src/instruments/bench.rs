@@ -311,6 +311,15 @@ impl Baseline {
     /// Parses a baseline read from `path` and refuses impossible figures
     /// (every error names `path`; exit status 2).
     pub fn from_bytes(bytes: &[u8], path: &Path) -> Result<Baseline> {
+        let schema = serde_json::from_slice::<serde_json::Value>(bytes)
+            .ok()
+            .and_then(|v| v.get("schema").and_then(|s| s.as_str()).map(str::to_string));
+        if schema.as_deref() == Some(super::instructions::INSTRUCTIONS_SCHEMA) {
+            return Err(Error::Parse {
+                path: path.to_path_buf(),
+                message: "holds instruction counts, not timings: compare it with `rtow bench --instructions`".into(),
+            });
+        }
         let b: Baseline = serde_json::from_slice(bytes).map_err(|e| {
             // serde quotes the offending input: a bounded part of it, and the position.
             let text = e.to_string();

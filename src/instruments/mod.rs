@@ -4,7 +4,9 @@
 //! kernels, observing them through [`probe`]s; none keeps a copy of a kernel.
 
 pub mod bench;
+pub mod callgrind;
 pub mod converge;
+pub mod instructions;
 pub mod noise;
 pub mod stress;
 
