@@ -390,7 +390,8 @@ impl RenderSettings {
     fn of(h: &Header) -> std::result::Result<RenderSettings, String> {
         let get = |k: &str| h.settings.get(k).map(String::as_str).ok_or(format!("the header has no setting '{k}'"));
         let bad = |k: &str, v: &str| format!("the header's {k} '{}' is not one rtow writes", crate::output::clip(v));
-        let (d, s, sm, rr, ad) = (get("max_depth")?, get("seed")?, get("sampler")?, get("russian_roulette")?, get("adaptive")?);
+        let (d, s, sm, rr, ad) =
+            (get("max_depth")?, get("seed")?, get("sampler")?, get("russian_roulette")?, get("adaptive")?);
         Ok(RenderSettings {
             max_depth: d.parse().map_err(|_| bad("max_depth", d))?,
             seed: s.parse().map_err(|_| bad("seed", s))?,

@@ -139,13 +139,21 @@ fn baselines_with_impossible_figures_are_refused() {
     type Edit = fn(&mut serde_json::Value);
     let cases: [(&str, Edit, &str); 8] = [
         ("zero rate", |k| k["mrays_per_s"] = 0.0.into(), "Mrays/s"),
-        ("rate and time disagree", |k| k["mrays_per_s"] = (k["mrays_per_s"].as_f64().unwrap() * 2.0).into(), "disagree"),
+        (
+            "rate and time disagree",
+            |k| k["mrays_per_s"] = (k["mrays_per_s"].as_f64().unwrap() * 2.0).into(),
+            "disagree",
+        ),
         ("negative time", |k| k["seconds"] = (-1.0).into(), "not a measurement"),
         ("no rays", |k| k["rays"] = 0.into(), "not a measurement"),
         ("a run of 0 s", |k| k["runs_seconds"][0] = 0.0.into(), "runs_seconds"),
         ("no threads", |k| k["threads"] = 0.into(), "thread"),
         ("bad hash", |k| k["image_hash"] = "xyz".into(), "image hash"),
-        ("more roots than sphere tests", |k| k["work"]["roots"] = (k["work"]["sphere_tests"].as_u64().unwrap() + 1).into(), "work counters"),
+        (
+            "more roots than sphere tests",
+            |k| k["work"]["roots"] = (k["work"]["sphere_tests"].as_u64().unwrap() + 1).into(),
+            "work counters",
+        ),
     ];
     for (what, f, needle) in cases {
         let path = d.join("bad.json");
@@ -168,12 +176,7 @@ fn the_verdict_knows_the_noise_of_the_runs() {
     let o = rtow::Overrides { width: Some(32), height: Some(18), spp: Some(2), ..Default::default() };
     let opts = rtow::RenderOptions { threads: Some(1), ..Default::default() };
     let job = rtow::Job::new(&scene, &o, &opts).unwrap();
-    let cfg = BenchConfig {
-        kernels: vec![rtow::KernelChoice::Simd8],
-        repeat: 5,
-        tolerance: 0.0,
-        gate: Gate::Time,
-    };
+    let cfg = BenchConfig { kernels: vec![rtow::KernelChoice::Simd8], repeat: 5, tolerance: 0.0, gate: Gate::Time };
     let report = bench::run(&job, "ch07-diffuse", &cfg, |_, _, _| {}).unwrap();
     let saved = |scale: f64| -> Baseline {
         let mut v: serde_json::Value = serde_json::from_str(&report.to_json()).unwrap();

@@ -4,8 +4,8 @@
 use clap::builder::{PossibleValuesParser, TypedValueParser};
 use clap::Args;
 use rtow::{
-    AccelChoice, Adaptive, KernelChoice, Overrides, RenderOptions, Result, Roulette, Sampler, ADAPTIVE_MIN_SPP,
-    DEFAULT_TILE, ROULETTE_AFTER_RAYS,
+    AccelChoice, Adaptive, KernelChoice, Mode, Overrides, RenderOptions, Result, Roulette, Sampler, Settings,
+    ADAPTIVE_MIN_SPP, DEFAULT_TILE, ROULETTE_AFTER_RAYS,
 };
 use std::path::PathBuf;
 use std::str::FromStr;
@@ -29,16 +29,14 @@ pub fn sampler_parser() -> impl TypedValueParser<Value = Sampler> {
 #[derive(Args, Clone, Debug)]
 pub struct SizeArgs {
     /// Image width in pixels [default: the scene's]
-    #[arg(long)]
+    #[arg(long, allow_negative_numbers = true)]
     pub width: Option<u32>,
     /// Image height in pixels [default: the scene's]
-    #[arg(long)]
+    #[arg(long, allow_negative_numbers = true)]
     pub height: Option<u32>,
-    /// Maximum rays per path [default: the scene's, the book's 50]
-    #[arg(long)]
+    #[arg(long, allow_negative_numbers = true, help = depth_help())]
     pub depth: Option<u32>,
-    /// Seed of the random streams [default: the scene's, else 0]
-    #[arg(long)]
+    #[arg(long, allow_negative_numbers = true, help = seed_help())]
     pub seed: Option<u64>,
 }
 
@@ -48,13 +46,28 @@ pub struct ImageArgs {
     #[command(flatten)]
     pub size: SizeArgs,
     /// Samples per pixel [default: the scene's]
-    #[arg(long)]
+    #[arg(long, allow_negative_numbers = true)]
     pub spp: Option<u32>,
-    /// The book's final settings: 1200x675, 500 spp, depth 50 (flags given explicitly still win)
-    #[arg(long)]
+    #[arg(long, help = book_help())]
     pub book: bool,
     #[arg(long, value_parser = sampler_parser(), help = sampler_help())]
     pub sampler: Option<Sampler>,
+}
+
+/// `--depth`'s help, naming the library's default.
+fn depth_help() -> String {
+    format!("Maximum rays per path [default: the scene's, else {}, the book's]", Settings::default().max_depth)
+}
+
+/// `--seed`'s help, naming the library's default.
+fn seed_help() -> String {
+    format!("Seed of the random streams [default: the scene's, else {}]", Settings::default().seed)
+}
+
+/// `--book`'s help, from the library's book settings.
+fn book_help() -> String {
+    let (w, h, spp, depth) = Settings::BOOK;
+    format!("The book's final settings: {w}x{h}, {spp} spp, depth {depth} (flags given explicitly still win)")
 }
 
 /// `--sampler`'s help, naming the default the library uses.
@@ -70,9 +83,9 @@ fn sampler_help() -> String {
 #[derive(Args, Clone, Debug)]
 pub struct RunArgs {
     /// Worker threads [default: one per core]
-    #[arg(long)]
+    #[arg(long, allow_negative_numbers = true)]
     pub threads: Option<usize>,
-    #[arg(long, default_value_t = DEFAULT_TILE, help = tile_help())]
+    #[arg(long, allow_negative_numbers = true, default_value_t = DEFAULT_TILE, help = tile_help())]
     pub tile: u32,
     /// Closest-hit search: auto (by the plan), brute force, the BVH with packets, or one ray at a time
     #[arg(long, value_parser = choice::<AccelChoice>(AccelChoice::NAMES), default_value = "auto")]
@@ -82,7 +95,13 @@ pub struct RunArgs {
 /// `--tile`'s help, from the library's bound.
 fn tile_help() -> String {
     let max = rtow::limits::MAX_TILE;
-    format!("Tile edge in pixels, at most {max} (a tile's {} pixels must fit one wavefront workspace)", max * max)
+    format!(
+        "Tile edge in pixels (tiles are the unit of parallel work), at most {max}: the wavefront traces a tile's \
+         pixels together, one sample each, and its workspace holds {} paths, so {max}x{max} = {} pixels is the \
+         largest square tile",
+        rtow::internals::kernel::wavefront::MAX_PATHS,
+        max * max
+    )
 }
 
 impl RunArgs {
@@ -99,14 +118,14 @@ pub struct EstimatorArgs {
     #[arg(long)]
     pub rr: bool,
     /// With --rr: the roulette starts once a path has traced N rays.
-    #[arg(long, value_name = "N", default_value_t = ROULETTE_AFTER_RAYS, requires = "rr")]
+    #[arg(long, allow_negative_numbers = true, value_name = "N", default_value_t = ROULETTE_AFTER_RAYS, requires = "rr")]
     pub rr_after: u32,
     /// Adaptive sampling: a pixel stops taking samples once the relative
     /// standard error of its mean is at most THRESHOLD (e.g. 0.02); --spp is the maximum.
-    #[arg(long, value_name = "THRESHOLD")]
+    #[arg(long, allow_negative_numbers = true, value_name = "THRESHOLD")]
     pub adaptive: Option<f32>,
     /// Adaptive sampling decides after N, 2N, 4N, ... samples.
-    #[arg(long, value_name = "N", default_value_t = ADAPTIVE_MIN_SPP, requires = "adaptive")]
+    #[arg(long, allow_negative_numbers = true, value_name = "N", default_value_t = ADAPTIVE_MIN_SPP, requires = "adaptive")]
     pub adaptive_min: u32,
 }
 
@@ -129,9 +148,17 @@ pub struct OutputArgs {
     /// box and sphere tests, square roots, lane occupancy).
     #[arg(long, value_name = "FILE")]
     pub stats_json: Option<PathBuf>,
-    /// PNG gamma [default: 2 for path traced scenes, 1 for the debug chapters, as in the book]
-    #[arg(long, allow_negative_numbers = true)]
+    #[arg(long, allow_negative_numbers = true, help = gamma_help())]
     pub gamma: Option<f32>,
+}
+
+/// `--gamma`'s help, from the gamma the library gives each kind of scene.
+fn gamma_help() -> String {
+    format!(
+        "PNG gamma [default: {} for path traced scenes, {} for the debug chapters, as in the book]",
+        Mode::Path.default_gamma(),
+        Mode::Normals.default_gamma()
+    )
 }
 
 impl OutputArgs {

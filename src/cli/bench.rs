@@ -23,7 +23,7 @@ pub struct BenchArgs {
     #[command(flatten)]
     run: RunArgs,
     /// Timed renders per kernel; the median-time one is reported (plus one render with the work counters on).
-    #[arg(long, default_value_t = DEFAULT_REPEAT)]
+    #[arg(long, allow_negative_numbers = true, default_value_t = DEFAULT_REPEAT)]
     repeat: usize,
     /// Write the report as JSON.
     #[arg(long, value_name = "FILE")]
@@ -240,7 +240,8 @@ fn print_comparison(report: &bench::BenchReport, b: &Baseline, cfg: &BenchConfig
             if c.regressed { "REGRESSION" } else { "ok" },
             match c.verdict {
                 BaselineVerdict::Same => format!(" (within the {}% tolerance)", cfg.tolerance),
-                BaselineVerdict::WithinNoise => " (within noise: the runs cannot tell this change from the machine's noise)".into(),
+                BaselineVerdict::WithinNoise =>
+                    " (within noise: the runs cannot tell this change from the machine's noise)".into(),
                 BaselineVerdict::TimingOnly if cfg.gate == Gate::Work =>
                     format!(" (timing only, {timing}: same image and work; not gated with --gate work)"),
                 BaselineVerdict::TimingOnly => format!(" (timing only, {timing}: same image and work)"),

@@ -14,20 +14,15 @@ pub struct ConvergeArgs {
     /// Kernels to measure, comma separated.
     #[arg(long, value_delimiter = ',', value_parser = kernel_parser(), default_value = "simd")]
     kernels: Vec<KernelChoice>,
-    /// Estimator variants, comma separated: plain, rr (roulette after the default number of rays),
-    /// rr:N (after N rays), adaptive (threshold 0.02), adaptive:THRESHOLD, sobol (Owen-scrambled
-    /// Sobol points; sobol-pixel, sobol-lens, sobol-bounce1 for part of the layout), or
-    /// combinations such as sobol+rr+adaptive:0.05. The first kernel's first variant is the
-    /// baseline. The reference is always rendered with independent sampling.
-    #[arg(long, value_delimiter = ',', default_value = "plain,rr,adaptive")]
+    #[arg(long, value_delimiter = ',', default_value = "plain,rr,adaptive", help = variants_help())]
     variants: Vec<String>,
     /// Samples per pixel to measure, increasing (the maximum, for adaptive variants).
-    #[arg(long, value_delimiter = ',', default_value = "4,16,64,256")]
+    #[arg(long, allow_negative_numbers = true, value_delimiter = ',', default_value = "4,16,64,256")]
     spp_list: Vec<u32>,
     /// A linear reference image (.exr or .pfm) of the same size.
     #[arg(long, value_name = "FILE", conflicts_with = "reference_spp")]
     reference: Option<PathBuf>,
-    #[arg(long, value_name = "N", help = reference_spp_help())]
+    #[arg(long, allow_negative_numbers = true, value_name = "N", help = reference_spp_help())]
     reference_spp: Option<u32>,
     /// Output folder for <scene>.csv, <scene>.md, <scene>.svg (and <scene>-reference.exr).
     #[arg(long, default_value = "converge")]
@@ -38,18 +33,30 @@ pub struct ConvergeArgs {
     run: RunArgs,
     /// Render every measurement N times, in N passes over all of them, and keep the fastest
     /// time (the image is the same).
-    #[arg(long, value_name = "N", default_value_t = 1)]
+    #[arg(long, allow_negative_numbers = true, value_name = "N", default_value_t = 1)]
     repeat: u32,
     /// Adaptive variants decide after N, 2N, 4N, ... samples.
-    #[arg(long, value_name = "N", default_value_t = ADAPTIVE_MIN_SPP)]
+    #[arg(long, allow_negative_numbers = true, value_name = "N", default_value_t = ADAPTIVE_MIN_SPP)]
     adaptive_min: u32,
     /// The sampler of the variants that name none (plain, rr, ...).
     #[arg(long, value_parser = super::args::sampler_parser(), default_value = "independent")]
     sampler: Sampler,
     /// Also report what every configuration needs to reach the error of the baseline at N spp
     /// (N from --spp-list).
-    #[arg(long, value_name = "N")]
+    #[arg(long, allow_negative_numbers = true, value_name = "N")]
     at_spp: Option<u32>,
+}
+
+/// `--variants`' help, naming the library's defaults.
+fn variants_help() -> String {
+    format!(
+        "Estimator variants, comma separated: plain, rr (roulette after {} rays), rr:N (after N rays), adaptive \
+         (threshold {}), adaptive:THRESHOLD, sobol (Owen-scrambled Sobol points; sobol-pixel, sobol-lens, \
+         sobol-bounce1 for part of the layout), or combinations such as sobol+rr+adaptive:0.05. The first kernel's \
+         first variant is the baseline. The reference is always rendered with independent sampling",
+        rtow::ROULETTE_AFTER_RAYS,
+        converge::DEFAULT_ADAPTIVE_THRESHOLD
+    )
 }
 
 /// `--reference-spp`'s help, naming the factor the library uses.

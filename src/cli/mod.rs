@@ -45,7 +45,7 @@ enum Command {
     /// Merge partial films (.rtfilm: the shards of one render) into the image,
     /// bit for bit the one-process render's.
     Merge(merge::MergeArgs),
-    /// List the built-in scenes.
+    /// List the built-in scenes, by book (the stress scenes apart).
     Scenes,
     /// Measure rays/s of each kernel on a scene; compare with a saved baseline.
     Bench(bench::BenchArgs),
@@ -58,10 +58,10 @@ enum Command {
         #[arg(long)]
         quick: bool,
         /// Seed of the sweeps and renders.
-        #[arg(long, default_value_t = 1)]
+        #[arg(long, allow_negative_numbers = true, default_value_t = 1)]
         seed: u64,
         /// Worker threads [default: one per core]
-        #[arg(long)]
+        #[arg(long, allow_negative_numbers = true)]
         threads: Option<usize>,
     },
     /// Write a preset as a scene file (.json or .toml).
@@ -72,6 +72,14 @@ enum Command {
         #[arg(short, long)]
         output: PathBuf,
     },
+    /// Print a shell completion script: `rtow completions bash > ~/.local/share/bash-completion/completions/rtow`.
+    Completions {
+        /// The shell.
+        #[arg(value_enum)]
+        shell: clap_complete::Shell,
+    },
+    /// Print the manual page (roff): `rtow man > rtow.1; man ./rtow.1`.
+    Man,
 }
 
 pub(crate) use say;
@@ -96,10 +104,28 @@ fn run(cli: Cli) -> Result<bool> {
         Command::Converge(a) => converge::run(a).map(|_| true),
         Command::Scenes => {
             let width = scene::presets().iter().map(|p| p.name.len()).max().unwrap_or(0);
-            for p in scene::presets() {
-                say!("{:<width$}  {}", p.name, p.description);
+            for (i, &group) in scene::PresetGroup::ALL.iter().enumerate() {
+                if i > 0 {
+                    say!();
+                }
+                say!("{}:", group.title());
+                for p in scene::presets().iter().filter(|p| p.group == group) {
+                    say!("  {:<width$}  {}", p.name, p.description);
+                }
             }
             Ok(true)
+        }
+        Command::Completions { shell } => {
+            let mut out = Vec::new();
+            clap_complete::generate(shell, &mut command(), "rtow", &mut out);
+            write_stdout(&out)
+        }
+        Command::Man => {
+            let mut out = Vec::new();
+            clap_mangen::Man::new(command().version(env!("CARGO_PKG_VERSION")))
+                .render(&mut out)
+                .map_err(|e| Error::System(format!("cannot render the manual page: {e}")))?;
+            write_stdout(&out)
         }
         Command::Stress { quick, seed, threads } => cmd_stress(quick, seed, threads),
         Command::Export { preset, output } => {
@@ -145,11 +171,25 @@ pub(crate) fn message(e: &Error) -> String {
     }
 }
 
+/// The command line's definition, with the version this build reports.
+fn command() -> clap::Command {
+    let version = format!("{}\n{}", rtow::provenance::version(), rtow::build_description());
+    Cli::command().version(&*Box::leak(version.into_boxed_str()))
+}
+
+/// Writes generated text to stdout; a write error is an output failure (exit status 1).
+fn write_stdout(bytes: &[u8]) -> Result<bool> {
+    use std::io::Write as _;
+    let mut out = std::io::stdout().lock();
+    out.write_all(bytes)
+        .and_then(|_| out.flush())
+        .map_err(|e| Error::System(format!("cannot write to stdout: {e}")))?;
+    Ok(true)
+}
+
 pub fn main() -> ExitCode {
     rtow::output::install_signal_cleanup();
-    let version = format!("{}\n{}", rtow::provenance::version(), rtow::build_description());
-    let version: &'static str = Box::leak(version.into_boxed_str());
-    let cli = match Cli::command().version(version).try_get_matches().and_then(|m| Cli::from_arg_matches(&m)) {
+    let cli = match command().try_get_matches().and_then(|m| Cli::from_arg_matches(&m)) {
         Ok(c) => c,
         Err(e) => clap_exit(e),
     };

@@ -382,7 +382,11 @@ impl Baseline {
                 return Err(bad(format!("'{}' is not an image hash", crate::output::clip(&b.image_hash))));
             }
             let samples = b.width as u64 * b.height as u64 * b.spp as u64;
-            if samples == 0 || b.max_depth == 0 || b.rays < samples || b.rays > samples.saturating_mul(b.max_depth as u64) {
+            if samples == 0
+                || b.max_depth == 0
+                || b.rays < samples
+                || b.rays > samples.saturating_mul(b.max_depth as u64)
+            {
                 return Err(bad(format!(
                     "{} rays cannot come from {}x{} pixels, {} spp and depth {}",
                     b.rays, b.width, b.height, b.spp, b.max_depth
@@ -510,9 +514,8 @@ pub fn compare(report: &BenchReport, base: &Baseline, tolerance_percent: f64, ga
         };
         // Rate ratio (this run over the baseline), from the times of the runs.
         let runs = b.runs_seconds.as_deref().unwrap_or(&[]);
-        let noise = noise::ratio(runs, &e.runs_seconds).map(|(time, ci)| {
-            (1.0 / time, Interval { lo: 1.0 / ci.hi, hi: 1.0 / ci.lo, level: ci.level })
-        });
+        let noise = noise::ratio(runs, &e.runs_seconds)
+            .map(|(time, ci)| (1.0 / time, Interval { lo: 1.0 / ci.hi, hi: 1.0 / ci.lo, level: ci.level }));
         let (ratio, ci) = match noise {
             Some((r, ci)) => (r, Some(ci)),
             None => (s.mrays_per_s / b.mrays_per_s, None),

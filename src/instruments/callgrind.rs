@@ -189,7 +189,8 @@ pub fn valgrind_version() -> Result<String> {
              (Debian/Ubuntu: apt-get install valgrind) or measure time without --instructions"
         ))
     };
-    let out = Command::new("valgrind").arg("--version").output().map_err(|e| missing(format!("cannot be run ({e})")))?;
+    let out =
+        Command::new("valgrind").arg("--version").output().map_err(|e| missing(format!("cannot be run ({e})")))?;
     if !out.status.success() {
         return Err(missing(format!("--version failed ({})", out.status)));
     }
@@ -199,8 +200,7 @@ pub fn valgrind_version() -> Result<String> {
 /// The callgrind command line that counts `program` with `args`, writing
 /// the profile to `profile`.
 pub fn command_line(program: &Path, args: &[OsString], profile: &Path) -> Vec<OsString> {
-    let mut v: Vec<OsString> =
-        vec!["valgrind".into(), "--tool=callgrind".into(), "-q".into(), "--dump-line=no".into()];
+    let mut v: Vec<OsString> = vec!["valgrind".into(), "--tool=callgrind".into(), "-q".into(), "--dump-line=no".into()];
     let mut out = OsString::from("--callgrind-out-file=");
     out.push(profile);
     v.push(out);

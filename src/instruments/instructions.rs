@@ -130,7 +130,11 @@ pub fn count(
         }
         let phases = profile.phases().map(|rows| {
             rows.into_iter()
-                .map(|PhaseCount { phase, instructions }| PhaseRow { phase, instructions, per_ray: instructions as f64 / rays })
+                .map(|PhaseCount { phase, instructions }| PhaseRow {
+                    phase,
+                    instructions,
+                    per_ray: instructions as f64 / rays,
+                })
                 .collect()
         });
         let command = callgrind::command_line(program, &args, Path::new("callgrind.out"))
@@ -197,7 +201,8 @@ impl InstructionsReport {
             for e in &with {
                 t += &format!(" {:>16}", format!("{:.1}", e.per_ray));
             }
-            t += "\n(a `phases` build: the phases are kept out of line, which adds calls; compare phases with phases)\n";
+            t +=
+                "\n(a `phases` build: the phases are kept out of line, which adds calls; compare phases with phases)\n";
         }
         t
     }
@@ -278,7 +283,10 @@ impl InstructionsBaseline {
                 )));
             }
             if k.image_hash.len() != 16 || !k.image_hash.bytes().all(|c| c.is_ascii_hexdigit()) {
-                return Err(parse(format!("kernel {name}: '{}' is not an image hash", crate::output::clip(&k.image_hash))));
+                return Err(parse(format!(
+                    "kernel {name}: '{}' is not an image hash",
+                    crate::output::clip(&k.image_hash)
+                )));
             }
         }
         if b.kernels.is_empty() {
@@ -293,10 +301,7 @@ impl InstructionsBaseline {
     pub fn check(&self, scene: &str, s: &Settings, threads: usize, kernels: &[KernelChoice]) -> Result<()> {
         let mine = Provenance::collect();
         let differs = |what: &str, theirs: &str, ours: &str| {
-            Error::Input(format!(
-                "baseline {what} {} differs from this run's {ours}",
-                crate::output::clip(theirs)
-            ))
+            Error::Input(format!("baseline {what} {} differs from this run's {ours}", crate::output::clip(theirs)))
         };
         if self.scene != scene {
             return Err(differs("scene", &self.scene, scene));

@@ -117,10 +117,13 @@ fn mann_whitney_cdf(m: usize, n: usize) -> Vec<f64> {
     let counts = &prev[n];
     let total: f64 = counts.iter().sum();
     let mut acc = 0.0;
-    counts.iter().map(|&c| {
-        acc += c;
-        acc / total
-    }).collect()
+    counts
+        .iter()
+        .map(|&c| {
+            acc += c;
+            acc / total
+        })
+        .collect()
 }
 
 /// The ratio `current / baseline` of two sets of positive values (times),
