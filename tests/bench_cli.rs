@@ -4,7 +4,7 @@
 
 mod common;
 
-use common::{rtow, Run};
+use common::{rtow, rtow_env, Run};
 use std::path::Path;
 
 fn bench(dir: &Path, extra: &[&str]) -> Run {
@@ -196,4 +196,60 @@ fn the_verdict_knows_the_noise_of_the_runs() {
     assert!(!bench::compare(&report, &saved(10.0), 5.0, Gate::Work)[0].regressed);
     let c = &bench::compare(&report, &saved(0.1), 5.0, Gate::Time)[0];
     assert!(!c.regressed && c.verdict == BaselineVerdict::TimingOnly && c.change_percent > 0.0, "{c:?}");
+}
+
+/// `--instructions`: callgrind counts each kernel's render loop; the same
+/// build counts the same instructions; baselines compare exactly; without
+/// valgrind the command says so before any work.
+#[test]
+fn instructions_are_counted_and_compared_exactly() {
+    let dir = tempfile::tempdir().unwrap();
+    let d = dir.path();
+    let args = |extra: &[&'static str]| -> Vec<&'static str> {
+        let mut v = vec!["bench", "ch07-diffuse", "--kernels", "scalar,simd8", "--instructions", "--threads", "1"];
+        v.extend(["--width", "16", "--height", "9", "--spp", "2", "--depth", "8"]);
+        v.extend_from_slice(extra);
+        v
+    };
+    let r = rtow_env(d, &args(&["--save", "i.json"]), &[("PATH", "/nonexistent")]);
+    let line = common::failure(&r, 1, "no valgrind");
+    assert!(line.contains("valgrind") && line.contains("install"), "{line}");
+    assert!(!d.join("i.json").exists());
+    if std::process::Command::new("valgrind").arg("--version").output().is_err() {
+        eprintln!("valgrind is not installed: only the refusal was checked");
+        return;
+    }
+    let r = rtow(d, &args(&["--save", "i.json"]));
+    if r.code == 1 && r.stderr.contains("instruction valgrind does not know") {
+        eprintln!("valgrind cannot run this build: {}", r.stderr);
+        return;
+    }
+    assert_eq!(r.code, 0, "{}", r.stderr);
+    let v: serde_json::Value = serde_json::from_str(&std::fs::read_to_string(d.join("i.json")).unwrap()).unwrap();
+    assert_eq!(v["schema"], "rtow-instructions/1");
+    let k = &v["kernels"];
+    assert_eq!(k[0]["image_hash"], k[1]["image_hash"], "scalar and SIMD images differ");
+    for e in k.as_array().unwrap() {
+        let (n, rays) = (e["instructions"].as_u64().unwrap(), e["rays"].as_u64().unwrap());
+        assert!(n > 10 * rays && e["process_instructions"].as_u64().unwrap() > n, "{e}");
+        assert!((e["per_ray"].as_f64().unwrap() - n as f64 / rays as f64).abs() < 1e-9, "{e}");
+    }
+    // Counted again: exactly the same.
+    let r = rtow(d, &args(&["--baseline", "i.json"]));
+    assert_eq!(r.code, 0, "{}{}", r.stdout, r.stderr);
+    assert_eq!(r.stdout.matches("ok (identical)").count(), 2, "{}", r.stdout);
+    // A baseline one instruction leaner: a regression.
+    edit(&d.join("i.json"), |v| {
+        let n = v["kernels"][1]["instructions"].as_u64().unwrap();
+        v["kernels"][1]["instructions"] = (n - 1).into();
+    });
+    let r = rtow(d, &args(&["--baseline", "i.json"]));
+    assert_eq!(r.code, 1, "{}", r.stdout);
+    assert!(r.stdout.contains("REGRESSION (+1 instructions)"), "{}", r.stdout);
+    // A timing baseline is not an instruction baseline, and the other way round.
+    assert_eq!(bench(d, &["--save", "t.json"]).code, 0);
+    let line = common::failure(&rtow(d, &args(&["--baseline", "t.json"])), 2, "time baseline");
+    assert!(line.contains("not an instruction baseline"), "{line}");
+    let line = common::failure(&bench(d, &["--baseline", "i.json"]), 2, "instruction baseline");
+    assert!(line.contains("holds instruction counts"), "{line}");
 }

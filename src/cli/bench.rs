@@ -161,6 +161,7 @@ fn count_instructions(a: &BenchArgs, source: &SceneSource, job: &Job) -> Result<
         v.push("--instructions-child".into());
         v.into_iter().map(OsString::from).collect()
     };
+    rtow::instruments::callgrind::valgrind_version()?;
     let s = job.settings();
     tell!(
         "bench --instructions {}: {}x{} {} spp depth {} seed {}, {} sampler, {} thread(s), built for {}; \

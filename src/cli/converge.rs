@@ -17,7 +17,7 @@ pub struct ConvergeArgs {
     #[arg(long, value_delimiter = ',', default_value = "plain,rr,adaptive", help = variants_help())]
     variants: Vec<String>,
     /// Samples per pixel to measure, increasing (the maximum, for adaptive variants).
-    #[arg(long, allow_negative_numbers = true, value_delimiter = ',', default_value = "4,16,64,256")]
+    #[arg(long, allow_hyphen_values = true, value_delimiter = ',', default_value = "4,16,64,256")]
     spp_list: Vec<u32>,
     /// A linear reference image (.exr or .pfm) of the same size.
     #[arg(long, value_name = "FILE", conflicts_with = "reference_spp")]
