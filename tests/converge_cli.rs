@@ -71,6 +71,13 @@ fn converge_writes_table_plot_and_reference_and_reuses_the_reference() {
     assert!(svg.starts_with("<svg") && svg.contains("scalar/plain") && svg.contains("polyline"));
     let reference = out.join("ch07-diffuse-reference.exr");
     assert!(reference.exists());
+    // The run's description and provenance beside the tables.
+    let json: serde_json::Value =
+        serde_json::from_str(&std::fs::read_to_string(out.join("ch07-diffuse.json")).unwrap()).unwrap();
+    assert_eq!(json["schema"], "rtow-converge/1");
+    assert_eq!(json["files"][0], "ch07-diffuse.csv");
+    assert_eq!(json["provenance"]["isa"], rtow::isa());
+    assert_eq!(json["provenance"]["command_line"][1], "converge");
 
     // Again from the saved reference: the errors are the same as before.
     let again = dir.path().join("again");

@@ -204,6 +204,8 @@ pub struct ConvergeReport {
     pub at_spp: Option<u32>,
     /// The reference, when this run rendered it (written out for reuse with `--reference`).
     pub rendered_reference: Option<Image>,
+    /// The build, machine, date and command of the run (written to `<scene>.json`).
+    pub provenance: crate::provenance::Provenance,
     pub rows: Vec<ConvergeRow>,
 }
 
@@ -274,6 +276,7 @@ pub fn run(job: &Job, name: &str, cfg: &ConvergeConfig, mut on: impl FnMut(Event
         threads,
         at_spp: cfg.at_spp,
         rendered_reference: rendered.then_some(reference),
+        provenance: crate::provenance::Provenance::collect(),
         rows,
     })
 }
@@ -436,6 +439,7 @@ mod tests {
             repeat: 1,
             threads: 1,
             at_spp: Some(16),
+            provenance: crate::provenance::Provenance::collect(),
             rendered_reference: None,
             rows,
         };

@@ -197,6 +197,26 @@ impl ConvergeReport {
     /// Writes `<scene>.csv`, `<scene>.md` and (with the `plot` feature) `<scene>.svg` into `dir` (created
     /// if missing), and `<scene>-reference.exr` if the run rendered its
     /// reference; returns their paths.
+    /// The run's description beside its tables: what was measured, the
+    /// files, and the provenance (docs/figures.md).
+    pub fn json(&self, files: &[String]) -> String {
+        let v = serde_json::json!({
+            "schema": "rtow-converge/1",
+            "scene": self.scene,
+            "width": self.width,
+            "height": self.height,
+            "max_depth": self.max_depth,
+            "seed": self.seed,
+            "reference": self.reference,
+            "repeat": self.repeat,
+            "threads": self.threads,
+            "at_spp": self.at_spp,
+            "files": files,
+            "provenance": self.provenance,
+        });
+        serde_json::to_string_pretty(&v).expect("serializes") + "\n"
+    }
+
     pub fn write(&self, dir: &Path) -> Result<Vec<PathBuf>> {
         std::fs::create_dir_all(dir)
             .map_err(|e| Error::Output { path: dir.to_path_buf(), message: format!("--out: {e}") })?;
@@ -210,7 +230,9 @@ impl ConvergeReport {
         #[cfg(not(feature = "plot"))]
         let svg = None;
         let mut paths = Vec::new();
-        for (ext, text) in [("csv", self.csv()), ("md", self.markdown())].into_iter().chain(svg) {
+        let files: Vec<(&str, String)> = [("csv", self.csv()), ("md", self.markdown())].into_iter().chain(svg).collect();
+        let names: Vec<String> = files.iter().map(|(ext, _)| format!("{stem}.{ext}")).collect();
+        for (ext, text) in files.into_iter().chain([("json", self.json(&names))]) {
             let p = dir.join(format!("{stem}.{ext}"));
             crate::output::write_atomic(&p, text.as_bytes())?;
             paths.push(p);
