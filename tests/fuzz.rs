@@ -17,8 +17,8 @@
 //! compare without a panic and with finite figures.
 //!
 //! `cargo test` runs it for 3 seconds; `.ci/run` for 60
-//! (`RTOW_FUZZ_SECS=60 cargo test --test fuzz`); a long run:
-//! `RTOW_FUZZ_SECS=3600 RTOW_FUZZ_SEED=7 cargo test --test fuzz -- --nocapture`.
+//! (`RTOW_FUZZ_SECS=60 cargo test --release --test fuzz`); a long run:
+//! `RTOW_FUZZ_SECS=3600 RTOW_FUZZ_SEED=7 cargo test --release --test fuzz -- --nocapture`.
 //! A failure prints the seed and the input, and writes it to
 //! `target/tmp/fuzz-failure.<ext>` to be replayed with `rtow render`.
 
