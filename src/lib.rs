@@ -64,6 +64,7 @@ mod job;
 mod kernel;
 pub mod limits;
 mod material;
+mod math;
 pub mod output;
 mod plan;
 mod probe;
@@ -105,6 +106,9 @@ pub mod internals {
     }
     pub mod material {
         pub use crate::material::*;
+    }
+    pub mod math {
+        pub use crate::math::*;
     }
     pub mod plan {
         pub use crate::plan::*;

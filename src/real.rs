@@ -57,7 +57,7 @@ pub trait Real:
 {
     type Mask: Mask;
     /// The matching unsigned integer lanes (random streams).
-    type U32: Copy;
+    type U32: U32Lanes;
     const LANES: usize;
 
     fn splat(x: f32) -> Self;
@@ -85,6 +85,14 @@ pub trait Real:
     fn select(m: Self::Mask, a: Self, b: Self) -> Self;
     /// Uniform float in [0, 1) from 32 random bits: `(x >> 8) * 2^-24`.
     fn unit_from_bits(bits: Self::U32) -> Self;
+    /// Rounded down to an integer (exact, as `f32::floor`; `-0.0` stays `-0.0`).
+    fn floor(self) -> Self;
+    /// The IEEE-754 bits of each lane.
+    fn to_u32_bits(self) -> Self::U32;
+    /// The real whose IEEE-754 bits are `u`, in each lane.
+    fn from_u32_bits(u: Self::U32) -> Self;
+    /// Each lane's integer `u` (below 2^24, so exactly) as a real.
+    fn from_small_u32(u: Self::U32) -> Self;
     fn u_splat(x: u32) -> Self::U32;
     /// `a < b` per lane, as a mask of this width (closest-hit ties: lower index wins).
     fn u_lt(a: Self::U32, b: Self::U32) -> Self::Mask;
@@ -178,6 +186,22 @@ impl Real for f32 {
     #[inline(always)]
     fn unit_from_bits(bits: u32) -> Self {
         (bits >> 8) as f32 * (1.0 / 16_777_216.0)
+    }
+    #[inline(always)]
+    fn floor(self) -> Self {
+        f32::floor(self)
+    }
+    #[inline(always)]
+    fn to_u32_bits(self) -> u32 {
+        f32::to_bits(self)
+    }
+    #[inline(always)]
+    fn from_u32_bits(u: u32) -> Self {
+        f32::from_bits(u)
+    }
+    #[inline(always)]
+    fn from_small_u32(u: u32) -> Self {
+        u as f32
     }
     #[inline(always)]
     fn u_splat(x: u32) -> u32 {
@@ -468,6 +492,23 @@ macro_rules! impl_wide {
                 // (bits >> 8) < 2^24, so the signed conversion is exact.
                 let i: $i = bytemuck::cast(bits >> 8);
                 $f::$from_int(i) * $f::splat(1.0 / 16_777_216.0)
+            }
+            #[inline(always)]
+            fn floor(self) -> Self {
+                $f::floor(self)
+            }
+            #[inline(always)]
+            fn to_u32_bits(self) -> $u {
+                bytemuck::cast(self)
+            }
+            #[inline(always)]
+            fn from_u32_bits(u: $u) -> Self {
+                bytemuck::cast(u)
+            }
+            #[inline(always)]
+            fn from_small_u32(u: $u) -> Self {
+                // Below 2^24, so the signed conversion is exact.
+                $f::$from_int(bytemuck::cast::<$u, $i>(u))
             }
             #[inline(always)]
             fn u_splat(x: u32) -> $u {

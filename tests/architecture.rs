@@ -11,7 +11,7 @@ use std::path::{Path, PathBuf};
 /// The layers, bottom up. A module may import modules of lower layers, and
 /// of its own layer where the layer allows it (the graph stays acyclic).
 const LAYERS: &[(&str, &[&str])] = &[
-    ("foundation", &["error", "choice", "real", "limits", "output", "vec3", "sampling", "settings"]),
+    ("foundation", &["error", "choice", "real", "math", "limits", "output", "vec3", "sampling", "settings"]),
     ("user side", &["scene"]),
     ("kernel side", &["probe", "film", "material", "geometry", "camera", "estimator", "plan", "kernel"]),
     ("bridge", &["job"]),
