@@ -278,7 +278,8 @@ fn version_names_the_simd_instruction_set() {
         assert!(r.stdout.contains(env!("CARGO_PKG_VERSION")), "{:?}", r.stdout);
         assert!(r.stdout.contains(rtow::isa()), "{:?} lacks {:?}", r.stdout, rtow::isa());
         // The commit the build came from, or that it is not known.
-        let commit = rtow::provenance::commit().map_or("commit unknown".to_string(), |c| format!("commit {}", &c[..12]));
+        let commit =
+            rtow::provenance::commit().map_or("commit unknown".to_string(), |c| format!("commit {}", &c[..12]));
         assert!(r.stdout.contains(&commit), "{:?} lacks {commit:?}", r.stdout);
     }
 }
@@ -327,7 +328,11 @@ fn help_states_the_defaults_the_library_uses() {
         format!("at most {}", rtow::limits::MAX_TILE),
         format!("[default: {}]", rtow::ROULETTE_AFTER_RAYS),
         format!("[default: {}]", rtow::ADAPTIVE_MIN_SPP),
-        format!("[default: {} for path traced scenes, {} for the debug", rtow::Mode::Path.default_gamma(), rtow::Mode::Normals.default_gamma()),
+        format!(
+            "[default: {} for path traced scenes, {} for the debug",
+            rtow::Mode::Path.default_gamma(),
+            rtow::Mode::Normals.default_gamma()
+        ),
     ] {
         assert!(render.contains(&want), "render --help lacks {want:?}: {render}");
     }
@@ -406,14 +411,27 @@ fn statistics_files_carry_their_provenance_in_one_schema() {
     run(&["--shard", "2/2", "--rr", "-o", "p2.rtfilm"]);
     run(&["--rr", "-o", "rr.png", "--stats-json", "rr.json"]);
     success(&rtow(d, &["merge", "p1.rtfilm", "p2.rtfilm", "-o", "m.png", "--stats-json", "m.json", "-q"]), "merge");
-    let read = |f: &str| -> serde_json::Value { serde_json::from_str(&std::fs::read_to_string(d.join(f)).unwrap()).unwrap() };
+    let read =
+        |f: &str| -> serde_json::Value { serde_json::from_str(&std::fs::read_to_string(d.join(f)).unwrap()).unwrap() };
     let (one, rr, m) = (read("one.json"), read("rr.json"), read("m.json"));
     let keys = |v: &serde_json::Value| v.as_object().unwrap().keys().cloned().collect::<Vec<_>>();
     assert_eq!(keys(&one), keys(&m), "one schema for render and merge");
     assert_eq!((one["schema"].as_str(), m["schema"].as_str()), (Some("rtow-stats/1"), Some("rtow-stats/1")));
     assert_eq!((one["command"].as_str(), m["command"].as_str()), (Some("render"), Some("merge")));
     // The merge's settings are the parts': those of the one-process render with --rr.
-    for k in ["width", "height", "spp", "max_depth", "seed", "sampler", "russian_roulette", "adaptive", "rays", "samples", "image_hash"] {
+    for k in [
+        "width",
+        "height",
+        "spp",
+        "max_depth",
+        "seed",
+        "sampler",
+        "russian_roulette",
+        "adaptive",
+        "rays",
+        "samples",
+        "image_hash",
+    ] {
         assert_eq!(m[k], rr[k], "{k}");
     }
     assert_eq!(m["russian_roulette"], rtow::ROULETTE_AFTER_RAYS);

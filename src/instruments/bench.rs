@@ -395,7 +395,7 @@ impl Baseline {
             if let Some(w) = b.work {
                 // A packet has `lanes` lanes and at least one of them active.
                 let lanes_ok = |active: u64, total: u64| {
-                    active <= total && total <= active.saturating_mul(lanes) && total % lanes == 0
+                    active <= total && total <= active.saturating_mul(lanes) && total.is_multiple_of(lanes)
                 };
                 if w.roots > w.sphere_tests
                     || w.box_tests > w.nodes.saturating_mul(8)

@@ -230,7 +230,8 @@ impl ConvergeReport {
         #[cfg(not(feature = "plot"))]
         let svg = None;
         let mut paths = Vec::new();
-        let files: Vec<(&str, String)> = [("csv", self.csv()), ("md", self.markdown())].into_iter().chain(svg).collect();
+        let files: Vec<(&str, String)> =
+            [("csv", self.csv()), ("md", self.markdown())].into_iter().chain(svg).collect();
         let names: Vec<String> = files.iter().map(|(ext, _)| format!("{stem}.{ext}")).collect();
         for (ext, text) in files.into_iter().chain([("json", self.json(&names))]) {
             let p = dir.join(format!("{stem}.{ext}"));
