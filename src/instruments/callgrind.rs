@@ -60,10 +60,14 @@ pub struct Profile {
 }
 
 /// Whether the function `name` (as callgrind writes it) is `path`: the path,
-/// with `<...>` of trait and generic syntax ignored, followed by nothing, a
-/// generic list, a recursion mark or a hash.
+/// (an impl's `<Type>::` read as `Type::`), followed by nothing, a generic
+/// list, a recursion mark or a hash.
 fn is(name: &str, path: &str) -> bool {
-    let plain: String = name.chars().filter(|&c| c != '<' && c != '>').collect();
+    // `<rtow::film::TileFilm>::add` (an impl's path) reads as `rtow::film::TileFilm::add`.
+    let plain = match name.strip_prefix('<') {
+        Some(rest) => rest.replacen(">::", "::", 1),
+        None => name.to_string(),
+    };
     plain.strip_prefix(path).is_some_and(|rest| rest.is_empty() || rest.starts_with("::") || rest.starts_with('\''))
 }
 
@@ -153,20 +157,22 @@ impl Profile {
         self.inclusive(RENDER_LOOP)
     }
 
-    /// The render loop by phase, "rest" last; `None` when no phase function
-    /// is in the profile (not a `phases` build, or the scalar kernel).
+    /// The render loop by phase, "rest" last; `None` when the traversal is
+    /// not out of line in the profile (not a `phases` build, or the scalar kernel).
     pub fn phases(&self) -> Option<Vec<PhaseCount>> {
         let in_phase = |name: &str| PHASES.iter().position(|(_, fs)| fs.iter().any(|f| is(name, f)));
         let mut counts = vec![0u64; PHASES.len()];
-        let mut seen = false;
+        let mut seen = vec![false; PHASES.len()];
         for (name, f) in &self.functions {
             let Some(i) = in_phase(name) else { continue };
-            seen = true;
+            seen[i] = true;
             // Its own cost and its calls, less calls into another phase's functions.
             let into_other = |c: &str| in_phase(c).is_some_and(|j| j != i);
             counts[i] += f.own + f.calls.iter().filter(|(c, _)| !into_other(c)).map(|(_, &x)| x).sum::<u64>();
         }
-        if !seen {
+        // The wavefront's phases are out of line only in a phases build; the
+        // scalar kernel has its film out of line there, but not its traversal.
+        if !seen[0] {
             return None;
         }
         let loop_total = self.render_loop();
@@ -251,7 +257,7 @@ mod tests {
     /// the render loop, which calls scatter (which calls append) and the traversal.
     const PROFILE: &str = "version: 1\ncreator: callgrind-3.19.0\npositions: line\nevents: Ir\nsummary: 1000\n\n\
         fl=(1) a.rs\nfn=(1) main\n1 100\ncfn=(2) rtow::render::tile_work\ncalls=2 5\n2 900\n\n\
-        fn=(2)\n5 40\ncfn=(3) rtow::kernel::wavefront::scatter<wide::f32x8>\ncalls=10 7\n6 300\n\
+        fn=(2)\n5 40\ncfn=(3) rtow::kernel::wavefront::scatter::<wide::f32x8>\ncalls=10 7\n6 300\n\
         cfn=(4) <rtow::plan::Prepared>::closest_hits\ncalls=10 8\n7 560\n\n\
         fn=(3)\n7 250\ncfn=(5) rtow::kernel::wavefront::Paths::append\ncalls=10 9\n8 50\n\n\
         fn=(5)\n9 50\n\nfn=(4)\n8 560\n\ntotals: 1000\n";
@@ -276,6 +282,11 @@ mod tests {
         assert!(!is("rtow::render::tile_works", RENDER_LOOP));
         assert!(is("<rtow::film::TileFilm>::add", "rtow::film::TileFilm::add"));
         assert!(Profile::parse("no profile here").is_err());
+        // Without the traversal out of line (the scalar kernel): no phases.
+        let scalar =
+            "events: Ir\nfn=(1) rtow::render::tile_work\n1 10\ncfn=(2) rtow::film::TileFilm::add\ncalls=1 2\n1 5\nfn=(2)\n2 5\n";
+        let p = Profile::parse(scalar).unwrap();
+        assert_eq!((p.render_loop(), p.phases()), (15, None));
         assert!(Profile::parse("events: Dr\n").is_err());
     }
 }
