@@ -285,6 +285,21 @@ fn check(bytes: &[u8], format: Format) -> Result<&'static str, String> {
     Ok("rendered")
 }
 
+/// Runs one check; counts its kind of success, or returns why it failed (a panic included).
+fn tally_outcome(
+    tally: &mut std::collections::BTreeMap<&'static str, u64>,
+    check: impl FnOnce() -> Result<&'static str, String> + std::panic::UnwindSafe,
+) -> Option<String> {
+    match std::panic::catch_unwind(check) {
+        Ok(Ok(kind)) => {
+            *tally.entry(kind).or_default() += 1;
+            None
+        }
+        Ok(Err(why)) => Some(why),
+        Err(_) => Some("panic".to_string()),
+    }
+}
+
 fn peak_rss_kib() -> Option<u64> {
     let s = std::fs::read_to_string("/proc/self/status").ok()?;
     let line = s.lines().find(|l| l.starts_with("VmHWM:"))?;
@@ -317,15 +332,7 @@ fn fuzz_the_input_path() {
             }
             (data, *f)
         };
-        let outcome = std::panic::catch_unwind(|| check(&input, format));
-        let failure = match outcome {
-            Ok(Ok(kind)) => {
-                *tally.entry(kind).or_default() += 1;
-                None
-            }
-            Ok(Err(why)) => Some(why),
-            Err(_) => Some("panic".to_string()),
-        };
+        let failure = tally_outcome(&mut tally, || check(&input, format));
         if let Some(why) = failure {
             let ext = if format == Format::Json { "json" } else { "toml" };
             let path = Path::new(env!("CARGO_TARGET_TMPDIR")).join(format!("fuzz-failure.{ext}"));
@@ -416,15 +423,7 @@ fn fuzz_the_baselines() {
         for _ in 0..1 + rng.below(4) {
             mutate(&mut rng, &mut data, &corpus);
         }
-        let outcome = std::panic::catch_unwind(|| check_baseline(&data, &report, &settings, threads));
-        let failure = match outcome {
-            Ok(Ok(kind)) => {
-                *tally.entry(kind).or_default() += 1;
-                None
-            }
-            Ok(Err(why)) => Some(why),
-            Err(_) => Some("panic".to_string()),
-        };
+        let failure = tally_outcome(&mut tally, || check_baseline(&data, &report, &settings, threads));
         if let Some(why) = failure {
             let path = Path::new(env!("CARGO_TARGET_TMPDIR")).join("fuzz-failure-baseline.json");
             let _ = std::fs::write(&path, &data);

@@ -104,12 +104,7 @@ pub fn run(a: BenchArgs) -> Result<bool> {
     let report = bench::run(&job, name, &cfg, |k, i, st| {
         tell!("  {} run {}: {:.3} s, {:.2} Mrays/s", k.name(), i + 1, st.seconds, st.mrays_per_s)
     })?;
-    say!("{}", report.table().trim_end_matches('\n'));
-    let json = report.to_json();
-    for id in ids {
-        outputs.stage(id, json.as_bytes())?;
-    }
-    outputs.commit()?;
+    write_report(&report.table(), &report.to_json(), outputs, ids)?;
     Ok(baseline.as_ref().is_none_or(|b| print_comparison(&report, b, &cfg)))
 }
 
@@ -132,13 +127,22 @@ fn outputs(a: &BenchArgs, source: &SceneSource) -> Result<(Outputs, Vec<OutputId
     Ok((outputs, ids))
 }
 
+/// Prints a report's table and writes its JSON to every output, together.
+fn write_report(table: &str, json: &str, mut outputs: Outputs, ids: Vec<OutputId>) -> Result<()> {
+    say!("{}", table.trim_end_matches('\n'));
+    for id in ids {
+        outputs.stage(id, json.as_bytes())?;
+    }
+    outputs.commit()
+}
+
 /// `--instructions`: each kernel counted under callgrind; against a baseline, exactly.
 fn count_instructions(a: &BenchArgs, source: &SceneSource, job: &Job) -> Result<bool> {
     let baseline = a.baseline.as_deref().map(InstructionsBaseline::load).transpose()?;
     if let Some(b) = &baseline {
         b.check(&source.name, job.settings(), job.threads(), &a.kernels)?;
     }
-    let (mut outputs, ids) = outputs(a, source)?;
+    let (outputs, ids) = outputs(a, source)?;
     let program = std::env::current_exe().map_err(|e| Error::System(format!("cannot find this executable: {e}")))?;
     // The counted process: this very command line's job, one kernel, rendered once.
     let child_args = |job: &Job| -> Vec<OsString> {
@@ -179,12 +183,7 @@ fn count_instructions(a: &BenchArgs, source: &SceneSource, job: &Job) -> Result<
     let report = instructions::count(job, &source.name, &a.kernels, &program, child_args, |e| {
         tell!("  {}: {} instructions, {:.2} per ray", e.kernel, e.instructions, e.per_ray)
     })?;
-    say!("{}", report.table().trim_end_matches('\n'));
-    let json = report.to_json();
-    for id in ids {
-        outputs.stage(id, json.as_bytes())?;
-    }
-    outputs.commit()?;
+    write_report(&report.table(), &report.to_json(), outputs, ids)?;
     let Some(b) = baseline else { return Ok(true) };
     if b.provenance.rustc != report.provenance.rustc {
         say!(
