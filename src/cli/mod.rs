@@ -47,7 +47,7 @@ enum Command {
     Merge(merge::MergeArgs),
     /// List the built-in scenes, by book (the stress scenes apart).
     Scenes,
-    /// Measure rays/s of each kernel on a scene; compare with a saved baseline.
+    /// Measure rays/s (or, with --instructions, instructions per ray) of each kernel on a scene; compare with a saved baseline.
     Bench(bench::BenchArgs),
     /// Run time against error: measure kernels and estimator variants at several
     /// sample counts against a reference; write a CSV, a markdown table and a log-log plot.
