@@ -269,7 +269,12 @@ fn rtow_merge_refuses_what_would_not_be_the_image() {
     a.extend_from_slice(&SMALL);
     let with = |extra: &[&'static str]| -> Vec<&'static str> { [a.as_slice(), extra].concat() };
     refused(d, &with(&["--shard", "1/2", "-o", "out.png"]), "--shard");
-    refused(d, &with(&["--shard", "1/2", "--adaptive", "0.1", "-o", "out.rtfilm"]), "split adaptive renders by rows");
+    // (--adaptive-min 2: with 6 samples adaptive sampling can act, so it is on.)
+    refused(
+        d,
+        &with(&["--shard", "1/2", "--adaptive", "0.1", "--adaptive-min", "2", "-o", "out.rtfilm"]),
+        "split adaptive renders by rows",
+    );
     refused(d, &with(&["--shard", "3/2", "-o", "out.rtfilm"]), "--shard");
     refused(d, &with(&["--seed", "1", "--resume", "p1.rtfilm", "-o", "out.png"]), "p1.rtfilm");
     let e = refused(d, &["render", "ch01-gradient", "--width", "8", "--height", "8", "-o", "out.rtfilm"], "no film");

@@ -81,7 +81,7 @@ pub fn run(a: BenchArgs) -> Result<bool> {
     if let Some(b) = &baseline {
         b.check(name, job.settings(), job.threads(), &a.kernels)?;
     }
-    let (mut outputs, ids) = outputs(&a, &source)?;
+    let (outputs, ids) = outputs(&a, &source)?;
     if a.by_depth {
         for (kernel, rows) in bench::work_by_depth_per_kernel(&job, &cfg)? {
             say!("{}:", kernel.name());

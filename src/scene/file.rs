@@ -335,7 +335,9 @@ mod tests {
             let text = scene_to_string(&scene, format);
             let sphere_lines = text.lines().filter(|l| l.contains("center")).count();
             assert_eq!(sphere_lines, scene.spheres.len(), "{format:?}");
-            assert!(text.len() < 100 * scene.spheres.len() + 2000, "{format:?}: {} bytes", text.len());
+            // One line of about 145 bytes per sphere (the old exports wrote
+            // one number per line: 128 KB for this scene).
+            assert!(text.len() < 150 * scene.spheres.len() + 2000, "{format:?}: {} bytes", text.len());
             assert_eq!(scene_from_str(&text, format, Path::new("x")).unwrap(), scene, "{format:?}");
         }
     }
