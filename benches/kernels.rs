@@ -13,24 +13,31 @@
 //! Throughput is in rays (criterion's "elements"). Renders run with the probe off (`()`).
 
 use criterion::{criterion_group, criterion_main, BenchmarkGroup, Criterion, Throughput};
-use rtow::estimator::Estimator;
 use rtow::film::TileFilm;
-use rtow::geometry::closest_hit;
-use rtow::kernel::{scalar, wavefront};
-use rtow::plan::Prepared;
-use rtow::prepare::prepare;
-use rtow::real::Wide;
-use rtow::sampling::ScalarStream;
-use rtow::vec3::V3;
-use rtow::{AccelChoice, Settings};
+use rtow::internals::geometry::closest_hit;
+use rtow::internals::kernel::{scalar, wavefront};
+use rtow::internals::plan::Prepared;
+use rtow::internals::real::Wide;
+use rtow::internals::sampling::{ScalarStream, Sobol};
+use rtow::internals::vec3::V3;
+use rtow::{AccelChoice, Job, Overrides, RenderOptions, Sampler, Settings};
 use std::hint::black_box;
 use std::time::Duration;
 use wide::{f32x16, f32x8};
 
-fn prepared(spp: u32, accel: AccelChoice) -> Prepared {
+/// The final scene at 400x225, depth 50, seed 1, with the default (Sobol) sampler.
+fn job(spp: u32, accel: AccelChoice) -> Job {
     let scene = rtow::scene::final_scene();
-    let s = Settings { width: 400, height: 225, spp, max_depth: 50, seed: 1 };
-    prepare(&scene, s, accel, Estimator::default()).unwrap()
+    let s = Settings { width: 400, height: 225, spp, max_depth: 50, seed: 1, ..Settings::default() };
+    Job::new(&scene, &Overrides::from(s), &RenderOptions { accel, ..Default::default() }).unwrap()
+}
+
+/// The sampler the kernels run with (the default, Sobol points).
+fn sobol(prep: &Prepared) -> Sobol {
+    match prep.settings.sampler {
+        Sampler::Sobol { dims } => Sobol { dims },
+        Sampler::Independent => unreachable!("the benchmarks render with the default sampler"),
+    }
 }
 
 /// 4096 camera rays of the final scene (jittered, through the lens), SoA.
@@ -68,8 +75,9 @@ fn intersect_wide<W: Wide>(
 }
 
 fn intersect(c: &mut Criterion) {
-    let prep = prepared(1, AccelChoice::Brute);
-    let r = rays(&prep);
+    let job = job(1, AccelChoice::Brute);
+    let prep = job.prepared();
+    let r = rays(prep);
     let n = r[0].len();
     let mut g = c.benchmark_group("intersect");
     g.sample_size(10).measurement_time(Duration::from_secs(4)).throughput(Throughput::Elements(n as u64));
@@ -85,8 +93,8 @@ fn intersect(c: &mut Criterion) {
             black_box(acc)
         })
     });
-    intersect_wide::<f32x8>(&mut g, &prep, &r);
-    intersect_wide::<f32x16>(&mut g, &prep, &r);
+    intersect_wide::<f32x8>(&mut g, prep, &r);
+    intersect_wide::<f32x16>(&mut g, prep, &r);
     g.finish();
 }
 
@@ -100,7 +108,7 @@ fn kernels(g: &mut BenchmarkGroup<criterion::measurement::WallTime>, prep: &Prep
         g.bench_function(format!("scalar{prefix}"), |b| {
             b.iter(|| {
                 let mut t = tile();
-                scalar::render_tile(prep, &mut t, 0..prep.settings.spp, &mut ());
+                scalar::render_tile(prep, sobol(prep), &mut t, 0..prep.settings.spp, &mut ());
                 black_box(t.sum[0])
             })
         });
@@ -114,7 +122,7 @@ fn wide_kernel<W: Wide>(g: &mut BenchmarkGroup<criterion::measurement::WallTime>
     g.bench_function(format!("simd{}{prefix}", W::LANES), |b| {
         b.iter(|| {
             let mut t = tile();
-            wavefront::render_tile::<W, ()>(prep, &mut ws, &mut t, 0..prep.settings.spp, &mut ());
+            wavefront::render_tile::<W, (), _>(prep, sobol(prep), &mut ws, &mut t, 0..prep.settings.spp, &mut ());
             black_box(t.sum[0])
         })
     });
@@ -122,14 +130,15 @@ fn wide_kernel<W: Wide>(g: &mut BenchmarkGroup<criterion::measurement::WallTime>
 
 /// Rays one tile traces (the same for every kernel).
 fn tile_rays(prep: &Prepared) -> u64 {
-    scalar::render_tile(prep, &mut tile(), 0..prep.settings.spp, &mut ())
+    scalar::render_tile(prep, sobol(prep), &mut tile(), 0..prep.settings.spp, &mut ())
 }
 
 fn render_tile(c: &mut Criterion) {
-    let prep = prepared(2, AccelChoice::Brute);
+    let job = job(2, AccelChoice::Brute);
+    let prep = job.prepared();
     let mut g = c.benchmark_group("render");
-    g.sample_size(10).measurement_time(Duration::from_secs(6)).throughput(Throughput::Elements(tile_rays(&prep)));
-    kernels(&mut g, &prep, "", true);
+    g.sample_size(10).measurement_time(Duration::from_secs(6)).throughput(Throughput::Elements(tile_rays(prep)));
+    kernels(&mut g, prep, "", true);
     g.finish();
 }
 
@@ -137,10 +146,11 @@ fn render_tile(c: &mut Criterion) {
 fn accel(c: &mut Criterion) {
     let mut g = c.benchmark_group("accel");
     for accel in [AccelChoice::Brute, AccelChoice::Bvh, AccelChoice::BvhRay] {
-        let prep = prepared(2, accel);
-        g.sample_size(10).measurement_time(Duration::from_secs(4)).throughput(Throughput::Elements(tile_rays(&prep)));
+        let job = job(2, accel);
+        let prep = job.prepared();
+        g.sample_size(10).measurement_time(Duration::from_secs(4)).throughput(Throughput::Elements(tile_rays(prep)));
         // The scalar kernel walks the BVH one ray at a time either way.
-        kernels(&mut g, &prep, &format!("/{}", accel.name()), accel != AccelChoice::BvhRay);
+        kernels(&mut g, prep, &format!("/{}", accel.name()), accel != AccelChoice::BvhRay);
     }
     g.finish();
 }

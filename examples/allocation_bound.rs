@@ -17,15 +17,12 @@
 //! Usage: `cargo run --release --example allocation_bound -- [SCENE] [WIDTH] [HEIGHT] [SPP] [SEED]`
 //! (defaults: final 200 113 128 77).
 
-use rtow::estimator::Estimator;
-use rtow::estimator::RELATIVE_ERROR_FLOOR;
-use rtow::kernel::scalar;
-use rtow::prepare::prepare;
-use rtow::probe::PathId;
-use rtow::sampling::ScalarStream;
+use rtow::instruments::probe::PathId;
+use rtow::internals::estimator::RELATIVE_ERROR_FLOOR;
+use rtow::internals::kernel::scalar;
+use rtow::internals::sampling::ScalarStream;
 use rtow::scene::preset;
-use rtow::AccelChoice;
-use rtow::Settings;
+use rtow::{Job, Overrides, RenderOptions, Settings};
 
 struct Pixel {
     var: f64,
@@ -52,14 +49,15 @@ fn main() {
         eprintln!("error: SPP must be at least 2 (a variance needs two samples)");
         std::process::exit(2)
     }
-    let settings = Settings { width: w, height: h, spp, max_depth: 50, seed };
-    let prep = match prepare(&scene, settings, AccelChoice::Auto, Estimator::default()) {
-        Ok(p) => p,
+    let settings = Settings { width: w, height: h, spp, max_depth: 50, seed, ..Settings::default() };
+    let job = match Job::new(&scene, &Overrides::from(settings), &RenderOptions::default()) {
+        Ok(j) => j,
         Err(e) => {
             eprintln!("error: {e}");
             std::process::exit(2)
         }
     };
+    let prep = job.prepared();
     let mut pixels = Vec::with_capacity((w * h) as usize);
     for y in 0..h {
         for x in 0..w {
@@ -69,7 +67,7 @@ fn main() {
             for sample in 0..spp {
                 let mut rng = ScalarStream::for_path(seed, pixel, sample as u64);
                 let id = PathId { pixel: pixel as u32, sample };
-                let (v, n) = scalar::trace(&prep, x, y, id, &mut rng, &mut ());
+                let (v, n) = scalar::trace(prep, x, y, id, &mut rng, &mut ());
                 rays += n as u64;
                 for k in 0..3 {
                     m[k][0] += v[k] as f64;

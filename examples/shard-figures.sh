@@ -1,5 +1,5 @@
 #!/bin/bash
-# The figures of the README's "Past one machine" section. Run on a quiet
+# The figures of docs/shards.md ("Figures"). Run on a quiet
 # machine (nothing else building or rendering), from the repository root:
 #
 #   cargo build --release

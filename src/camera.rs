@@ -1,5 +1,7 @@
-//! Camera rays for both widths: the book's positionable thin-lens camera.
+//! Camera rays for both widths: the book's positionable thin-lens camera,
+//! prepared from a [`View`] (the scene's camera in f64; the job module builds it).
 
+use crate::error::{Error, Result};
 use crate::real::Real;
 use crate::sampling::{in_unit_disk, layout, Stream};
 use crate::vec3::V3;
@@ -9,7 +11,7 @@ use glam::DVec3;
 /// rounded once. Pixel positions are kept relative to the eye, so a camera far
 /// from the origin loses no precision in its ray directions.
 #[derive(Clone, Copy, Debug)]
-pub struct Camera {
+pub struct PreparedCamera {
     pub center: [f32; 3],
     /// Upper-left pixel centre minus the eye (on the focus plane).
     pub to_pixel00: [f32; 3],
@@ -29,7 +31,7 @@ fn f3(v: DVec3) -> [f32; 3] {
     [v.x as f32, v.y as f32, v.z as f32]
 }
 
-/// Where the camera is and what it sees, in f64 (from the scene's camera).
+/// Where the camera is and what it sees, in f64 (built from the scene's camera).
 #[derive(Clone, Copy, Debug)]
 pub struct View {
     pub look_from: DVec3,
@@ -42,7 +44,7 @@ pub struct View {
     pub lens_radius: f64,
 }
 
-impl Camera {
+impl PreparedCamera {
     pub fn new(view: &View, width: u32, height: u32, jitter: bool) -> Self {
         let (from, at, vup) = (view.look_from, view.look_at, view.vup);
         let focus = view.focus_dist;
@@ -57,7 +59,7 @@ impl Camera {
         let upper_left = -(focus * w) - (u * vw) / 2.0 + (v * vh) / 2.0;
         let to00 = upper_left + 0.5 * (du + dv);
         let lr = view.lens_radius;
-        Camera {
+        PreparedCamera {
             center: f3(from),
             to_pixel00: f3(to00),
             du: f3(du),
@@ -69,24 +71,23 @@ impl Camera {
         }
     }
 
-    /// Checks that the f32 camera of `spec` is computable for every image
+    /// Checks that the f32 camera of `view` is computable for every image
     /// size rtow accepts (1x1 up to `MAX_PIXELS` on a side): every vector
     /// finite, the pixel steps and the eye-relative pixel grid non-zero, and
     /// the squared length of a ray's unnormalized direction a normal f32 (the
     /// ray direction is normalized in f32). A backstop behind the range checks
-    /// of `Scene::validate`.
-    pub fn check(spec: &crate::scene::Camera) -> crate::Result<()> {
-        let view = crate::prepare::view(spec);
+    /// of the scene's validation.
+    pub fn check(view: &View) -> Result<()> {
         let big = crate::limits::MAX_PIXELS as u32;
         for (w, h) in [(1, 1), (big, 1), (1, big)] {
-            let cam = Camera::new(&view, w, h, true);
+            let cam = PreparedCamera::new(view, w, h, true);
             let vecs = [cam.center, cam.to_pixel00, cam.du, cam.dv, cam.lens_u, cam.lens_v];
             let len2 = |v: [f32; 3]| v.iter().map(|&x| x as f64 * x as f64).sum::<f64>();
             let ok = vecs.iter().flatten().all(|x| x.is_finite())
                 && [cam.du, cam.dv].iter().all(|v| len2(*v) > 0.0)
                 && len2(cam.to_pixel00) >= (f32::MIN_POSITIVE as f64) * 2f64.powi(24);
             if !ok {
-                return Err(crate::Error::invalid(
+                return Err(Error::invalid(
                     "camera",
                     format!(
                         "look_from, look_at, vfov_deg and the focus distance give no camera the f32 kernels can \
@@ -140,7 +141,7 @@ mod tests {
             focus_dist: DVec3::new(13.0, 2.0, 3.0).length(),
             lens_radius: 0.0,
         };
-        let cam = Camera::new(&view, 401, 201, false);
+        let cam = PreparedCamera::new(&view, 401, 201, false);
         let mut rng = ScalarStream::for_path(0, 0, 0);
         let (o, d) = cam.ray(200.0f32, 100.0f32, &mut rng);
         let want = DVec3::new(-13.0, -2.0, -3.0).normalize();

@@ -1,5 +1,6 @@
-//! Errors, split by who has to act: bad input (exit status 2) or a failure
-//! to write output (exit status 1).
+//! Errors, split by who has to act: bad input (exit status 2), or a failure
+//! of the system around rtow: an output that cannot be written, threads that
+//! cannot start (exit status 1).
 
 use std::path::PathBuf;
 
@@ -11,6 +12,9 @@ pub enum Error {
     /// A value that parses but is not a valid scene or setting; `field` names it.
     #[error("{field}: {message}")]
     Invalid { field: String, message: String },
+    /// An error about the values of the scene read from `path`.
+    #[error("{}: {error}", path.display())]
+    InFile { path: PathBuf, error: Box<Error> },
     /// An unknown preset or unreadable input.
     #[error("{0}")]
     Input(String),
@@ -21,6 +25,9 @@ pub enum Error {
     /// Writing an output failed.
     #[error("cannot write {path}: {message}")]
     Output { path: PathBuf, message: String },
+    /// The operating system refused a resource (e.g. worker threads).
+    #[error("{0}")]
+    System(String),
 }
 
 impl Error {
@@ -28,11 +35,21 @@ impl Error {
         Error::Invalid { field: field.into(), message: message.into() }
     }
 
-    /// The process exit status for this error: 2 for bad input, 1 for output.
+    /// The process exit status for this error: 2 for bad input, 1 for a
+    /// failure to write output or to get a resource.
     pub fn exit_code(&self) -> i32 {
         match self {
-            Error::Output { .. } => 1,
+            Error::Output { .. } | Error::System(_) => 1,
+            Error::InFile { error, .. } => error.exit_code(),
             _ => 2,
+        }
+    }
+
+    /// The error without its file context (what it says about a value).
+    pub fn root(&self) -> &Error {
+        match self {
+            Error::InFile { error, .. } => error.root(),
+            e => e,
         }
     }
 }

@@ -13,18 +13,63 @@
 use crate::error::{Error, Result};
 use crate::film::{Moments, TileFilm};
 use crate::real::Real;
-use crate::sampling::Sampler;
 use crate::sampling::Stream;
 use crate::vec3::V3;
-use serde::Serialize;
+use serde::{Deserialize, Serialize};
 
 /// By default roulette starts once a path has traced this many rays. Measured
-/// on the final scene and ch11-defocus (README, "Run time against error"):
-/// starting after 3 rays costs 28% of the efficiency 1/(MSE x rays) on both
-/// (the sky is the only light, so a live path's next rays are likely to reach
-/// it and matter); after 6 rays it gains 3% on the final scene and costs 7% on
-/// ch11-defocus.
+/// on the final scene and ch11-defocus (docs/convergence.md): starting after
+/// 3 rays costs 28% of the efficiency 1/(MSE x rays) on both (the sky is the
+/// only light, so a live path's next rays are likely to reach it and matter);
+/// after 6 rays it gains 3% on the final scene and costs 7% on ch11-defocus.
 pub const ROULETTE_AFTER_RAYS: u32 = 6;
+
+/// Russian roulette on the path throughput: from `after_rays` rays on, a
+/// path survives with probability `min(1, max throughput component)` and is
+/// reweighted (unbiased; it changes the noise, not the expected image).
+/// Serialized as the number `after_rays`.
+#[derive(Clone, Copy, Debug, PartialEq, Eq, Serialize, Deserialize)]
+#[serde(transparent)]
+pub struct Roulette {
+    /// Roulette starts once a path has traced this many rays (1: right after the camera ray).
+    pub after_rays: u32,
+}
+
+impl Default for Roulette {
+    fn default() -> Self {
+        Roulette { after_rays: ROULETTE_AFTER_RAYS }
+    }
+}
+
+impl Roulette {
+    /// Roulette after `after_rays` rays: at least 1 (the camera ray).
+    pub fn new(after_rays: u32) -> Result<Roulette> {
+        if after_rays == 0 {
+            return Err(Error::invalid(
+                "roulette.after_rays",
+                "roulette can start after 1 ray (the camera ray) at the earliest, not 0",
+            ));
+        }
+        Ok(Roulette { after_rays })
+    }
+
+    /// How the film identity and `--explain` describe it.
+    pub fn describe(roulette: Option<Roulette>) -> String {
+        match roulette {
+            Some(r) => format!("after {} rays", r.after_rays),
+            None => "off".into(),
+        }
+    }
+
+    /// What [`Roulette::describe`] wrote (`None`: text it never writes).
+    pub fn from_description(text: &str) -> Option<Option<Roulette>> {
+        if text == "off" {
+            return Some(None);
+        }
+        let n = text.strip_prefix("after ")?.strip_suffix(" rays")?.parse().ok()?;
+        Roulette::new(n).ok().map(Some)
+    }
+}
 
 /// Russian roulette on a path's throughput `thr` (after the bounce's albedo):
 /// the path survives with probability `p = min(1, max component of thr)` and
@@ -46,27 +91,16 @@ pub fn roulette<R: Real, S: Stream<R>>(thr: V3<R>, rng: &mut S) -> (V3<R>, R::Ma
 /// just scattered faces the roulette before its next ray.
 #[inline(always)]
 pub fn roulette_applies(est: &Estimator, rays: u32) -> bool {
-    match est.russian_roulette {
-        Some(after) => rays >= after,
+    match est.roulette {
+        Some(r) => rays >= r.after_rays,
         None => false,
     }
-}
-
-/// Validates `--rr-after`: roulette after this many rays (at least 1, the camera ray).
-pub fn check_roulette_after(after: u32) -> Result<u32> {
-    if after == 0 {
-        return Err(Error::invalid(
-            "--rr-after",
-            "roulette can start after 1 ray (the camera ray) at the earliest, not 0",
-        ));
-    }
-    Ok(after)
 }
 
 /// Adaptive sampling: a pixel stops once its relative standard error is at
 /// most `threshold`. Decisions are taken only after `min_spp`, `2 min_spp`,
 /// `4 min_spp`, ... samples.
-#[derive(Clone, Copy, Debug, PartialEq, Serialize)]
+#[derive(Clone, Copy, Debug, PartialEq, Serialize, Deserialize)]
 pub struct Adaptive {
     pub threshold: f32,
     pub min_spp: u32,
@@ -74,7 +108,8 @@ pub struct Adaptive {
 
 /// Default first decision point (samples per pixel). An error estimate from
 /// fewer samples is too often wrong the lucky way: on the final scene, first
-/// decisions at 32 samples cost 23% more MSE x rays than at 64 (README).
+/// decisions at 32 samples cost 23% more MSE x rays than at 64
+/// (docs/convergence.md).
 pub const ADAPTIVE_MIN_SPP: u32 = 64;
 
 /// Below this mean value a pixel's error is taken relative to this floor, so
@@ -83,21 +118,39 @@ pub const ADAPTIVE_MIN_SPP: u32 = 64;
 pub const RELATIVE_ERROR_FLOOR: f64 = 0.05;
 
 impl Adaptive {
-    /// Validates the flag values (`--adaptive`, `--adaptive-min`).
+    /// A pixel stops once its relative error is at most `threshold`; the
+    /// first decision is taken after `min_spp` samples.
     pub fn new(threshold: f32, min_spp: u32) -> Result<Adaptive> {
         if !(threshold.is_finite() && threshold > 0.0) {
             return Err(Error::invalid(
-                "--adaptive",
+                "adaptive.threshold",
                 format!("the relative error threshold must be a positive number, not {threshold}"),
             ));
         }
         if min_spp < 2 {
             return Err(Error::invalid(
-                "--adaptive-min",
+                "adaptive.min_spp",
                 format!("the first decision needs at least 2 samples to estimate an error, not {min_spp}"),
             ));
         }
         Ok(Adaptive { threshold, min_spp })
+    }
+
+    /// How the film identity describes it.
+    pub fn describe(adaptive: Option<Adaptive>) -> String {
+        match adaptive {
+            Some(a) => format!("threshold {} from {} spp", a.threshold, a.min_spp),
+            None => "off".into(),
+        }
+    }
+
+    /// What [`Adaptive::describe`] wrote (`None`: text it never writes).
+    pub fn from_description(text: &str) -> Option<Option<Adaptive>> {
+        if text == "off" {
+            return Some(None);
+        }
+        let (t, m) = text.strip_prefix("threshold ")?.strip_suffix(" spp")?.split_once(" from ")?;
+        Adaptive::new(t.parse().ok()?, m.parse().ok()?).ok().map(Some)
     }
 
     /// The next decision point after `done` samples, or `spp` if there is none
@@ -122,7 +175,7 @@ impl Adaptive {
 /// the channels' mean sample variance over the sample count) over the pixel's
 /// mean value (the channels' average, at least [`RELATIVE_ERROR_FLOOR`]).
 /// Infinite below 2 samples. It is computed from the very samples being
-/// averaged, so stopping on it is slightly biased (see the README).
+/// averaged, so stopping on it is slightly biased (docs/convergence.md).
 pub fn relative_error(m: &Moments) -> f64 {
     let n = m.n as f64;
     if m.n < 2 {
@@ -138,14 +191,11 @@ pub fn relative_error(m: &Moments) -> f64 {
     se / (mean / 3.0).max(RELATIVE_ERROR_FLOOR)
 }
 
-/// The estimator's options, as the kernels see them.
+/// The estimator's options, as the kernels see them (both off by default).
 #[derive(Clone, Copy, Debug, Default, PartialEq, Serialize)]
 pub struct Estimator {
-    /// Russian roulette from this many rays on (`None`: off).
-    pub russian_roulette: Option<u32>,
+    pub roulette: Option<Roulette>,
     pub adaptive: Option<Adaptive>,
-    /// Which sampler draws the paths' random decisions.
-    pub sampler: Sampler,
 }
 
 impl Estimator {
@@ -164,6 +214,20 @@ mod tests {
     use super::*;
     use crate::sampling::{path_state, ScalarStream, Xoshiro128PlusX8};
     use wide::{f32x8, u32x8};
+
+    #[test]
+    fn descriptions_read_back() {
+        for r in [None, Some(Roulette { after_rays: 1 }), Some(Roulette::default())] {
+            assert_eq!(Roulette::from_description(&Roulette::describe(r)), Some(r));
+        }
+        for a in [None, Some(Adaptive::new(0.02, 64).unwrap()), Some(Adaptive::new(1e-7, 2).unwrap())] {
+            assert_eq!(Adaptive::from_description(&Adaptive::describe(a)), Some(a));
+        }
+        for bad in ["", "after 0 rays", "after x rays", "threshold -1 from 64 spp", "threshold 0.1 from 1 spp", "on"] {
+            assert_eq!(Roulette::from_description(bad).flatten(), None, "{bad}");
+            assert!(Adaptive::from_description(bad).flatten().is_none(), "{bad}");
+        }
+    }
 
     #[test]
     fn decision_points_double_from_min() {
@@ -204,10 +268,10 @@ mod tests {
     fn bad_adaptive_values_name_the_flag() {
         for t in [0.0, -1.0, f32::NAN, f32::INFINITY] {
             let e = Adaptive::new(t, 16).unwrap_err().to_string();
-            assert!(e.starts_with("--adaptive:"), "{e}");
+            assert!(e.starts_with("adaptive.threshold:"), "{e}");
         }
         let e = Adaptive::new(0.1, 1).unwrap_err().to_string();
-        assert!(e.starts_with("--adaptive-min:"), "{e}");
+        assert!(e.starts_with("adaptive.min_spp:"), "{e}");
     }
 
     #[test]

@@ -1,48 +1,125 @@
-//! rtow: a data-oriented path tracer for the scenes of *Ray Tracing in One Weekend*.
+//! rtow: a data-oriented path tracer for the scenes of *Ray Tracing in One
+//! Weekend*, fast and bit-exact: a scalar reference kernel and a SIMD
+//! wavefront kernel (8 or 16 lanes, structure-of-arrays, a queue per material
+//! kind) render the same image, bit for bit, for a seed.
 //!
-//! Data flow, one module each (the README's code map):
+//! # Use
 //!
-//! ```text
-//! scene (user-facing, validated) + settings (resolved once: scene + flags)
-//!   -> prepare -> plan::Prepared (a typed Plan, SoA spheres, material tables, camera, BVH)
-//!   -> render (tiles over rayon) -> kernel::scalar | kernel::wavefront<W> (8 or 16 lanes)
-//!        (geometry: intersection and BVH; material: scatter; sampling: random streams;
-//!         probe: what instruments see)
-//!   -> film (per-tile accumulators) -> Image -> output (PNG / PFM / EXR, atomic)
+//! A scene (built in code, a preset, or a JSON / TOML file), resolved once
+//! with overrides and options into a [`Job`], rendered into an [`Image`]:
+//!
+//! ```
+//! use rtow::{Job, Overrides, RenderOptions};
+//!
+//! # fn main() -> rtow::Result<()> {
+//! let scene = rtow::scene::preset("final").expect("a built-in scene");
+//! // Or a file: rtow::scene::load_scene(Path::new("final.json"))?
+//! let overrides = Overrides { width: Some(64), height: Some(36), spp: Some(4), ..Default::default() };
+//! let job = Job::new(&scene, &overrides, &RenderOptions::default())?; // checks everything, once
+//! println!("{}", job.explain());
+//! let rendered = rtow::render(&job, None)?;
+//! let stats = &rendered.stats;
+//! println!("{} rays, {:.1} Mrays/s, {} kernel on {}", stats.rays, stats.mrays_per_s, stats.kernel, rtow::isa());
+//! let png: Vec<u8> = rendered.image.png_bytes(job.default_gamma()); // or image.save(path, gamma)
+//! assert!(!png.is_empty());
+//! # Ok(())
+//! # }
 //! ```
 //!
-//! The kernels are one estimator: every formula is written once over
-//! [`real::Real`] and instantiated for `f32`, `wide::f32x8` and `wide::f32x16`,
-//! so for the same seed they produce bit-identical images. The instruments in
-//! [`tools`] (bench, stress, converge) drive the real kernels through probes.
-pub mod camera;
-pub mod error;
-pub mod estimator;
+//! Past one machine, a job renders a shard of its samples or rows into a
+//! partial film, and films merge into exactly the one-process image
+//! ([`shard`]). Writing several outputs as one transaction: [`output`].
+//!
+//! # Speed needs the build's instruction set
+//!
+//! SIMD code is chosen at compile time. rtow's own `.cargo/config.toml` sets
+//! `target-cpu=native`, but a crate that depends on rtow builds with its own
+//! flags: set them in *your* `.cargo/config.toml` (or `RUSTFLAGS`), e.g.
+//!
+//! ```toml
+//! [target.x86_64-unknown-linux-gnu]
+//! rustflags = ["-C", "target-cpu=native"]   # or x86-64-v3 (AVX2), x86-64-v4 (AVX-512)
+//! ```
+//!
+//! [`isa()`] says what a build got. Every build renders the same image.
+//!
+//! # Layout
+//!
+//! The data flow is the module layout (docs/architecture.md has the picture):
+//! the user side ([`scene`]) and the kernel side (camera, plan, geometry,
+//! materials, sampling, kernels, film) never import each other; the job
+//! module is the bridge that reads both, once per render. The [`instruments`]
+//! measure the real renderer through probes; [`internals`] exposes its
+//! building blocks to tests, benchmarks and experiments (no stability promise).
+
+mod camera;
+mod choice;
+mod error;
+mod estimator;
+pub mod files;
 pub mod film;
-pub mod geometry;
-pub mod kernel;
+mod geometry;
+pub mod instruments;
+mod job;
+mod kernel;
 pub mod limits;
-pub mod material;
+mod material;
+mod math;
 pub mod output;
-pub mod plan;
-pub mod prepare;
-pub mod probe;
-pub mod real;
-pub mod render;
-pub mod sampling;
+mod plan;
+mod probe;
+pub mod provenance;
+mod real;
+mod render;
+mod sampling;
 pub mod scene;
-pub mod settings;
+mod settings;
 pub mod shard;
-pub mod tools;
-pub mod vec3;
+mod vec3;
 
+pub use choice::{AccelChoice, KernelChoice, Mode};
 pub use error::{Error, Result};
+pub use estimator::{Adaptive, Roulette, ADAPTIVE_MIN_SPP, ROULETTE_AFTER_RAYS};
 pub use film::Image;
-pub use render::{isa, render, Kernel, Rendered, Stats};
-pub use scene::Scene;
-pub use settings::{AccelChoice, KernelChoice, Overrides, RenderOptions, Settings};
+pub use job::{Job, Overrides, RenderOptions, DEFAULT_TILE};
+pub use kernel::{build_description, isa, Kernel, HAS_SIMD16};
+pub use render::{render, render_counted, render_probed, Progress, Rendered, Stats};
+pub use sampling::Sampler;
+pub use scene::{Scene, SceneSource};
+pub use settings::Settings;
 
-/// The settings a scene asks for (its `render` table, else rtow's defaults).
-pub fn default_settings(scene: &Scene) -> Settings {
-    Settings::resolve(&scene.render, &Overrides::default())
+/// The renderer's building blocks, for tests, benchmarks and experiments: the
+/// geometry and its BVH, the materials' scatter functions, the samplers, the
+/// kernels, the numeric interface. Not a stable API.
+pub mod internals {
+    pub mod camera {
+        pub use crate::camera::*;
+    }
+    pub mod estimator {
+        pub use crate::estimator::*;
+    }
+    pub mod geometry {
+        pub use crate::geometry::*;
+    }
+    pub mod kernel {
+        pub use crate::kernel::*;
+    }
+    pub mod material {
+        pub use crate::material::*;
+    }
+    pub mod math {
+        pub use crate::math::*;
+    }
+    pub mod plan {
+        pub use crate::plan::*;
+    }
+    pub mod real {
+        pub use crate::real::*;
+    }
+    pub mod sampling {
+        pub use crate::sampling::*;
+    }
+    pub mod vec3 {
+        pub use crate::vec3::*;
+    }
 }

@@ -1,8 +1,8 @@
 //! Documented bounds on every input rtow accepts: file sizes, scene contents,
 //! world lengths and resource flags. Each one is checked before any work that
 //! depends on it, so hostile input is refused (exit status 2) instead of
-//! exhausting memory, hanging, or rendering garbage. The README's
-//! "Reliability" section lists them.
+//! exhausting memory, hanging, or rendering garbage. docs/reliability.md
+//! lists them.
 
 use crate::error::{Error, Result};
 
@@ -11,7 +11,8 @@ use crate::error::{Error, Result};
 /// image (12) and the 8-bit output, about 4.5 GB at the limit.
 pub const MAX_PIXELS: u64 = 1 << 26;
 
-/// Largest tile edge in pixels: a tile's paths must fit one wavefront workspace.
+/// Largest tile edge in pixels: a tile's 45 x 45 = 2025 pixels must fit one
+/// wavefront workspace of `MAX_PATHS` = 2048 paths (one sample each at a time).
 pub const MAX_TILE: u32 = 45;
 
 /// Largest JSON scene file read (bytes). serde_json parses it as a stream into
@@ -63,8 +64,8 @@ pub const MIN_VFOV_DEG: f32 = 1e-4;
 /// Largest thin-lens radius (world units).
 pub const MAX_LENS_RADIUS: f32 = MAX_COORD;
 
-/// Most worker threads (`--threads`): more than any machine rtow runs on has
-/// cores; each thread costs a stack and a workspace.
+/// Most worker threads: more than any machine rtow runs on has cores; each
+/// thread costs a stack and a workspace.
 pub const MAX_THREADS: usize = 1024;
 
 /// A render in which more than this fraction of the samples were NaN or
@@ -99,13 +100,11 @@ pub fn read_bounded(path: &std::path::Path, limit: u64, what: &str) -> Result<Ve
     Ok(bytes)
 }
 
-/// `--threads`: at least 1, at most [`MAX_THREADS`].
+/// Worker threads: at least 1, at most [`MAX_THREADS`] (`None`: one per core).
 pub fn check_threads(threads: Option<usize>) -> Result<()> {
     match threads {
-        Some(0) => Err(Error::invalid("--threads", "must be at least 1")),
-        Some(n) if n > MAX_THREADS => {
-            Err(Error::invalid("--threads", format!("{n} is too many; at most {MAX_THREADS}")))
-        }
+        Some(0) => Err(Error::invalid("threads", "must be at least 1")),
+        Some(n) if n > MAX_THREADS => Err(Error::invalid("threads", format!("{n} is too many; at most {MAX_THREADS}"))),
         _ => Ok(()),
     }
 }

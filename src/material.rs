@@ -11,7 +11,6 @@
 use crate::real::Real;
 use crate::sampling::{unit_vector, Stream};
 use crate::vec3::V3;
-use serde::Deserialize;
 
 /// Material kinds, one wavefront queue each.
 #[derive(Clone, Copy, Debug, PartialEq, Eq, Hash, PartialOrd, Ord)]
@@ -30,15 +29,6 @@ impl Kind {
             Kind::Metal => "metal",
             Kind::Dielectric => "dielectric",
         }
-    }
-}
-
-/// A material's `type`: a string naming the kind.
-impl<'de> Deserialize<'de> for Kind {
-    fn deserialize<D: serde::Deserializer<'de>>(d: D) -> std::result::Result<Self, D::Error> {
-        const NAMES: &[&str] = &["lambertian", "metal", "dielectric"];
-        let s = String::deserialize(d)?;
-        Kind::ALL.into_iter().find(|k| k.name() == s).ok_or_else(|| serde::de::Error::unknown_variant(&s, NAMES))
     }
 }
 

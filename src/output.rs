@@ -145,6 +145,20 @@ fn same_file(a: &Path, b: &Path) -> bool {
     same_inode(a, b) || matches!((identity(a), identity(b)), (Some(x), Some(y)) if x == y)
 }
 
+/// At most the first 40 characters of an input's text, for a message (an
+/// error line never repeats an unbounded input).
+pub fn clip(text: &str) -> String {
+    clip_to(text, 40)
+}
+
+/// At most the first `n` characters of `text`, `...` marking a cut.
+pub fn clip_to(text: &str, n: usize) -> String {
+    match text.char_indices().nth(n) {
+        Some((i, _)) => format!("{}...", &text[..i]),
+        None => text.to_string(),
+    }
+}
+
 /// Checks that the extension of `path` is one of `allowed` (lower case,
 /// without the dot); otherwise a usage error (exit status 2) naming them.
 pub fn check_extension(path: &Path, allowed: &[&str], flag: &str) -> Result<()> {
@@ -157,7 +171,7 @@ pub fn check_extension(path: &Path, allowed: &[&str], flag: &str) -> Result<()> 
     }
 }
 
-struct Output {
+struct Staged {
     /// As the user gave it (for messages).
     shown: PathBuf,
     /// Where the bytes land (symlinks followed).
@@ -172,7 +186,7 @@ struct Output {
 #[derive(Default)]
 pub struct Outputs {
     inputs: Vec<(PathBuf, String)>,
-    outputs: Vec<Output>,
+    outputs: Vec<Staged>,
 }
 
 /// Which output of an [`Outputs`] to stage.
@@ -231,7 +245,7 @@ impl Outputs {
             std::fs::OpenOptions::new().write(true).open(&target).map_err(|e| output_error(path, e))?;
         }
         temp_in(dir).map_err(|e| output_error(path, e))?;
-        self.outputs.push(Output { shown: path.to_path_buf(), target, flag: flag.to_string(), temp: None });
+        self.outputs.push(Staged { shown: path.to_path_buf(), target, flag: flag.to_string(), temp: None });
         Ok(OutputId(self.outputs.len() - 1))
     }
 
@@ -338,27 +352,6 @@ impl Drop for Outputs {
     }
 }
 
-/// The image file types rtow writes: PNG (8-bit, gamma encoded), PFM and EXR (linear).
-pub const IMAGE_TYPES: [&str; 3] = ["png", "pfm", "exr"];
-
-/// The bytes of `image` as the file type `path`'s extension names (checked
-/// up front with [`check_extension`]; an unknown one is a usage error here too).
-pub fn image_bytes(image: &crate::Image, path: &Path, gamma: f32) -> Result<Vec<u8>> {
-    let ext = path.extension().and_then(|e| e.to_str()).map(|e| e.to_ascii_lowercase());
-    match ext.as_deref() {
-        Some("png") => Ok(image.png_bytes(gamma)),
-        Some("pfm") => Ok(image.pfm_bytes()),
-        Some("exr") => Ok(image.exr_bytes()),
-        _ => check_extension(path, &IMAGE_TYPES, "image").map(|_| Vec::new()),
-    }
-}
-
-/// Checks, before any expensive work, that `path` can be written (see
-/// [`Outputs::add`]).
-pub fn check_writable(path: &Path) -> Result<()> {
-    Outputs::new().add(path, "output").map(|_| ())
-}
-
 /// Writes `bytes` to `path` atomically: a transaction of one output.
 pub fn write_atomic(path: &Path, bytes: &[u8]) -> Result<()> {
     let mut out = Outputs::new();
@@ -370,6 +363,11 @@ pub fn write_atomic(path: &Path, bytes: &[u8]) -> Result<()> {
 #[cfg(test)]
 mod tests {
     use super::*;
+
+    /// Checks `path` as the one output of a run.
+    fn check_writable(path: &Path) -> Result<()> {
+        Outputs::new().add(path, "output").map(|_| ())
+    }
 
     fn names(dir: &Path) -> Vec<String> {
         let mut v: Vec<String> =

@@ -1,8 +1,10 @@
-//! What a scene needs, decided once before rendering ([`Plan`]), and the scene
-//! laid out for the kernels ([`Prepared`]). Built from a scene by
-//! [`crate::prepare`]; read by the kernels, which do only what the plan says.
+//! The kernel side of the bridge: what a scene needs, decided once before
+//! rendering ([`Plan`]), and the scene laid out for the kernels
+//! ([`Prepared`]). The job module builds both from a scene; the kernels read
+//! them and do only what the plan says. Nothing here knows the scene's schema.
 
-use crate::camera::Camera;
+use crate::camera::PreparedCamera;
+use crate::choice::Mode;
 use crate::estimator::Estimator;
 use crate::geometry::{self, Bvh, Spheres};
 use crate::material::{Kind, MaterialTables};
@@ -10,32 +12,7 @@ use crate::probe::Probe;
 use crate::real::Wide;
 use crate::settings::Settings;
 use crate::vec3::V3;
-use serde::{Deserialize, Serialize, Serializer};
-
-/// What the renderer computes for each camera ray.
-#[derive(Serialize, Deserialize, Clone, Copy, Debug, PartialEq, Eq, Default)]
-#[serde(rename_all = "lowercase")]
-pub enum Mode {
-    /// Chapter 1: no rays; r = x / width, g = (rows from the bottom) / height, b = 0.2.
-    Gradient,
-    /// Chapters 3-4: the sky where a camera ray misses, the hit material's colour where it hits.
-    Flat,
-    /// Chapters 5-6: 0.5 * (n + 1) of the outward normal where a camera ray hits.
-    Normals,
-    /// Chapter 7 on: the path tracer.
-    #[default]
-    Path,
-}
-
-impl Mode {
-    /// The book writes the debug images without gamma and the path traced ones with gamma 2.
-    pub fn default_gamma(self) -> f32 {
-        match self {
-            Mode::Path => 2.0,
-            Mode::Gradient | Mode::Flat | Mode::Normals => 1.0,
-        }
-    }
-}
+use serde::{Serialize, Serializer};
 
 /// A set of material kinds (serialized as the list of their names).
 #[derive(Clone, Copy, Debug, Default, PartialEq, Eq)]
@@ -92,10 +69,6 @@ impl Accel {
     }
 }
 
-/// With at least this many spheres `auto` builds a BVH. Measured with
-/// `rtow bench` on random scenes (docs/performance.md).
-pub const BVH_CROSSOVER: usize = 16;
-
 /// The decisions that make each render do only the work its scene needs.
 #[derive(Clone, Debug, Serialize, PartialEq, Eq)]
 pub struct Plan {
@@ -139,7 +112,7 @@ pub struct Prepared {
     pub settings: Settings,
     pub spheres: Spheres,
     pub materials: MaterialTables,
-    pub camera: Camera,
+    pub camera: PreparedCamera,
     pub sky: SkyColours,
     /// Present when the plan chose a BVH.
     pub bvh: Option<Bvh>,

@@ -11,8 +11,11 @@
 //! Comparisons return a `Mask`; branches become `select`. For `f32` the mask is
 //! a `bool` and `select` a plain `if`, so the scalar kernel stays readable.
 
-use std::ops::{Add, BitAnd, BitOr, Div, Mul, Neg, Not, Sub};
+use std::ops::{Add, BitAnd, BitOr, BitXor, Div, Mul, Neg, Not, Shl, Shr, Sub};
 use wide::{f32x16, f32x8, i32x16, i32x8, u32x16, u32x8};
+
+/// The most lanes any width has (`f32x16`): the size of per-packet scratch arrays.
+pub const MAX_LANES: usize = 16;
 
 /// A lane mask: `bool` for one lane, an all-ones/all-zeros float vector for several.
 pub trait Mask: Copy + BitAnd<Output = Self> + BitOr<Output = Self> + Not<Output = Self> {
@@ -54,7 +57,7 @@ pub trait Real:
 {
     type Mask: Mask;
     /// The matching unsigned integer lanes (random streams).
-    type U32: Copy;
+    type U32: U32Lanes;
     const LANES: usize;
 
     fn splat(x: f32) -> Self;
@@ -87,6 +90,14 @@ pub trait Real:
     fn select(m: Self::Mask, a: Self, b: Self) -> Self;
     /// Uniform float in [0, 1) from 32 random bits: `(x >> 8) * 2^-24`.
     fn unit_from_bits(bits: Self::U32) -> Self;
+    /// Rounded down to an integer (exact, as `f32::floor`; `-0.0` stays `-0.0`).
+    fn floor(self) -> Self;
+    /// The IEEE-754 bits of each lane.
+    fn to_u32_bits(self) -> Self::U32;
+    /// The real whose IEEE-754 bits are `u`, in each lane.
+    fn from_u32_bits(u: Self::U32) -> Self;
+    /// Each lane's integer `u` (below 2^24, so exactly) as a real.
+    fn from_small_u32(u: Self::U32) -> Self;
     fn u_splat(x: u32) -> Self::U32;
     /// `a < b` per lane, as a mask of this width (closest-hit ties: lower index wins).
     fn u_lt(a: Self::U32, b: Self::U32) -> Self::Mask;
@@ -193,6 +204,22 @@ impl Real for f32 {
         (bits >> 8) as f32 * (1.0 / 16_777_216.0)
     }
     #[inline(always)]
+    fn floor(self) -> Self {
+        f32::floor(self)
+    }
+    #[inline(always)]
+    fn to_u32_bits(self) -> u32 {
+        f32::to_bits(self)
+    }
+    #[inline(always)]
+    fn from_u32_bits(u: u32) -> Self {
+        f32::from_bits(u)
+    }
+    #[inline(always)]
+    fn from_small_u32(u: u32) -> Self {
+        u as f32
+    }
+    #[inline(always)]
     fn u_splat(x: u32) -> u32 {
         x
     }
@@ -239,7 +266,7 @@ pub trait Wide:
     + 'static
 {
     /// The matching unsigned lanes (same as `Real::U32`, with its arithmetic).
-    type U: Lanes32 + crate::sampling::lanes::U32Lanes;
+    type U: U32Lanes;
     /// Lane indices of one packet (`[u32; LANES]`).
     type Idx: Copy + Default + AsRef<[u32]> + AsMut<[u32]>;
     /// Whole-vector load of `v[i..i + LANES]`.
@@ -285,19 +312,122 @@ pub trait Wide:
     fn compress_store_u(x: Self::U32, keep: u32, v: &mut [u32], at: usize) -> usize;
 }
 
-/// Unsigned 32-bit lanes: the random streams' arithmetic (wrapping, as u32).
-pub trait Lanes32:
+/// Unsigned 32-bit lanes with wrapping arithmetic.
+pub trait U32Lanes:
     Copy
-    + Add<Output = Self>
     + BitAnd<Output = Self>
     + BitOr<Output = Self>
-    + std::ops::BitXor<Output = Self>
-    + std::ops::Shl<u32, Output = Self>
-    + std::ops::Shr<u32, Output = Self>
+    + BitXor<Output = Self>
+    + Shl<u32, Output = Self>
+    + Shr<u32, Output = Self>
 {
+    const LANES: usize;
+    fn splat(x: u32) -> Self;
+    fn wrapping_add(self, o: Self) -> Self;
+    fn wrapping_sub(self, o: Self) -> Self;
+    fn wrapping_mul(self, o: Self) -> Self;
+    /// Whether every lane is zero.
+    fn all_zero(self) -> bool;
+    /// Lane `k` (tests and scalar fallbacks).
+    fn lane(self, k: usize) -> u32;
+    fn from_fn(f: impl FnMut(usize) -> u32) -> Self;
+
+    /// All ones in the lanes whose lowest bit is set, zero elsewhere.
+    #[inline(always)]
+    fn low_bit_mask(self) -> Self {
+        Self::splat(0).wrapping_sub(self & Self::splat(1))
+    }
+
+    /// The bits of every lane in reverse order (bit 0 <-> bit 31).
+    #[inline(always)]
+    fn reverse_bits(self) -> Self {
+        let swap = |x: Self, s: u32, m: u32| ((x >> s) & Self::splat(m)) | ((x & Self::splat(m)) << s);
+        let x = swap(self, 1, 0x5555_5555);
+        let x = swap(x, 2, 0x3333_3333);
+        let x = swap(x, 4, 0x0f0f_0f0f);
+        let x = swap(x, 8, 0x00ff_00ff);
+        (x >> 16) | (x << 16)
+    }
 }
-impl Lanes32 for u32x8 {}
-impl Lanes32 for u32x16 {}
+
+impl U32Lanes for u32 {
+    const LANES: usize = 1;
+    #[inline(always)]
+    fn splat(x: u32) -> Self {
+        x
+    }
+    #[inline(always)]
+    fn wrapping_add(self, o: Self) -> Self {
+        u32::wrapping_add(self, o)
+    }
+    #[inline(always)]
+    fn wrapping_sub(self, o: Self) -> Self {
+        u32::wrapping_sub(self, o)
+    }
+    #[inline(always)]
+    fn wrapping_mul(self, o: Self) -> Self {
+        u32::wrapping_mul(self, o)
+    }
+    #[inline(always)]
+    fn all_zero(self) -> bool {
+        self == 0
+    }
+    #[inline(always)]
+    fn lane(self, _k: usize) -> u32 {
+        self
+    }
+    #[inline(always)]
+    fn from_fn(mut f: impl FnMut(usize) -> u32) -> Self {
+        f(0)
+    }
+    #[inline(always)]
+    fn low_bit_mask(self) -> Self {
+        (self & 1).wrapping_neg()
+    }
+    #[inline(always)]
+    fn reverse_bits(self) -> Self {
+        u32::reverse_bits(self)
+    }
+}
+
+macro_rules! wide_lanes {
+    ($t:ty, $n:expr) => {
+        impl U32Lanes for $t {
+            const LANES: usize = $n;
+            #[inline(always)]
+            fn splat(x: u32) -> Self {
+                <$t>::splat(x)
+            }
+            #[inline(always)]
+            fn wrapping_add(self, o: Self) -> Self {
+                self + o // lane-wise, wrapping
+            }
+            #[inline(always)]
+            fn wrapping_sub(self, o: Self) -> Self {
+                self - o
+            }
+            #[inline(always)]
+            fn wrapping_mul(self, o: Self) -> Self {
+                self * o // the low 32 bits of each product
+            }
+            #[inline(always)]
+            fn all_zero(self) -> bool {
+                self.simd_eq(<$t>::splat(0)).all()
+            }
+            #[inline(always)]
+            fn lane(self, k: usize) -> u32 {
+                self.to_array()[k]
+            }
+            #[inline(always)]
+            fn from_fn(f: impl FnMut(usize) -> u32) -> Self {
+                <$t>::new(std::array::from_fn(f))
+            }
+        }
+    };
+}
+
+wide_lanes!(u32x8, 8);
+wide_lanes!(u32x16, 16);
 
 /// For each 8-bit lane mask, the indices of its set lanes first (stream compaction).
 static COMPRESS: [[u32; 8]; 256] = compress_table();
@@ -416,6 +546,23 @@ macro_rules! impl_wide {
                 // (bits >> 8) < 2^24, so the signed conversion is exact.
                 let i: $i = bytemuck::cast(bits >> 8);
                 $f::$from_int(i) * $f::splat(1.0 / 16_777_216.0)
+            }
+            #[inline(always)]
+            fn floor(self) -> Self {
+                $f::floor(self)
+            }
+            #[inline(always)]
+            fn to_u32_bits(self) -> $u {
+                bytemuck::cast(self)
+            }
+            #[inline(always)]
+            fn from_u32_bits(u: $u) -> Self {
+                bytemuck::cast(u)
+            }
+            #[inline(always)]
+            fn from_small_u32(u: $u) -> Self {
+                // Below 2^24, so the signed conversion is exact.
+                $f::$from_int(bytemuck::cast::<$u, $i>(u))
             }
             #[inline(always)]
             fn u_splat(x: u32) -> $u {
@@ -567,6 +714,7 @@ macro_rules! impl_wide {
 
 impl_wide!(f32x8, u32x8, i32x8, 8, from_i32x8);
 impl_wide!(f32x16, u32x16, i32x16, 16, from_i32x16);
+const _: () = assert!(<f32x8 as Real>::LANES <= MAX_LANES && <f32x16 as Real>::LANES <= MAX_LANES);
 
 #[cfg(test)]
 mod tests {

@@ -2,21 +2,38 @@
 //! Exit status 0 when throughput held and the image is the same; 1 when the
 //! image changed or throughput fell by more than the tolerance.
 
-use std::path::Path;
-use std::process::Command;
+mod common;
 
-fn bench(dir: &Path, extra: &[&str]) -> std::process::Output {
+use common::{rtow, rtow_env, Run};
+use std::path::Path;
+
+fn bench(dir: &Path, extra: &[&str]) -> Run {
     bench_spp(dir, "2", extra)
 }
 
-fn bench_spp(dir: &Path, spp: &str, extra: &[&str]) -> std::process::Output {
-    Command::new(env!("CARGO_BIN_EXE_rtow"))
-        .args(["bench", "ch05-ground", "--kernels", "scalar,simd", "--repeat", "1"])
-        .args(["--width", "24", "--height", "14", "--spp", spp, "--threads", "1"])
-        .args(extra)
-        .current_dir(dir)
-        .output()
-        .expect("rtow runs")
+fn bench_spp(dir: &Path, spp: &str, extra: &[&str]) -> Run {
+    let mut args = vec!["bench", "ch05-ground", "--kernels", "scalar,simd"];
+    args.extend(["--width", "24", "--height", "14", "--spp", spp, "--threads", "1"]);
+    if !extra.contains(&"--repeat") {
+        args.extend(["--repeat", "1"]);
+    }
+    args.extend_from_slice(extra);
+    rtow(dir, &args)
+}
+
+/// A kernel entry of a baseline made `factor` times faster, consistently
+/// (rate, median seconds and every run).
+fn faster(k: &mut serde_json::Value, factor: f64) {
+    let m = k["mrays_per_s"].as_f64().unwrap();
+    k["mrays_per_s"] = (m * factor).into();
+    let rays = k["rays"].as_f64().unwrap();
+    k["seconds"] = (rays / (m * factor) / 1e6).into();
+    let runs: Vec<f64> = k["runs_seconds"].as_array().unwrap().iter().map(|t| t.as_f64().unwrap() / factor).collect();
+    let mut sorted = runs.clone();
+    sorted.sort_by(f64::total_cmp);
+    k["seconds"] = sorted[sorted.len() / 2].into();
+    k["mrays_per_s"] = (rays / sorted[sorted.len() / 2] / 1e6).into();
+    k["runs_seconds"] = runs.into();
 }
 
 fn edit(path: &Path, f: impl Fn(&mut serde_json::Value)) {
@@ -29,7 +46,7 @@ fn edit(path: &Path, f: impl Fn(&mut serde_json::Value)) {
 fn baseline_catches_a_changed_image_and_a_slowdown() {
     let dir = tempfile::tempdir().unwrap();
     let saved = bench(dir.path(), &["--save", "base.json"]);
-    assert!(saved.status.success(), "{}", String::from_utf8_lossy(&saved.stderr));
+    assert!(saved.code == 0, "{}", saved.stderr);
     let base = dir.path().join("base.json");
     let v: serde_json::Value = serde_json::from_str(&std::fs::read_to_string(&base).unwrap()).unwrap();
     let kernels = v["kernels"].as_array().unwrap();
@@ -44,8 +61,8 @@ fn baseline_catches_a_changed_image_and_a_slowdown() {
     // Same code: passes, and says the image is identical (tolerance 100%: timings of
     // sub-millisecond renders are noise; the slowdown verdict is tested below).
     let ok = bench(dir.path(), &["--baseline", "base.json", "--tolerance", "100"]);
-    let out = String::from_utf8_lossy(&ok.stdout).to_string();
-    assert_eq!(ok.status.code(), Some(0), "{out}{}", String::from_utf8_lossy(&ok.stderr));
+    let out = ok.stdout.clone();
+    assert_eq!(ok.code, 0, "{out}{}", ok.stderr);
     assert!(out.contains("identical") && !out.contains("REGRESSION"), "{out}");
 
     // A baseline with another image: exit 1, whatever the speed.
@@ -53,40 +70,186 @@ fn baseline_catches_a_changed_image_and_a_slowdown() {
     std::fs::copy(&base, &changed).unwrap();
     edit(&changed, |v| v["kernels"][1]["image_hash"] = "0123456789abcdef".into());
     let r = bench(dir.path(), &["--baseline", "changed.json", "--tolerance", "100"]);
-    assert_eq!(r.status.code(), Some(1));
-    assert!(String::from_utf8_lossy(&r.stdout).contains("CHANGED"));
+    assert_eq!(r.code, 1);
+    assert!(r.stdout.contains("CHANGED"));
 
     // A baseline 1000x faster: this run is a slowdown beyond 5%: exit 1.
     let fast = dir.path().join("fast.json");
     std::fs::copy(&base, &fast).unwrap();
-    edit(&fast, |v| {
-        let m = v["kernels"][1]["mrays_per_s"].as_f64().unwrap();
-        v["kernels"][1]["mrays_per_s"] = (m * 1000.0).into();
-    });
+    edit(&fast, |v| faster(&mut v["kernels"][1], 1000.0));
     let r = bench(dir.path(), &["--baseline", "fast.json"]);
-    assert_eq!(r.status.code(), Some(1));
-    assert!(String::from_utf8_lossy(&r.stdout).contains("REGRESSION"));
+    assert_eq!(r.code, 1);
+    assert!(r.stdout.contains("REGRESSION"));
 
     // A baseline whose algorithm did less work: same image, more work now:
     // exit 1 and said so, even with timings within any tolerance.
     let less = dir.path().join("less.json");
     std::fs::copy(&base, &less).unwrap();
     edit(&less, |v| {
-        let n = v["kernels"][1]["work"]["sphere_tests"].as_u64().unwrap();
-        v["kernels"][1]["work"]["sphere_tests"] = (n / 2).into();
+        // Half the sphere tests, and so at most half the square roots.
+        for k in ["sphere_tests", "roots"] {
+            let n = v["kernels"][1]["work"][k].as_u64().unwrap();
+            v["kernels"][1]["work"][k] = (n / 2).into();
+        }
     });
     let r = bench(dir.path(), &["--baseline", "less.json", "--tolerance", "100"]);
-    let out = String::from_utf8_lossy(&r.stdout).to_string();
-    assert_eq!(r.status.code(), Some(1), "{out}");
+    let out = r.stdout.clone();
+    assert_eq!(r.code, 1, "{out}");
     assert!(out.contains("REGRESSION") && out.contains("work changed") && out.contains("image identical"), "{out}");
 
     // A baseline 1000x faster with the same work: a timing change only, labelled so.
     let r = bench(dir.path(), &["--baseline", "fast.json"]);
-    assert!(String::from_utf8_lossy(&r.stdout).contains("timing only"), "{}", String::from_utf8_lossy(&r.stdout));
+    assert!(r.stdout.contains("timing only"), "{}", r.stdout);
 
     // A baseline of other settings is an input error, not a verdict.
     let r = bench_spp(dir.path(), "3", &["--baseline", "base.json"]);
-    let err = String::from_utf8_lossy(&r.stderr);
-    assert_eq!(r.status.code(), Some(2), "{err}");
+    let err = r.stderr;
+    assert_eq!(r.code, 2, "{err}");
     assert!(err.contains("baseline settings"), "{err}");
+}
+
+#[test]
+fn gate_work_passes_a_slowdown_and_a_baseline_of_other_threads_is_refused() {
+    let dir = tempfile::tempdir().unwrap();
+    let d = dir.path();
+    assert_eq!(bench(d, &["--repeat", "2", "--save", "base.json"]).code, 0);
+    let fast = d.join("fast.json");
+    std::fs::copy(d.join("base.json"), &fast).unwrap();
+    edit(&fast, |v| faster(&mut v["kernels"][1], 1000.0));
+    // Gated on time: a regression; gated on the work: the same image and work pass.
+    let r = bench(d, &["--repeat", "2", "--baseline", "fast.json"]);
+    assert_eq!(r.code, 1, "{}", r.stdout);
+    assert!(r.stdout.contains("CI"), "a noise estimate from 2 runs a side: {}", r.stdout);
+    let r = bench(d, &["--repeat", "2", "--baseline", "fast.json", "--gate", "work"]);
+    assert_eq!(r.code, 0, "{}{}", r.stdout, r.stderr);
+    assert!(r.stdout.contains("timing only, slower") && r.stdout.contains("not gated"), "{}", r.stdout);
+    // The same settings on another thread count: refused like other settings (exit 2).
+    let mut args = vec!["bench", "ch05-ground", "--kernels", "scalar,simd", "--repeat", "1"];
+    args.extend(["--width", "24", "--height", "14", "--spp", "2", "--threads", "2", "--baseline", "base.json"]);
+    let r = rtow(d, &args);
+    assert_eq!(r.code, 2, "{}", r.stderr);
+    assert!(r.stderr.contains("1 thread(s), this run on 2"), "{}", r.stderr);
+}
+
+#[test]
+fn baselines_with_impossible_figures_are_refused() {
+    let dir = tempfile::tempdir().unwrap();
+    let d = dir.path();
+    assert_eq!(bench(d, &["--repeat", "2", "--save", "base.json"]).code, 0);
+    type Edit = fn(&mut serde_json::Value);
+    let cases: [(&str, Edit, &str); 8] = [
+        ("zero rate", |k| k["mrays_per_s"] = 0.0.into(), "Mrays/s"),
+        (
+            "rate and time disagree",
+            |k| k["mrays_per_s"] = (k["mrays_per_s"].as_f64().unwrap() * 2.0).into(),
+            "disagree",
+        ),
+        ("negative time", |k| k["seconds"] = (-1.0).into(), "not a measurement"),
+        ("no rays", |k| k["rays"] = 0.into(), "not a measurement"),
+        ("a run of 0 s", |k| k["runs_seconds"][0] = 0.0.into(), "runs_seconds"),
+        ("no threads", |k| k["threads"] = 0.into(), "thread"),
+        ("bad hash", |k| k["image_hash"] = "xyz".into(), "image hash"),
+        (
+            "more roots than sphere tests",
+            |k| k["work"]["roots"] = (k["work"]["sphere_tests"].as_u64().unwrap() + 1).into(),
+            "work counters",
+        ),
+    ];
+    for (what, f, needle) in cases {
+        let path = d.join("bad.json");
+        std::fs::copy(d.join("base.json"), &path).unwrap();
+        edit(&path, |v| f(&mut v["kernels"][1]));
+        let r = bench(d, &["--baseline", "bad.json"]);
+        assert_eq!(r.code, 2, "{what}: {}", r.stderr);
+        let line = r.stderr.trim();
+        assert!(line.lines().count() == 1 && line.contains("bad.json") && line.contains(needle), "{what}: {line}");
+    }
+}
+
+/// The verdicts from real runs of this machine: the same runs as a baseline
+/// are within noise (never a regression); a baseline ten times faster is a
+/// regression gated on time and passes gated on the work.
+#[test]
+fn the_verdict_knows_the_noise_of_the_runs() {
+    use rtow::instruments::bench::{self, Baseline, BaselineVerdict, BenchConfig, Gate};
+    let scene = rtow::scene::preset("ch07-diffuse").unwrap();
+    let o = rtow::Overrides { width: Some(32), height: Some(18), spp: Some(2), ..Default::default() };
+    let opts = rtow::RenderOptions { threads: Some(1), ..Default::default() };
+    let job = rtow::Job::new(&scene, &o, &opts).unwrap();
+    let cfg = BenchConfig { kernels: vec![rtow::KernelChoice::Simd8], repeat: 5, tolerance: 0.0, gate: Gate::Time };
+    let report = bench::run(&job, "ch07-diffuse", &cfg, |_, _, _| {}).unwrap();
+    let saved = |scale: f64| -> Baseline {
+        let mut v: serde_json::Value = serde_json::from_str(&report.to_json()).unwrap();
+        faster(&mut v["kernels"][0], scale);
+        Baseline::from_bytes(v.to_string().as_bytes(), Path::new("b.json")).unwrap()
+    };
+    let runs = &report.kernels[0].runs_seconds;
+    let c = &bench::compare(&report, &saved(1.0), 0.0, Gate::Time)[0];
+    let ci = c.change_ci.expect("5 runs a side give an interval");
+    assert!((ci.level - (1.0 - 8.0 / 252.0)).abs() < 1e-12, "{ci:?}");
+    assert!(ci.lo <= c.change_percent && c.change_percent <= ci.hi && !c.regressed, "{c:?}");
+    if runs.iter().any(|&t| t != runs[0]) {
+        assert_eq!(c.verdict, BaselineVerdict::WithinNoise, "{c:?}");
+    }
+    let c = &bench::compare(&report, &saved(10.0), 5.0, Gate::Time)[0];
+    assert!(c.regressed && c.verdict == BaselineVerdict::TimingOnly && c.change_ci.unwrap().hi < -5.0, "{c:?}");
+    assert!(!bench::compare(&report, &saved(10.0), 5.0, Gate::Work)[0].regressed);
+    let c = &bench::compare(&report, &saved(0.1), 5.0, Gate::Time)[0];
+    assert!(!c.regressed && c.verdict == BaselineVerdict::TimingOnly && c.change_percent > 0.0, "{c:?}");
+}
+
+/// `--instructions`: callgrind counts each kernel's render loop; the same
+/// build counts the same instructions; baselines compare exactly; without
+/// valgrind the command says so before any work.
+#[test]
+fn instructions_are_counted_and_compared_exactly() {
+    let dir = tempfile::tempdir().unwrap();
+    let d = dir.path();
+    let args = |extra: &[&'static str]| -> Vec<&'static str> {
+        let mut v = vec!["bench", "ch07-diffuse", "--kernels", "scalar,simd8", "--instructions", "--threads", "1"];
+        v.extend(["--width", "16", "--height", "9", "--spp", "2", "--depth", "8"]);
+        v.extend_from_slice(extra);
+        v
+    };
+    let r = rtow_env(d, &args(&["--save", "i.json"]), &[("PATH", "/nonexistent")]);
+    let line = common::failure(&r, 1, "no valgrind");
+    assert!(line.contains("valgrind") && line.contains("install"), "{line}");
+    assert!(!d.join("i.json").exists());
+    if std::process::Command::new("valgrind").arg("--version").output().is_err() {
+        eprintln!("valgrind is not installed: only the refusal was checked");
+        return;
+    }
+    let r = rtow(d, &args(&["--save", "i.json"]));
+    if r.code == 1 && r.stderr.contains("instruction valgrind does not know") {
+        eprintln!("valgrind cannot run this build: {}", r.stderr);
+        return;
+    }
+    assert_eq!(r.code, 0, "{}", r.stderr);
+    let v: serde_json::Value = serde_json::from_str(&std::fs::read_to_string(d.join("i.json")).unwrap()).unwrap();
+    assert_eq!(v["schema"], "rtow-instructions/1");
+    let k = &v["kernels"];
+    assert_eq!(k[0]["image_hash"], k[1]["image_hash"], "scalar and SIMD images differ");
+    for e in k.as_array().unwrap() {
+        let (n, rays) = (e["instructions"].as_u64().unwrap(), e["rays"].as_u64().unwrap());
+        assert!(n > 10 * rays && e["process_instructions"].as_u64().unwrap() > n, "{e}");
+        assert!((e["per_ray"].as_f64().unwrap() - n as f64 / rays as f64).abs() < 1e-9, "{e}");
+    }
+    // Counted again: exactly the same.
+    let r = rtow(d, &args(&["--baseline", "i.json"]));
+    assert_eq!(r.code, 0, "{}{}", r.stdout, r.stderr);
+    assert_eq!(r.stdout.matches("ok (identical)").count(), 2, "{}", r.stdout);
+    // A baseline one instruction leaner: a regression.
+    edit(&d.join("i.json"), |v| {
+        let n = v["kernels"][1]["instructions"].as_u64().unwrap();
+        v["kernels"][1]["instructions"] = (n - 1).into();
+    });
+    let r = rtow(d, &args(&["--baseline", "i.json"]));
+    assert_eq!(r.code, 1, "{}", r.stdout);
+    assert!(r.stdout.contains("REGRESSION (+1 instructions)"), "{}", r.stdout);
+    // A timing baseline is not an instruction baseline, and the other way round.
+    assert_eq!(bench(d, &["--save", "t.json"]).code, 0);
+    let line = common::failure(&rtow(d, &args(&["--baseline", "t.json"])), 2, "time baseline");
+    assert!(line.contains("not an instruction baseline"), "{line}");
+    let line = common::failure(&bench(d, &["--baseline", "i.json"]), 2, "instruction baseline");
+    assert!(line.contains("holds instruction counts"), "{line}");
 }

@@ -4,10 +4,10 @@
 //! deep trees.
 
 use proptest::prelude::*;
-use rtow::geometry::{closest_hit, Bvh, Spheres, Walk};
-use rtow::material::Kind;
-use rtow::real::Wide;
-use rtow::vec3::V3;
+use rtow::internals::geometry::{closest_hit, Bvh, Spheres, Walk};
+use rtow::internals::material::Kind;
+use rtow::internals::real::Wide;
+use rtow::internals::vec3::V3;
 use wide::{f32x16, f32x8};
 
 fn spheres(list: &[([f32; 3], f32)]) -> Spheres {

@@ -4,55 +4,19 @@
 //! what they promise.
 
 mod bad_input;
+mod common;
 
+use common::{failure, listing, rtow, Run};
 use rtow::scene;
-use rtow::{Image, KernelChoice, RenderOptions, Settings};
-use std::path::Path;
-use std::process::Command;
+use rtow::{Image, Job, KernelChoice, Overrides, RenderOptions};
 
-const BIN: &str = env!("CARGO_BIN_EXE_rtow");
 /// A small render: a few milliseconds for any preset.
 const SMALL: [&str; 7] = ["--width", "32", "--height", "18", "--spp", "2", "-q"];
 /// What an output that must survive a failed run holds.
 const SENTINEL: &[u8] = b"not an image; a failed run must leave this file alone";
 
-struct Run {
-    code: i32,
-    stdout: String,
-    stderr: String,
-}
-
-fn rtow(dir: &Path, args: &[&str]) -> Run {
-    let out = Command::new(BIN).args(args).current_dir(dir).output().expect("rtow runs");
-    Run {
-        code: out.status.code().expect("rtow exited (not killed by a signal)"),
-        stdout: String::from_utf8(out.stdout).expect("utf-8 stdout"),
-        stderr: String::from_utf8(out.stderr).expect("utf-8 stderr"),
-    }
-}
-
-/// Asserts that the run failed with `code` and said so in exactly one
-/// `error: ...` line on stderr, and nothing on stdout; returns that line.
-fn failure(r: &Run, code: i32, what: &str) -> String {
-    assert!(!r.stderr.contains("panicked"), "{what}: panic: {}", r.stderr);
-    assert_eq!(r.code, code, "{what}: exit status (stderr: {})", r.stderr);
-    let lines: Vec<&str> = r.stderr.lines().collect();
-    assert_eq!(lines.len(), 1, "{what}: stderr is not one line: {:?}", r.stderr);
-    assert!(lines[0].starts_with("error: "), "{what}: {:?}", lines[0]);
-    assert!(r.stdout.is_empty(), "{what}: stdout: {:?}", r.stdout);
-    lines[0].to_string()
-}
-
 fn success(r: &Run, what: &str) {
     assert_eq!(r.code, 0, "{what}: exit status (stderr: {})", r.stderr);
-}
-
-/// The names in `dir`, sorted (temporary files included: they start with `.rtow-`).
-fn listing(dir: &Path) -> Vec<String> {
-    let mut v: Vec<String> =
-        std::fs::read_dir(dir).unwrap().map(|e| e.unwrap().file_name().to_string_lossy().into_owned()).collect();
-    v.sort();
-    v
 }
 
 #[test]
@@ -87,7 +51,7 @@ fn bad_arguments_exit_2_naming_the_argument_and_write_nothing() {
         (render(&["--width", "0"]), &["width: must be at least 1"]),
         (render(&["--height", "0"]), &["height: must be at least 1"]),
         (render(&["--spp", "0"]), &["spp: must be at least 1"]),
-        (render(&["--depth", "0"]), &["max_depth: must be at least 1"]),
+        (render(&["--depth", "0"]), &["--depth: must be at least 1"]),
         (render(&["--width", "100000", "--height", "100000"]), &["width x height", "memory"]),
         (render(&["--width", "8192", "--height", "8192", "--spp", "4000000000"]), &["spp: 4000000000"]),
         (render(&["--width", "-5"]), &["'-5'"]),
@@ -170,13 +134,14 @@ fn unwritable_outputs_exit_1_before_rendering_and_write_nothing() {
     }
 }
 
-fn small_settings(scene: &scene::Scene) -> Settings {
-    Settings { width: 32, height: 18, spp: 2, ..rtow::default_settings(scene) }
+/// The `SMALL` flags as the library's overrides.
+fn small_settings() -> Overrides {
+    Overrides { width: Some(32), height: Some(18), spp: Some(2), ..Default::default() }
 }
 
-fn render_lib(scene: &scene::Scene, s: Settings, kernel: KernelChoice) -> rtow::Rendered {
+fn render_lib(scene: &scene::Scene, o: Overrides, kernel: KernelChoice) -> rtow::Rendered {
     let opts = RenderOptions { kernel, ..Default::default() };
-    rtow::render(scene, s, opts, None).unwrap()
+    rtow::render(&Job::new(scene, &o, &opts).unwrap(), None).unwrap()
 }
 
 #[test]
@@ -184,7 +149,7 @@ fn a_render_writes_exactly_its_outputs_and_they_match_the_library() {
     let dir = tempfile::tempdir().unwrap();
     let d = dir.path();
     let preset = scene::preset("ch08-fuzz").unwrap();
-    let s = Settings { max_depth: 7, seed: 12345, ..small_settings(&preset) };
+    let s = Overrides { max_depth: Some(7), seed: Some(12345), ..small_settings() };
     let lib = render_lib(&preset, s, KernelChoice::Scalar);
     // Twice: once creating the outputs, once replacing them.
     for round in 0..2 {
@@ -283,7 +248,7 @@ fn stats_json_reports_the_run() {
         }
         let u = |k: &str| v[k].as_u64().unwrap_or_else(|| panic!("{k} is not an integer: {text}"));
         let f = |k: &str| v[k].as_f64().unwrap_or_else(|| panic!("{k} is not a number: {text}"));
-        let resolved = rtow::Kernel::resolve(kernel.parse().unwrap()).unwrap();
+        let resolved = rtow::Kernel::resolve(kernel.parse().unwrap());
         assert_eq!(v["kernel"], resolved.name());
         assert_eq!(u("lanes"), resolved.lanes() as u64);
         assert_eq!(v["isa"], rtow::isa());
@@ -312,20 +277,181 @@ fn version_names_the_simd_instruction_set() {
         success(&r, flag);
         assert!(r.stdout.contains(env!("CARGO_PKG_VERSION")), "{:?}", r.stdout);
         assert!(r.stdout.contains(rtow::isa()), "{:?} lacks {:?}", r.stdout, rtow::isa());
+        // The commit the build came from, or that it is not known.
+        let commit =
+            rtow::provenance::commit().map_or("commit unknown".to_string(), |c| format!("commit {}", &c[..12]));
+        assert!(r.stdout.contains(&commit), "{:?} lacks {commit:?}", r.stdout);
     }
 }
 
 #[test]
-fn scenes_lists_every_preset() {
+fn scenes_lists_every_preset_under_its_group() {
     let dir = tempfile::tempdir().unwrap();
     let r = rtow(dir.path(), &["scenes"]);
     success(&r, "scenes");
-    let lines: Vec<&str> = r.stdout.lines().collect();
+    // A heading per group, then its presets, indented; a blank line between groups.
+    let lines: Vec<&str> = r.stdout.lines().filter(|l| l.starts_with("  ")).collect();
     assert_eq!(lines.len(), scene::presets().len(), "{}", r.stdout);
-    for (p, line) in scene::presets().iter().zip(&lines) {
+    let mut want: Vec<&scene::Preset> = Vec::new();
+    for &g in scene::PresetGroup::ALL {
+        want.extend(scene::presets().iter().filter(|p| p.group == g));
+    }
+    for (p, line) in want.iter().zip(&lines) {
         assert_eq!(line.split_whitespace().next(), Some(p.name), "{line}");
         assert!(line.contains(p.description), "{line}");
     }
+    let headings: Vec<&str> = r.stdout.lines().filter(|l| l.ends_with(':') && !l.starts_with(' ')).collect();
+    let titles: Vec<String> = scene::PresetGroup::ALL.iter().map(|g| format!("{}:", g.title())).collect();
+    assert_eq!(headings, titles, "{}", r.stdout);
+    // The book's list holds no stress scene.
+    let book = r.stdout.split("\n\n").next().unwrap();
+    assert!(book.contains("final") && !book.contains("stress-"), "{book}");
+}
+
+#[test]
+fn help_states_the_defaults_the_library_uses() {
+    let dir = tempfile::tempdir().unwrap();
+    let help = |cmd: &str| {
+        let r = rtow(dir.path(), &[cmd, "--help"]);
+        success(&r, cmd);
+        r.stdout.split_whitespace().collect::<Vec<_>>().join(" ")
+    };
+    let render = help("render");
+    let d = rtow::Settings::default();
+    let (w, h, spp, depth) = rtow::Settings::BOOK;
+    for want in [
+        format!("else {}, the book's]", d.max_depth),
+        format!("else {}]", d.seed),
+        format!("else {}]", d.sampler),
+        format!("{w}x{h}, {spp} spp, depth {depth}"),
+        format!("[default: {}]", rtow::DEFAULT_TILE),
+        format!("at most {}", rtow::limits::MAX_TILE),
+        format!("[default: {}]", rtow::ROULETTE_AFTER_RAYS),
+        format!("[default: {}]", rtow::ADAPTIVE_MIN_SPP),
+        format!(
+            "[default: {} for path traced scenes, {} for the debug",
+            rtow::Mode::Path.default_gamma(),
+            rtow::Mode::Normals.default_gamma()
+        ),
+    ] {
+        assert!(render.contains(&want), "render --help lacks {want:?}: {render}");
+    }
+    let bench = help("bench");
+    use rtow::instruments::bench::{DEFAULT_REPEAT, DEFAULT_TOLERANCE};
+    for want in [format!("[default: {DEFAULT_REPEAT}]"), format!("[default: {DEFAULT_TOLERANCE}]")] {
+        assert!(bench.contains(&want), "bench --help lacks {want:?}: {bench}");
+    }
+    let converge = help("converge");
+    let want = format!("adaptive (threshold {})", rtow::instruments::converge::DEFAULT_ADAPTIVE_THRESHOLD);
+    assert!(converge.contains(&want), "converge --help lacks {want:?}");
+}
+
+#[test]
+fn negative_numbers_reach_the_checks_of_their_flags() {
+    let dir = tempfile::tempdir().unwrap();
+    let d = dir.path();
+    let cases: [(&[&str], &str); 6] = [
+        (&["render", "ch07-diffuse", "--gamma", "-1", "-o", "a.png"], "--gamma: must be a finite number > 0, got -1"),
+        (&["render", "ch07-diffuse", "--adaptive", "-0.5", "-o", "a.png"], "--adaptive: the relative error threshold"),
+        (&["bench", "ch07-diffuse", "--tolerance", "-3"], "--tolerance: must be a percentage >= 0, got -3"),
+        (&["render", "ch07-diffuse", "--seed", "-1", "-o", "a.png"], "invalid value '-1' for '--seed <SEED>'"),
+        (&["render", "ch07-diffuse", "--threads", "-2", "-o", "a.png"], "invalid value '-2' for '--threads"),
+        (&["converge", "ch07-diffuse", "--spp-list", "-4,16"], "invalid value '-4' for '--spp-list"),
+    ];
+    for (args, want) in cases {
+        let line = failure(&rtow(d, args), 2, &args.join(" "));
+        assert!(line.contains(want), "{}: {line}", args.join(" "));
+    }
+}
+
+#[test]
+fn adaptive_sampling_that_cannot_act_warns_and_the_stats_say_it_was_off() {
+    let dir = tempfile::tempdir().unwrap();
+    let d = dir.path();
+    let mut args = vec!["render", "ch07-diffuse", "--adaptive", "0.05", "--adaptive-min", "4", "--spp", "4"];
+    args.extend(["--width", "16", "--height", "9", "-q", "-o", "a.png", "--stats-json", "a.json"]);
+    let r = rtow(d, &args);
+    success(&r, "adaptive");
+    assert!(r.stderr.starts_with("warning: --adaptive-min: adaptive sampling decides first after 4"), "{}", r.stderr);
+    let v: serde_json::Value = serde_json::from_str(&std::fs::read_to_string(d.join("a.json")).unwrap()).unwrap();
+    assert!(v["adaptive"].is_null(), "{v}");
+    // One more sample and it runs, without a word.
+    args[7] = "5";
+    let r = rtow(d, &args);
+    success(&r, "adaptive on");
+    assert_eq!(r.stderr, "");
+    let v: serde_json::Value = serde_json::from_str(&std::fs::read_to_string(d.join("a.json")).unwrap()).unwrap();
+    assert_eq!(v["adaptive"]["min_spp"], 4, "{v}");
+}
+
+#[test]
+fn completions_and_the_manual_page_are_generated() {
+    let dir = tempfile::tempdir().unwrap();
+    for shell in ["bash", "zsh", "fish", "elvish", "powershell"] {
+        let r = rtow(dir.path(), &["completions", shell]);
+        success(&r, shell);
+        assert!(r.stdout.contains("rtow") && r.stdout.contains("render") && r.stdout.contains("stats-json"), "{shell}");
+    }
+    let r = rtow(dir.path(), &["man"]);
+    success(&r, "man");
+    assert!(r.stdout.contains(".TH rtow 1") && r.stdout.contains("render"), "{}", &r.stdout[..200.min(r.stdout.len())]);
+    failure(&rtow(dir.path(), &["completions", "cmd.exe"]), 2, "an unknown shell");
+}
+
+/// Every statistics file says what was run, on what, by which build; a
+/// merge's has the same fields as a render's, its settings from the parts.
+#[test]
+fn statistics_files_carry_their_provenance_in_one_schema() {
+    let dir = tempfile::tempdir().unwrap();
+    let d = dir.path();
+    let size = ["--width", "24", "--height", "14", "--spp", "4", "--depth", "6", "--seed", "9", "-q"];
+    let run = |extra: &[&str]| success(&rtow(d, &[&["render", "ch08-fuzz"][..], &size, extra].concat()), "render");
+    run(&["--threads", "1", "-o", "one.png", "--stats-json", "one.json"]);
+    run(&["--shard", "1/2", "--rr", "-o", "p1.rtfilm"]);
+    run(&["--shard", "2/2", "--rr", "-o", "p2.rtfilm"]);
+    run(&["--rr", "-o", "rr.png", "--stats-json", "rr.json"]);
+    success(&rtow(d, &["merge", "p1.rtfilm", "p2.rtfilm", "-o", "m.png", "--stats-json", "m.json", "-q"]), "merge");
+    let read =
+        |f: &str| -> serde_json::Value { serde_json::from_str(&std::fs::read_to_string(d.join(f)).unwrap()).unwrap() };
+    let (one, rr, m) = (read("one.json"), read("rr.json"), read("m.json"));
+    let keys = |v: &serde_json::Value| v.as_object().unwrap().keys().cloned().collect::<Vec<_>>();
+    assert_eq!(keys(&one), keys(&m), "one schema for render and merge");
+    assert_eq!((one["schema"].as_str(), m["schema"].as_str()), (Some("rtow-stats/1"), Some("rtow-stats/1")));
+    assert_eq!((one["command"].as_str(), m["command"].as_str()), (Some("render"), Some("merge")));
+    // The merge's settings are the parts': those of the one-process render with --rr.
+    for k in [
+        "width",
+        "height",
+        "spp",
+        "max_depth",
+        "seed",
+        "sampler",
+        "russian_roulette",
+        "adaptive",
+        "rays",
+        "samples",
+        "image_hash",
+    ] {
+        assert_eq!(m[k], rr[k], "{k}");
+    }
+    assert_eq!(m["russian_roulette"], rtow::ROULETTE_AFTER_RAYS);
+    assert!(m["kernel"].is_null() && m["work"].is_null() && m["mrays_per_s"].is_null());
+    assert_eq!(m["merge"]["parts"], 2);
+    assert_eq!(m["split"]["kind"], "samples");
+    assert_eq!(one["split"]["kind"], "none");
+    assert_eq!(one["threads"], 1);
+    for v in [&one, &m] {
+        let p = &v["provenance"];
+        assert_eq!(p["rtow"], env!("CARGO_PKG_VERSION"));
+        assert_eq!(p["isa"], rtow::isa());
+        assert!(p["rustc"].as_str().unwrap().starts_with("rustc "), "{p}");
+        assert!(p["logical_cores"].as_u64().unwrap() >= 1 && p["available_cores"].as_u64().unwrap() >= 1);
+        assert!(p["date_utc"].as_str().unwrap().ends_with('Z'), "{p}");
+        assert_eq!(p["command_line"][1], v["command"], "{p}");
+        assert!(p["commit"].is_null() || p["commit"].as_str().unwrap().len() == 40, "{p}");
+        assert!(matches!(p["simd_lanes"].as_u64(), Some(8 | 16)), "{p}");
+    }
+    assert!(one["provenance"]["command_line"].as_array().unwrap().iter().any(|a| a == "one.json"));
 }
 
 /// `rtow export` writes every preset in both formats; the file loads back as
@@ -345,7 +471,7 @@ fn exported_presets_render_the_identical_image() {
     };
     for p in scene::presets() {
         let preset = (p.build)();
-        let s = small_settings(&preset);
+        let s = small_settings();
         let want: Vec<Image> = kernels.iter().map(|&(k, _)| render_lib(&preset, s, k).image).collect();
         let want_cli: Vec<_> = kernels.iter().map(|&(_, k)| cli_render(p.name, k)).collect();
         for ext in ["json", "toml"] {
@@ -356,7 +482,7 @@ fn exported_presets_render_the_identical_image() {
             let loaded = scene::load_scene(&d.join(&file)).unwrap_or_else(|e| panic!("{file}: {e}"));
             assert_eq!(loaded, preset, "{file}");
             for (i, &(kernel, name)) in kernels.iter().enumerate() {
-                let got = render_lib(&loaded, small_settings(&loaded), kernel).image;
+                let got = render_lib(&loaded, small_settings(), kernel).image;
                 assert!(got == want[i], "{file}: {name} kernel renders a different image");
                 let (png, stats) = cli_render(&file, name);
                 assert!(png == want_cli[i].0, "{file}: {name}: the binary writes a different PNG");

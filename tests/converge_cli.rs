@@ -1,14 +1,13 @@
 //! `rtow converge` and the estimator flags of `rtow render`, through the binary.
 
+mod common;
+
+use common::{rtow, Run};
 use std::path::Path;
-use std::process::{Command, Output};
 
-fn rtow(args: &[&str]) -> Output {
-    Command::new(env!("CARGO_BIN_EXE_rtow")).args(args).output().unwrap()
-}
-
-fn text(b: &[u8]) -> String {
-    String::from_utf8_lossy(b).into_owned()
+/// `rtow args...` in the package folder (the tests name their output folders).
+fn run(args: &[&str]) -> Run {
+    rtow(Path::new("."), args)
 }
 
 const SMALL: &[&str] = &["--width", "16", "--height", "9", "--threads", "1"];
@@ -35,9 +34,9 @@ fn converge_writes_table_plot_and_reference_and_reuses_the_reference() {
         out_s,
     ];
     args.extend_from_slice(SMALL);
-    let o = rtow(&args);
-    assert!(o.status.success(), "{}", text(&o.stderr));
-    let stdout = text(&o.stdout);
+    let o = run(&args);
+    assert!(o.code == 0, "{}", o.stderr.clone());
+    let stdout = o.stdout.clone();
     assert!(stdout.contains("reference: 64 spp with seed"), "{stdout}");
     assert!(stdout.contains("simd/rr vs scalar/plain: equal error"), "{stdout}");
     assert!(stdout.contains("simd/rr vs simd/plain"), "{stdout}");
@@ -72,6 +71,13 @@ fn converge_writes_table_plot_and_reference_and_reuses_the_reference() {
     assert!(svg.starts_with("<svg") && svg.contains("scalar/plain") && svg.contains("polyline"));
     let reference = out.join("ch07-diffuse-reference.exr");
     assert!(reference.exists());
+    // The run's description and provenance beside the tables.
+    let json: serde_json::Value =
+        serde_json::from_str(&std::fs::read_to_string(out.join("ch07-diffuse.json")).unwrap()).unwrap();
+    assert_eq!(json["schema"], "rtow-converge/1");
+    assert_eq!(json["files"][0], "ch07-diffuse.csv");
+    assert_eq!(json["provenance"]["isa"], rtow::isa());
+    assert_eq!(json["provenance"]["command_line"][1], "converge");
 
     // Again from the saved reference: the errors are the same as before.
     let again = dir.path().join("again");
@@ -90,9 +96,9 @@ fn converge_writes_table_plot_and_reference_and_reuses_the_reference() {
         again.to_str().unwrap(),
     ];
     args.extend_from_slice(SMALL);
-    let o = rtow(&args);
-    assert!(o.status.success(), "{}", text(&o.stderr));
-    assert!(!text(&o.stdout).contains("reference: 64 spp"));
+    let o = run(&args);
+    assert!(o.code == 0, "{}", o.stderr.clone());
+    assert!(!o.stdout.clone().contains("reference: 64 spp"));
     let csv2 = std::fs::read_to_string(again.join("ch07-diffuse.csv")).unwrap();
     for line in csv2.lines().skip(1) {
         let r: Vec<&str> = line.split(',').collect();
@@ -103,9 +109,9 @@ fn converge_writes_table_plot_and_reference_and_reuses_the_reference() {
 }
 
 fn fails_naming(args: &[&str], flag: &str, code: i32) {
-    let o = rtow(args);
-    let err = text(&o.stderr);
-    assert_eq!(o.status.code(), Some(code), "{args:?}: {err}");
+    let o = run(args);
+    let err = o.stderr.clone();
+    assert_eq!(o.code, code, "{args:?}: {err}");
     assert!(err.contains(flag), "{args:?}: {err}");
     assert!(!err.contains("panicked"), "{err}");
 }
@@ -199,7 +205,7 @@ fn render_flags_report_the_estimator() {
     let dir = tempfile::tempdir().unwrap();
     let json = dir.path().join("s.json");
     let png = dir.path().join("x.png");
-    let o = rtow(&[
+    let o = run(&[
         "render",
         "ch07-diffuse",
         "-o",
@@ -221,7 +227,7 @@ fn render_flags_report_the_estimator() {
         "--stats-json",
         json.to_str().unwrap(),
     ]);
-    assert!(o.status.success(), "{}", text(&o.stderr));
+    assert!(o.code == 0, "{}", o.stderr.clone());
     let v: serde_json::Value = serde_json::from_str(&std::fs::read_to_string(&json).unwrap()).unwrap();
     assert_eq!(v["russian_roulette"], 4);
     assert_eq!(v["adaptive"]["min_spp"], 16);
@@ -234,7 +240,7 @@ fn a_scene_without_noise_still_gets_its_outputs() {
     // Chapter 1's gradient traces no rays: every error is exactly 0.
     let dir = tempfile::tempdir().unwrap();
     let out = dir.path().join("g");
-    let o = rtow(&[
+    let o = run(&[
         "converge",
         "ch01-gradient",
         "--width",
@@ -248,7 +254,7 @@ fn a_scene_without_noise_still_gets_its_outputs() {
         "--out",
         out.to_str().unwrap(),
     ]);
-    assert!(o.status.success(), "{}", text(&o.stderr));
+    assert!(o.code == 0, "{}", o.stderr.clone());
     let svg = std::fs::read_to_string(out.join("ch01-gradient.svg")).unwrap();
     assert!(svg.contains("no measurement has a positive error"));
     assert!(out.join("ch01-gradient.csv").exists());

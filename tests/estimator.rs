@@ -2,28 +2,28 @@
 //! bit-identical kernels with either on, adaptive decisions independent of
 //! tiles and threads, and rays counted only where traced.
 
-use rtow::estimator::Adaptive;
-use rtow::estimator::Estimator;
-use rtow::kernel::scalar;
-use rtow::plan::Prepared;
-use rtow::prepare::prepare;
-use rtow::probe::PathId;
-use rtow::sampling::ScalarStream;
+mod common;
+
+use common::job;
+use rtow::instruments::probe::PathId;
+use rtow::internals::kernel::scalar;
+use rtow::internals::plan::Prepared;
+use rtow::internals::sampling::ScalarStream;
 use rtow::scene::preset;
-use rtow::AccelChoice;
-use rtow::{render, KernelChoice, RenderOptions, Rendered, Settings};
+use rtow::{render, Adaptive, KernelChoice, RenderOptions, Rendered, Roulette, Settings};
 
 fn settings(w: u32, h: u32, spp: u32, seed: u64) -> Settings {
-    Settings { width: w, height: h, spp, max_depth: 50, seed }
+    common::settings(w, h, spp, 50, seed)
 }
 
 fn run(scene: &str, s: Settings, opts: RenderOptions) -> Rendered {
-    render(&preset(scene).unwrap(), s, opts, None).unwrap()
+    render(&job(&preset(scene).unwrap(), s, opts), None).unwrap()
 }
 
 fn opts(kernel: KernelChoice, rr: bool, adaptive: Option<Adaptive>) -> RenderOptions {
     // Roulette early, so that it decides much of the image.
-    RenderOptions { kernel, threads: Some(2), tile: 16, rr, rr_after: 2, adaptive, ..Default::default() }
+    let roulette = rr.then_some(Roulette { after_rays: 2 });
+    RenderOptions { kernel, threads: Some(2), tile: 16, roulette, adaptive, ..Default::default() }
 }
 
 fn assert_same(a: &Rendered, b: &Rendered, what: &str) {
@@ -71,11 +71,11 @@ fn pixel_stats(prep: &Prepared, n: u32) -> Vec<[(f64, f64); 3]> {
 /// as a whole (the mean difference over all pixels, |z| < 4).
 fn roulette_keeps_the_mean(scene: &str, w: u32, h: u32, n: u32, after: u32) {
     let sc = preset(scene).unwrap();
-    let plain = prepare(&sc, settings(w, h, n, 11), AccelChoice::Auto, Estimator::default()).unwrap();
-    let with_rr = Estimator { russian_roulette: Some(after), ..Estimator::default() };
-    let rr = prepare(&sc, settings(w, h, n, 12), AccelChoice::Auto, with_rr).unwrap();
-    let a = pixel_stats(&plain, n);
-    let b = pixel_stats(&rr, n);
+    let plain = job(&sc, settings(w, h, n, 11), RenderOptions::default());
+    let with_rr = RenderOptions { roulette: Some(Roulette { after_rays: after }), ..Default::default() };
+    let rr = job(&sc, settings(w, h, n, 12), with_rr);
+    let a = pixel_stats(plain.prepared(), n);
+    let b = pixel_stats(rr.prepared(), n);
     let tests = (a.len() * 3) as f64;
     // Two-sided z for 1e-3 / tests, by bisection on the normal tail.
     let tail = |z: f64| 0.5 * erfc(z / std::f64::consts::SQRT_2);
@@ -134,7 +134,7 @@ fn roulette_is_unbiased_on_diffuse_glass_and_metal() {
     // sensitive: most of the image goes through the roulette. And the default.
     roulette_keeps_the_mean("ch07-diffuse", 24, 14, 512, 1);
     roulette_keeps_the_mean("ch09-glass", 24, 14, 512, 2);
-    roulette_keeps_the_mean("ch09-glass", 24, 14, 256, rtow::estimator::ROULETTE_AFTER_RAYS);
+    roulette_keeps_the_mean("ch09-glass", 24, 14, 256, rtow::ROULETTE_AFTER_RAYS);
 }
 
 #[test]
@@ -144,7 +144,7 @@ fn roulette_traces_fewer_rays_and_changes_the_noise() {
     let rr = run("ch07-diffuse", s, opts(KernelChoice::Simd, true, None));
     assert!(rr.stats.rays < plain.stats.rays, "{} vs {}", rr.stats.rays, plain.stats.rays);
     assert_ne!(rr.image, plain.image);
-    assert_eq!(rr.stats.russian_roulette, Some(2));
+    assert_eq!(rr.stats.russian_roulette, Some(Roulette { after_rays: 2 }));
     assert_eq!(plain.stats.russian_roulette, None);
 }
 
@@ -157,7 +157,7 @@ fn roulette_scalar_and_simd_agree_bit_for_bit() {
     }
     // The default start.
     let s = settings(40, 23, 8, 5);
-    let dflt = |kernel| RenderOptions { rr_after: rtow::estimator::ROULETTE_AFTER_RAYS, ..opts(kernel, true, None) };
+    let dflt = |kernel| RenderOptions { roulette: Some(Roulette::default()), ..opts(kernel, true, None) };
     let a = run("ch09-glass", s, dflt(KernelChoice::Scalar));
     let b = run("ch09-glass", s, dflt(KernelChoice::Simd));
     assert_same(&a, &b, "default roulette start");
@@ -203,13 +203,15 @@ fn adaptive_counts_only_what_it_traced() {
 }
 
 #[test]
-fn bad_adaptive_options_are_errors_naming_the_flag() {
-    for (t, min, flag) in [(f32::NAN, 16, "--adaptive"), (-1.0, 16, "--adaptive"), (0.1, 0, "--adaptive-min")] {
+fn bad_adaptive_options_are_errors_naming_the_setting() {
+    for (t, min, field) in
+        [(f32::NAN, 16, "adaptive.threshold"), (-1.0, 16, "adaptive.threshold"), (0.1, 0, "adaptive.min_spp")]
+    {
         let o = RenderOptions { adaptive: Some(Adaptive { threshold: t, min_spp: min }), ..RenderOptions::default() };
-        let e = match render(&preset("final").unwrap(), settings(8, 8, 4, 0), o, None) {
+        let e = match rtow::Job::new(&preset("final").unwrap(), &settings(8, 8, 4, 0).into(), &o) {
             Ok(_) => panic!("{t} {min} accepted"),
             Err(e) => e.to_string(),
         };
-        assert!(e.starts_with(&format!("{flag}:")), "{e}");
+        assert!(e.starts_with(&format!("{field}:")), "{e}");
     }
 }

@@ -12,14 +12,18 @@
 //!   few rejected samples or a `check_finite` error (exit status 2);
 //! - keep the process's peak memory bounded.
 //!
+//! Saved bench baselines go through the same mutations: parsing, the
+//! sanity checks and the comparison must refuse (exit status 2, one line) or
+//! compare without a panic and with finite figures.
+//!
 //! `cargo test` runs it for 3 seconds; `.ci/run` for 60
-//! (`RTOW_FUZZ_SECS=60 cargo test --test fuzz`); a long run:
-//! `RTOW_FUZZ_SECS=3600 RTOW_FUZZ_SEED=7 cargo test --test fuzz -- --nocapture`.
+//! (`RTOW_FUZZ_SECS=60 cargo test --release --test fuzz`); a long run:
+//! `RTOW_FUZZ_SECS=3600 RTOW_FUZZ_SEED=7 cargo test --release --test fuzz -- --nocapture`.
 //! A failure prints the seed and the input, and writes it to
 //! `target/tmp/fuzz-failure.<ext>` to be replayed with `rtow render`.
 
 use rtow::scene::{self, Format};
-use rtow::{KernelChoice, Overrides, RenderOptions, Settings};
+use rtow::{Job, KernelChoice, Overrides, RenderOptions};
 use std::path::Path;
 use std::time::{Duration, Instant};
 
@@ -234,24 +238,29 @@ fn generated(rng: &mut Rng) -> (Vec<u8>, Format) {
 /// Runs one input through the whole path; `Err` describes a broken promise.
 fn check(bytes: &[u8], format: Format) -> Result<&'static str, String> {
     let origin = Path::new(if format == Format::Json { "fuzz.json" } else { "fuzz.toml" });
+    // A refusal is exit status 2 with a one-line message.
+    let refusal = |e: rtow::Error| {
+        let msg = e.to_string();
+        if e.exit_code() != 2 || msg.is_empty() || msg.lines().count() != 1 {
+            return Err(format!("bad refusal (exit {}): {msg:?}", e.exit_code()));
+        }
+        Ok("refused")
+    };
     let scene = match scene::scene_from_bytes(bytes, format, origin) {
         Ok(s) => s,
-        Err(e) => {
-            let msg = e.to_string();
-            if e.exit_code() != 2 || msg.is_empty() || msg.lines().count() != 1 {
-                return Err(format!("bad refusal (exit {}): {msg:?}", e.exit_code()));
-            }
-            return Ok("refused");
-        }
+        Err(e) => return refusal(e),
     };
-    let o = Overrides { width: Some(8), height: Some(5), spp: Some(2), max_depth: Some(6), seed: None, book: false };
-    let s = Settings::resolve(&scene.render, &o);
-    s.validate().map_err(|e| format!("tiny settings refused: {e}"))?;
+    let o = Overrides { width: Some(8), height: Some(5), spp: Some(2), max_depth: Some(6), ..Default::default() };
     let mut hashes = Vec::new();
     for kernel in [KernelChoice::Scalar, KernelChoice::Simd] {
         let t = Instant::now();
         let opts = RenderOptions { kernel, threads: Some(1), ..Default::default() };
-        let r = match rtow::render(&scene, s, opts, None) {
+        // Resolving the job checks the scene's values (and the tiny settings).
+        let job = match Job::new(&scene, &o, &opts) {
+            Ok(j) => j,
+            Err(e) => return refusal(e),
+        };
+        let r = match rtow::render(&job, None) {
             Ok(r) => r,
             Err(e) if e.exit_code() == 2 => return Ok("refused by render"),
             Err(e) => return Err(format!("render failed with exit {}: {e}", e.exit_code())),
@@ -274,6 +283,21 @@ fn check(bytes: &[u8], format: Format) -> Result<&'static str, String> {
         return Err(format!("kernels disagree: {hashes:?}"));
     }
     Ok("rendered")
+}
+
+/// Runs one check; counts its kind of success, or returns why it failed (a panic included).
+fn tally_outcome(
+    tally: &mut std::collections::BTreeMap<&'static str, u64>,
+    check: impl FnOnce() -> Result<&'static str, String> + std::panic::UnwindSafe,
+) -> Option<String> {
+    match std::panic::catch_unwind(check) {
+        Ok(Ok(kind)) => {
+            *tally.entry(kind).or_default() += 1;
+            None
+        }
+        Ok(Err(why)) => Some(why),
+        Err(_) => Some("panic".to_string()),
+    }
 }
 
 fn peak_rss_kib() -> Option<u64> {
@@ -308,15 +332,7 @@ fn fuzz_the_input_path() {
             }
             (data, *f)
         };
-        let outcome = std::panic::catch_unwind(|| check(&input, format));
-        let failure = match outcome {
-            Ok(Ok(kind)) => {
-                *tally.entry(kind).or_default() += 1;
-                None
-            }
-            Ok(Err(why)) => Some(why),
-            Err(_) => Some("panic".to_string()),
-        };
+        let failure = tally_outcome(&mut tally, || check(&input, format));
         if let Some(why) = failure {
             let ext = if format == Format::Json { "json" } else { "toml" };
             let path = Path::new(env!("CARGO_TARGET_TMPDIR")).join(format!("fuzz-failure.{ext}"));
@@ -338,4 +354,87 @@ fn fuzz_the_input_path() {
         assert!(kib < 1 << 20, "peak RSS {kib} KiB: memory is not bounded");
     }
     assert!(execs > 0);
+}
+
+/// A real baseline (two kernels, two runs each) and the report it is compared with.
+fn baseline_corpus() -> (Vec<u8>, rtow::instruments::bench::BenchReport, rtow::Settings, usize) {
+    use rtow::instruments::bench::{self, BenchConfig, Gate};
+    let scene = scene::preset("ch08-fuzz").unwrap();
+    let o = Overrides { width: Some(12), height: Some(7), spp: Some(2), max_depth: Some(5), ..Default::default() };
+    let job = Job::new(&scene, &o, &RenderOptions { threads: Some(1), ..Default::default() }).unwrap();
+    let cfg = BenchConfig {
+        kernels: vec![KernelChoice::Scalar, KernelChoice::Simd8],
+        repeat: 2,
+        tolerance: 5.0,
+        gate: Gate::Time,
+    };
+    let report = bench::run(&job, "ch08-fuzz", &cfg, |_, _, _| {}).unwrap();
+    (report.to_json().into_bytes(), report, *job.settings(), job.threads())
+}
+
+/// One mutated baseline through load, check and compare; `Err` describes a broken promise.
+fn check_baseline(
+    bytes: &[u8],
+    report: &rtow::instruments::bench::BenchReport,
+    s: &rtow::Settings,
+    threads: usize,
+) -> Result<&'static str, String> {
+    use rtow::instruments::bench::{compare, Baseline, Gate};
+    let refusal = |e: rtow::Error| {
+        let msg = e.to_string();
+        if e.exit_code() != 2 || msg.is_empty() || msg.lines().count() != 1 || msg.len() > 1000 {
+            return Err(format!("bad refusal (exit {}): {msg:?}", e.exit_code()));
+        }
+        Ok("refused")
+    };
+    let b = match Baseline::from_bytes(bytes, Path::new("fuzz-baseline.json")) {
+        Ok(b) => b,
+        Err(e) => return refusal(e),
+    };
+    if let Err(e) = b.check("ch08-fuzz", s, threads, &[KernelChoice::Scalar, KernelChoice::Simd8]) {
+        return refusal(e);
+    }
+    for gate in [Gate::Time, Gate::Work] {
+        for c in compare(report, &b, 5.0, gate) {
+            let ci_ok = c.change_ci.is_none_or(|ci| ci.lo.is_finite() && ci.hi.is_finite() && ci.lo <= ci.hi);
+            if !(c.change_percent.is_finite() && c.baseline_mrays > 0.0 && ci_ok) {
+                return Err(format!("a comparison with impossible figures: {c:?}"));
+            }
+        }
+    }
+    Ok("compared")
+}
+
+#[test]
+fn fuzz_the_baselines() {
+    let secs: u64 = std::env::var("RTOW_FUZZ_SECS").ok().and_then(|v| v.parse().ok()).unwrap_or(3);
+    let seed: u64 = std::env::var("RTOW_FUZZ_SEED").ok().and_then(|v| v.parse().ok()).unwrap_or_else(|| {
+        std::time::SystemTime::now().duration_since(std::time::UNIX_EPOCH).map_or(1, |d| d.as_nanos() as u64)
+    });
+    let (base, report, settings, threads) = baseline_corpus();
+    assert_eq!(check_baseline(&base, &report, &settings, threads), Ok("compared"));
+    let corpus = vec![(base.clone(), Format::Json)];
+    let mut rng = Rng(seed | 1);
+    let start = Instant::now();
+    let mut tally: std::collections::BTreeMap<&str, u64> = Default::default();
+    let mut execs = 0u64;
+    while start.elapsed() < Duration::from_secs(secs) {
+        let mut data = base.clone();
+        for _ in 0..1 + rng.below(4) {
+            mutate(&mut rng, &mut data, &corpus);
+        }
+        let failure = tally_outcome(&mut tally, || check_baseline(&data, &report, &settings, threads));
+        if let Some(why) = failure {
+            let path = Path::new(env!("CARGO_TARGET_TMPDIR")).join("fuzz-failure-baseline.json");
+            let _ = std::fs::write(&path, &data);
+            panic!(
+                "fuzz seed {seed}, baseline execution {execs}: {why}\ninput written to {}:\n{}",
+                path.display(),
+                String::from_utf8_lossy(&data[..data.len().min(4000)])
+            );
+        }
+        execs += 1;
+    }
+    println!("fuzz baselines: seed {seed}, {execs} executions in {:.1} s: {tally:?}", start.elapsed().as_secs_f64());
+    assert!(tally.get("refused").is_some_and(|&n| n > 0), "no mutation was refused: {tally:?}");
 }

@@ -1,53 +1,24 @@
 //! Issue 11, "Hostile input": one test (or more) per class of input that broke
-//! rtow, each of which fails on the code before the fix. The README's
-//! "Reliability" table maps every class to these tests.
+//! rtow, each of which fails on the code before the fix. The table of
+//! docs/reliability.md maps every class to these tests.
 
+mod common;
+
+use common::{failure, listing, rtow, Run, BIN};
 use rtow::scene::{self, Format};
 use rtow::Error;
 use std::path::Path;
 use std::process::{Command, Stdio};
 
-const BIN: &str = env!("CARGO_BIN_EXE_rtow");
 const SMALL: [&str; 7] = ["--width", "16", "--height", "9", "--spp", "1", "-q"];
 const SENTINEL: &[u8] = b"old contents; a failed run must leave this file alone";
 
-struct Run {
-    code: Option<i32>,
-    stdout: String,
-    stderr: String,
-}
-
-fn rtow_env(dir: &Path, args: &[&str], env: &[(&str, &str)]) -> Run {
-    let out = Command::new(BIN).args(args).envs(env.iter().copied()).current_dir(dir).output().expect("rtow runs");
-    Run {
-        code: out.status.code(),
-        stdout: String::from_utf8_lossy(&out.stdout).into_owned(),
-        stderr: String::from_utf8_lossy(&out.stderr).into_owned(),
-    }
-}
-
-fn rtow(dir: &Path, args: &[&str]) -> Run {
-    rtow_env(dir, args, &[])
-}
-
 /// Exit status `code`, one `error:` line containing every needle, no panic.
 fn fails(r: &Run, code: i32, needles: &[&str], what: &str) {
-    assert!(!r.stderr.contains("panicked"), "{what}: panic: {}", r.stderr);
-    assert_eq!(r.code, Some(code), "{what}: stderr {}", r.stderr);
-    assert!(r.stdout.is_empty(), "{what}: stdout {}", r.stdout);
-    let lines: Vec<&str> = r.stderr.lines().collect();
-    assert_eq!(lines.len(), 1, "{what}: stderr is not one line: {:?}", r.stderr);
-    assert!(lines[0].starts_with("error: "), "{what}: {}", lines[0]);
+    let line = failure(r, code, what);
     for n in needles {
-        assert!(lines[0].contains(n), "{what}: {:?} does not say {n:?}", lines[0]);
+        assert!(line.contains(n), "{what}: {line:?} does not say {n:?}");
     }
-}
-
-fn listing(dir: &Path) -> Vec<String> {
-    let mut v: Vec<String> =
-        std::fs::read_dir(dir).unwrap().map(|e| e.unwrap().file_name().to_string_lossy().into_owned()).collect();
-    v.sort();
-    v
 }
 
 fn export(dir: &Path, preset: &str, file: &str) -> String {
@@ -61,12 +32,7 @@ fn export(dir: &Path, preset: &str, file: &str) -> String {
 /// of swapping the machine.
 fn rtow_limited(dir: &Path, kib: u64, args: &str) -> Run {
     let script = format!("ulimit -v {kib} && exec \"{BIN}\" {args}");
-    let out = Command::new("sh").arg("-c").arg(script).current_dir(dir).output().expect("sh runs");
-    Run {
-        code: out.status.code(),
-        stdout: String::from_utf8_lossy(&out.stdout).into_owned(),
-        stderr: String::from_utf8_lossy(&out.stderr).into_owned(),
-    }
+    Command::new("sh").arg("-c").arg(script).current_dir(dir).output().expect("sh runs").into()
 }
 
 // ---------------------------------------------------------------------------
@@ -182,7 +148,7 @@ fn class2_a_write_protected_output_is_refused() {
     fails(&rtow(d, &args), 1, &["ro.png", "write-protected"], "ro.png");
     assert_eq!(std::fs::read(d.join("ro.png")).unwrap(), SENTINEL);
     let r = rtow(d, &["export", "final", "-o", "ro.json"]);
-    assert_eq!(r.code, Some(0));
+    assert_eq!(r.code, 0);
     std::fs::set_permissions(d.join("ro.json"), std::fs::Permissions::from_mode(0o444)).unwrap();
     fails(&rtow(d, &["export", "final", "-o", "ro.json"]), 1, &["write-protected"], "export");
 }
@@ -269,7 +235,7 @@ fn class3_degenerate_cameras_and_spheres_are_refused() {
         ),
     ];
     for (text, field) in cases {
-        let e = scene::scene_from_str(&text, Format::Json, Path::new("d.json")).expect_err(&text);
+        let e = common::read_and_check(&text, Format::Json, "d.json").expect_err(&text);
         assert_eq!(e.exit_code(), 2, "{text}: {e}");
         assert!(matches!(&e, Error::Invalid { field: f, .. } if f == field), "{text}: {e}");
     }
@@ -288,9 +254,9 @@ fn class3_every_accepted_edge_camera_renders_finite_images_with_both_kernels() {
         let s =
             scene::scene_from_str(&text, Format::Json, Path::new("e.json")).unwrap_or_else(|e| panic!("{text}: {e}"));
         for kernel in [rtow::KernelChoice::Scalar, rtow::KernelChoice::Simd] {
-            let st = rtow::Settings { width: 16, height: 9, spp: 2, max_depth: 4, seed: 1 };
+            let st = common::settings(16, 9, 2, 4, 1);
             let opts = rtow::RenderOptions { kernel, threads: Some(1), ..Default::default() };
-            let r = rtow::render(&s, st, opts, None).unwrap();
+            let r = rtow::render(&common::job(&s, st, opts), None).unwrap();
             assert!(r.image.data.iter().flatten().all(|v| v.is_finite()), "{text}");
             assert_eq!(r.stats.rejected_samples, 0, "{text}");
         }
@@ -332,7 +298,7 @@ fn class4_absurd_thread_counts_are_refused_at_once() {
     assert!(start.elapsed().as_secs() < 20, "took {:?}", start.elapsed());
     let s = scene::preset("ch04-sphere").unwrap();
     let opts = rtow::RenderOptions { threads: Some(usize::MAX), ..Default::default() };
-    let e = rtow::render(&s, rtow::Settings { width: 4, height: 4, spp: 1, max_depth: 1, seed: 0 }, opts, None);
+    let e = rtow::Job::new(&s, &common::settings(4, 4, 1, 1, 0).into(), &opts);
     assert!(e.err().unwrap().to_string().contains(&rtow::limits::MAX_THREADS.to_string()));
 }
 
@@ -352,7 +318,7 @@ fn class5_bench_validates_outputs_and_baseline_before_measuring() {
     // A measurement prints "run 1" to stderr; a failure up front prints only the error.
     fails(&rtow(d, &with(&["--save", "missing/b.json"])), 1, &["missing/b.json", "does not exist"], "save");
     let r = rtow(d, &with(&["--save", "b.json"]));
-    assert_eq!(r.code, Some(0), "{}", r.stderr);
+    assert_eq!(r.code, 0, "{}", r.stderr);
     // A baseline of another scene, or other settings, is refused before measuring.
     let other = ["bench", "ch05-normals", "--width", "16", "--height", "9", "--spp", "1", "--repeat", "1"];
     let mut args = other.to_vec();

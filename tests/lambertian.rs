@@ -9,9 +9,9 @@
 
 mod common;
 use common::stats::{chi2, chi2_critical, normal_quantile};
-use rtow::material::lambertian;
-use rtow::sampling::{ScalarStream, Stream};
-use rtow::vec3::V3;
+use rtow::internals::material::lambertian;
+use rtow::internals::sampling::{ScalarStream, Stream};
+use rtow::internals::vec3::V3;
 
 const SAMPLES: usize = 200_000;
 /// Bins in mu^2 and in phi: 16 x 16 cells, about 780 expected per cell.

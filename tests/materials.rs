@@ -6,9 +6,9 @@
 mod common;
 use common::stats::{chi2, chi2_critical};
 use glam::DVec3;
-use rtow::material::dielectric;
-use rtow::sampling::{in_unit_disk, unit_vector, ScalarStream, Stream};
-use rtow::vec3::V3;
+use rtow::internals::material::dielectric;
+use rtow::internals::sampling::{in_unit_disk, unit_vector, ScalarStream, Stream};
+use rtow::internals::vec3::V3;
 
 /// A stream that always draws `u` (the dielectric draws exactly one value).
 struct Fixed(f32);

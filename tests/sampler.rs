@@ -6,10 +6,11 @@
 
 mod common;
 use common::*;
-use rtow::sampling::Sampler;
 use rtow::scene::{self, scene_from_str, Format};
 use rtow::KernelChoice::{Scalar, Simd, Simd8};
-use rtow::{render, AccelChoice, KernelChoice, RenderOptions, Rendered, Scene, Settings};
+use rtow::{
+    render, AccelChoice, Job, KernelChoice, Overrides, RenderOptions, Rendered, Roulette, Sampler, Scene, Settings,
+};
 
 fn run(
     sc: &Scene,
@@ -20,8 +21,9 @@ fn run(
     threads: usize,
     tile: u32,
 ) -> Rendered {
-    let opts = RenderOptions { kernel, threads: Some(threads), tile, sampler, rr, rr_after: 2, ..Default::default() };
-    render(sc, s, opts, None).expect("render")
+    let roulette = rr.then_some(Roulette { after_rays: 2 });
+    let opts = RenderOptions { kernel, threads: Some(threads), tile, roulette, ..Default::default() };
+    render(&job(sc, Settings { sampler, ..s }, opts), None).expect("render")
 }
 
 /// Every SIMD kernel (`simd16` runs on every build: one 512-bit register with
@@ -34,7 +36,7 @@ fn kernels() -> Vec<KernelChoice> {
 fn sobol_renders_are_bit_identical_across_kernels() {
     for p in scene::presets() {
         let sc = (p.build)();
-        let d = rtow::default_settings(&sc);
+        let d = scene_settings(&sc);
         let s = settings(40, 24, 5, d.max_depth, 11);
         for sampler in [Sampler::SOBOL, Sampler::parse("sobol-lens").unwrap()] {
             for rr in [false, true] {
@@ -96,6 +98,21 @@ fn scene_files_name_the_sampler() {
         "render": {"sampler": "sobol"}}"#;
     let sc = scene_from_str(text, Format::Json, std::path::Path::new("t.json")).unwrap();
     assert_eq!(sc.render.sampler, Some(Sampler::SOBOL));
+    // The library honours it: a job of the scene renders with the table's
+    // sampler unless an override names another.
+    let indep = text.replace("\"sobol\"", "\"independent\"");
+    let sc = scene_from_str(&indep, Format::Json, std::path::Path::new("t.json")).unwrap();
+    let o = Overrides { width: Some(16), height: Some(9), spp: Some(4), ..Default::default() };
+    let from_table = render(&Job::new(&sc, &o, &RenderOptions::default()).unwrap(), None).unwrap();
+    assert_eq!(from_table.stats.sampler, Sampler::Independent);
+    let named = Overrides { sampler: Some(Sampler::Independent), ..o };
+    let plain = scene::Scene { render: Default::default(), ..sc.clone() };
+    let explicit = render(&Job::new(&plain, &named, &RenderOptions::default()).unwrap(), None).unwrap();
+    assert_identical(&from_table.image, &explicit.image, "the table's sampler");
+    let sobol = Overrides { sampler: Some(Sampler::SOBOL), ..o };
+    let overridden = render(&Job::new(&sc, &sobol, &RenderOptions::default()).unwrap(), None).unwrap();
+    assert_eq!(overridden.stats.sampler, Sampler::SOBOL);
+    assert_ne!(overridden.image.hash(), from_table.image.hash());
     let bad = text.replace("\"sobol\"", "\"halton\"");
     let e = scene_from_str(&bad, Format::Json, std::path::Path::new("t.json")).unwrap_err().to_string();
     assert!(e.contains("sampler") && e.contains("independent, sobol"), "{e}");

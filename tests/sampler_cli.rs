@@ -1,19 +1,14 @@
 //! `--sampler` through the binary: render, scene files, bench and converge.
 #![cfg(feature = "cli")]
 
-use rtow::sampling::Sampler;
-use rtow::{render, KernelChoice, RenderOptions, Settings};
+mod common;
+
+use common::{rtow, Run};
+use rtow::{render, Job, KernelChoice, Overrides, RenderOptions, Sampler};
 use std::path::Path;
-use std::process::{Command, Output};
 
-const BIN: &str = env!("CARGO_BIN_EXE_rtow");
-
-fn rtow(dir: &Path, args: &[&str]) -> Output {
-    Command::new(BIN).args(args).current_dir(dir).output().expect("rtow runs")
-}
-
-fn ok(o: &Output) {
-    assert!(o.status.success(), "exit {:?}: {}", o.status.code(), String::from_utf8_lossy(&o.stderr));
+fn ok(o: &Run) {
+    o.ok();
 }
 
 fn stats(dir: &Path) -> serde_json::Value {
@@ -32,14 +27,16 @@ fn render_takes_the_sampler_from_the_flag_or_the_scene() {
     let v = stats(dir);
     assert_eq!(v["sampler"], "independent");
     let sc = rtow::scene::preset("ch07-diffuse").unwrap();
-    let s = Settings { width: 24, height: 14, spp: 4, max_depth: rtow::default_settings(&sc).max_depth, seed: 3 };
-    let lib = render(
-        &sc,
-        s,
-        RenderOptions { kernel: KernelChoice::Simd, sampler: Sampler::Independent, ..Default::default() },
-        None,
-    )
-    .unwrap();
+    let o = Overrides {
+        width: Some(24),
+        height: Some(14),
+        spp: Some(4),
+        seed: Some(3),
+        sampler: Some(Sampler::Independent),
+        ..Default::default()
+    };
+    let job = Job::new(&sc, &o, &RenderOptions { kernel: KernelChoice::Simd, ..Default::default() }).unwrap();
+    let lib = render(&job, None).unwrap();
     assert_eq!(v["image_hash"], lib.stats.image_hash.as_str());
     ok(&rtow(dir, &args(&[])));
     assert_eq!(stats(dir)["sampler"], "sobol", "the default");
@@ -62,8 +59,8 @@ fn render_takes_the_sampler_from_the_flag_or_the_scene() {
 fn an_unknown_sampler_is_bad_input() {
     let d = tempfile::tempdir().unwrap();
     let o = rtow(d.path(), &[&["render", "ch07-diffuse", "--sampler", "halton"][..], &SMALL].concat());
-    assert_eq!(o.status.code(), Some(2), "{}", String::from_utf8_lossy(&o.stderr));
-    let err = String::from_utf8_lossy(&o.stderr);
+    assert_eq!(o.code, 2, "{}", o.stderr);
+    let err = o.stderr.clone();
     assert!(err.contains("independent") && err.contains("sobol"), "{err}");
     assert!(!d.path().join("ch07-diffuse.png").exists());
 }

@@ -3,9 +3,10 @@
 //! never a panic; writing scene files fails cleanly; valid scenes round-trip.
 
 mod bad_input;
+mod common;
 
 use proptest::prelude::*;
-use rtow::scene::{self, Camera, Format, Material, RenderDefaults, Scene, Sky, Sphere};
+use rtow::scene::{self, Camera, Format, Material, RenderTable, Scene, Sky, Sphere};
 use rtow::{Error, Settings};
 use std::path::Path;
 
@@ -16,7 +17,7 @@ fn format_of(file: &str) -> Format {
 #[test]
 fn every_bad_scene_is_an_input_error_naming_the_field() {
     for c in bad_input::cases() {
-        let r = std::panic::catch_unwind(|| scene::scene_from_str(&c.text, format_of(c.file), Path::new(c.file)));
+        let r = std::panic::catch_unwind(|| common::read_and_check(&c.text, format_of(c.file), c.file));
         let r = r.unwrap_or_else(|_| panic!("{}: panicked", c.file));
         let e = match r {
             Ok(s) => panic!("{}: accepted: {s:?}", c.file),
@@ -50,7 +51,7 @@ fn values_at_the_edges_of_their_ranges_are_accepted() {
                 [[spheres]]\ncenter = [0, 0, -1]\nradius = -1e-5\nmaterial = { type = \"dielectric\", ior = 1e-30 }\n\n\
                 [[spheres]]\ncenter = [-1e6, 1e6, -1e6]\nradius = 1e6\nmaterial = { type = \"dielectric\", ior = 1.5 }\n";
     for (text, f) in [(json, "ok.json"), (toml, "ok.toml")] {
-        scene::scene_from_str(text, format_of(f), Path::new(f)).unwrap_or_else(|e| panic!("{f}: {e}"));
+        common::read_and_check(text, format_of(f), f).unwrap_or_else(|e| panic!("{f}: {e}"));
     }
 }
 
@@ -76,7 +77,7 @@ fn load_scene_rejects_what_it_cannot_read() {
 
 #[test]
 fn settings_of_zero_or_too_large_name_the_setting() {
-    let ok = Settings { width: 8, height: 4, spp: 1, max_depth: 1, seed: 0 };
+    let ok = Settings { width: 8, height: 4, spp: 1, max_depth: 1, seed: 0, ..Settings::default() };
     ok.validate().unwrap();
     let cases: [(Settings, &str); 6] = [
         (Settings { width: 0, ..ok }, "width"),
@@ -92,7 +93,7 @@ fn settings_of_zero_or_too_large_name_the_setting() {
         assert!(matches!(&e, Error::Invalid { field: f, .. } if f == field), "{s:?}: {e}");
         // The library refuses before it allocates anything.
         let scene = scene::preset("ch04-sphere").unwrap();
-        let e = rtow::render(&scene, s, Default::default(), None).err().expect("render refused");
+        let e = rtow::Job::new(&scene, &s.into(), &Default::default()).expect_err("render refused");
         assert!(matches!(&e, Error::Invalid { field: f, .. } if f == field), "{e}");
     }
 }
@@ -197,7 +198,7 @@ fn scene_strategy() -> impl Strategy<Value = Scene> {
             },
             spheres,
             sky: Sky { horizon, zenith },
-            render: RenderDefaults { width: w, seed, ..Default::default() },
+            render: RenderTable { width: w, seed, ..Default::default() },
         })
 }
 
@@ -230,7 +231,7 @@ proptest! {
         let ok_r = (rtow::limits::MIN_RADIUS..=rtow::limits::MAX_RADIUS).contains(&r.abs());
         for format in [Format::Json, Format::Toml] {
             let text = scene::scene_to_string(&s, format);
-            match scene::scene_from_str(&text, format, Path::new("p")) {
+            match common::read_and_check(&text, format, "p") {
                 Ok(_) => prop_assert!(ok_c && ok_r, "accepted c {c} r {r}"),
                 Err(e) => {
                     prop_assert!(!(ok_c && ok_r), "refused c {c} r {r}: {e}");

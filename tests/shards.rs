@@ -4,19 +4,18 @@
 //! `rtow merge` refuses, with exit status 2 naming the file, everything that
 //! would not give that image.
 
-use rtow::estimator::Adaptive;
-use rtow::film::part::{self, Part, Split, SplitKind};
-use rtow::scene::{preset, Scene};
-use rtow::shard::{self, Job};
-use rtow::{render, KernelChoice, RenderOptions, Settings};
-use std::path::{Path, PathBuf};
-use std::process::Command;
+mod common;
 
-const BIN: &str = env!("CARGO_BIN_EXE_rtow");
+use common::{job, rtow, Run};
+use rtow::film::part;
+use rtow::scene::{preset, Scene};
+use rtow::shard::{self, FilmRequest, Part, Split, SplitKind};
+use rtow::{render, Adaptive, KernelChoice, RenderOptions, Settings};
+use std::path::{Path, PathBuf};
 
 fn kernels() -> Vec<KernelChoice> {
     let mut k = vec![KernelChoice::Scalar, KernelChoice::Simd8];
-    if rtow::render::HAS_SIMD16 {
+    if rtow::HAS_SIMD16 {
         k.push(KernelChoice::Simd16);
     }
     k
@@ -27,13 +26,13 @@ fn opts(kernel: KernelChoice, threads: usize, tile: u32) -> RenderOptions {
 }
 
 fn settings(spp: u32) -> Settings {
-    Settings { width: 37, height: 21, spp, max_depth: 12, seed: 3 }
+    common::settings(37, 21, spp, 12, 3)
 }
 
 /// Renders shard `k` of `n` and passes it through its file bytes.
 fn shard_part(scene: &Scene, s: Settings, o: RenderOptions, split: Split) -> (PathBuf, Part) {
-    let job = Job { split, resume: None };
-    let (_, p) = shard::render_part(scene, s, o, &job, None).expect("shard renders");
+    let req = FilmRequest { split, resume: None };
+    let (_, p) = shard::render_part(&job(scene, s, o), &req, None).expect("shard renders");
     let name = PathBuf::from(format!("part-{}.rtfilm", split.shard));
     let back = Part::from_bytes(&p.to_bytes(), &name).expect("reads back");
     assert_eq!(back, p);
@@ -45,7 +44,7 @@ fn any_split_merges_into_the_one_process_image() {
     for name in ["final", "ch09-glass"] {
         let scene = preset(name).unwrap();
         let s = settings(7);
-        let one = render(&scene, s, opts(KernelChoice::Simd, 2, 16), None).unwrap();
+        let one = render(&job(&scene, s, opts(KernelChoice::Simd, 2, 16)), None).unwrap();
         for (i, kernel) in kernels().into_iter().enumerate() {
             for (kind, ns) in [(SplitKind::Samples, &[1u32, 2, 3, 7][..]), (SplitKind::Rows, &[2, 5, 21][..])] {
                 for &n in ns {
@@ -77,10 +76,10 @@ fn any_split_merges_into_the_one_process_image() {
 fn the_image_does_not_depend_on_threads_tiles_or_kernel() {
     let scene = preset("final").unwrap();
     let s = settings(5);
-    let reference = render(&scene, s, opts(KernelChoice::Scalar, 1, 16), None).unwrap().image;
+    let reference = render(&job(&scene, s, opts(KernelChoice::Scalar, 1, 16)), None).unwrap().image;
     for kernel in kernels() {
         for (threads, tile) in [(1, 1), (2, 7), (2, 45), (1, 16)] {
-            let img = render(&scene, s, opts(kernel, threads, tile), None).unwrap().image;
+            let img = render(&job(&scene, s, opts(kernel, threads, tile)), None).unwrap().image;
             assert_eq!(img, reference, "{kernel:?}, {threads} threads, tile {tile}");
         }
     }
@@ -91,13 +90,13 @@ fn a_resumed_render_is_the_render_with_more_samples() {
     let scene = preset("final").unwrap();
     for kernel in kernels() {
         let o = opts(kernel, 2, 16);
-        let full = render(&scene, settings(13), o, None).unwrap();
+        let full = render(&job(&scene, settings(13), o), None).unwrap();
         for first in [2, 4, 13] {
-            let job = Job { split: Split::WHOLE, resume: None };
-            let (_, done) = shard::render_part(&scene, settings(first), o, &job, None).unwrap();
+            let req = FilmRequest { split: Split::WHOLE, resume: None };
+            let (_, done) = shard::render_part(&job(&scene, settings(first), o), &req, None).unwrap();
             let done = Part::from_bytes(&done.to_bytes(), Path::new("done.rtfilm")).unwrap();
-            let job = Job { split: Split::WHOLE, resume: Some((PathBuf::from("done.rtfilm"), done)) };
-            let (r, film) = shard::render_part(&scene, settings(13), o, &job, None).unwrap();
+            let req = FilmRequest { split: Split::WHOLE, resume: Some((PathBuf::from("done.rtfilm"), done)) };
+            let (r, film) = shard::render_part(&job(&scene, settings(13), o), &req, None).unwrap();
             assert_eq!(r.image, full.image, "{kernel:?}: resumed from {first} spp");
             assert_eq!(film.header.counters.rays, full.stats.rays);
             assert_eq!(film.header.samples, [0, 13]);
@@ -105,10 +104,10 @@ fn a_resumed_render_is_the_render_with_more_samples() {
     }
     // One sample per pixel goes through pixel centres, so it is not the start
     // of a jittered render: resuming it is refused.
-    let job = Job { split: Split::WHOLE, resume: None };
-    let (_, one) = shard::render_part(&scene, settings(1), opts(KernelChoice::Simd, 2, 16), &job, None).unwrap();
-    let job = Job { split: Split::WHOLE, resume: Some((PathBuf::from("one.rtfilm"), one)) };
-    let e = shard::check(&scene, &settings(8), &opts(KernelChoice::Simd, 2, 16), &job).unwrap_err().to_string();
+    let req = FilmRequest { split: Split::WHOLE, resume: None };
+    let (_, one) = shard::render_part(&job(&scene, settings(1), opts(KernelChoice::Simd, 2, 16)), &req, None).unwrap();
+    let req = FilmRequest { split: Split::WHOLE, resume: Some((PathBuf::from("one.rtfilm"), one)) };
+    let e = shard::check(&job(&scene, settings(8), opts(KernelChoice::Simd, 2, 16)), &req).unwrap_err().to_string();
     assert!(e.contains("one.rtfilm") && e.contains("pixel_jitter"), "{e}");
 }
 
@@ -117,7 +116,7 @@ fn adaptive_renders_split_by_rows_exactly_and_refuse_sample_splits() {
     let scene = preset("ch09-glass").unwrap();
     let s = settings(64);
     let o = RenderOptions { adaptive: Some(Adaptive::new(0.2, 8).unwrap()), ..opts(KernelChoice::Simd, 2, 16) };
-    let one = render(&scene, s, o, None).unwrap();
+    let one = render(&job(&scene, s, o), None).unwrap();
     assert!(one.stats.samples < 37 * 21 * 64, "some pixels stop early");
     let parts: Vec<_> =
         (1..=3).map(|k| shard_part(&scene, s, o, Split { kind: SplitKind::Rows, shard: k, of: 3 })).collect();
@@ -125,27 +124,12 @@ fn adaptive_renders_split_by_rows_exactly_and_refuse_sample_splits() {
     let merged = part::merge(&parts).unwrap();
     assert_eq!(merged.film.image(), one.image);
     assert_eq!(merged.header.counters.samples, one.stats.samples);
-    let job = Job { split: Split { kind: SplitKind::Samples, shard: 1, of: 2 }, resume: None };
-    let e = shard::check(&scene, &s, &o, &job).unwrap_err().to_string();
-    assert!(e.starts_with("--split:") && e.contains("--split rows"), "{e}");
+    let req = FilmRequest { split: Split { kind: SplitKind::Samples, shard: 1, of: 2 }, resume: None };
+    let e = shard::check(&job(&scene, s, o), &req).unwrap_err().to_string();
+    assert!(e.starts_with("split:") && e.contains("split adaptive renders by rows"), "{e}");
 }
 
 // The command line.
-
-struct Run {
-    code: i32,
-    stdout: String,
-    stderr: String,
-}
-
-fn rtow(dir: &Path, args: &[&str]) -> Run {
-    let out = Command::new(BIN).args(args).current_dir(dir).output().expect("rtow runs");
-    Run {
-        code: out.status.code().expect("rtow exited"),
-        stdout: String::from_utf8(out.stdout).unwrap(),
-        stderr: String::from_utf8(out.stderr).unwrap(),
-    }
-}
 
 fn ok(r: &Run) {
     assert_eq!(r.code, 0, "stderr: {}", r.stderr);
@@ -285,7 +269,12 @@ fn rtow_merge_refuses_what_would_not_be_the_image() {
     a.extend_from_slice(&SMALL);
     let with = |extra: &[&'static str]| -> Vec<&'static str> { [a.as_slice(), extra].concat() };
     refused(d, &with(&["--shard", "1/2", "-o", "out.png"]), "--shard");
-    refused(d, &with(&["--shard", "1/2", "--adaptive", "0.1", "-o", "out.rtfilm"]), "--split rows");
+    // (--adaptive-min 2: with 6 samples adaptive sampling can act, so it is on.)
+    refused(
+        d,
+        &with(&["--shard", "1/2", "--adaptive", "0.1", "--adaptive-min", "2", "-o", "out.rtfilm"]),
+        "split adaptive renders by rows",
+    );
     refused(d, &with(&["--shard", "3/2", "-o", "out.rtfilm"]), "--shard");
     refused(d, &with(&["--seed", "1", "--resume", "p1.rtfilm", "-o", "out.png"]), "p1.rtfilm");
     let e = refused(d, &["render", "ch01-gradient", "--width", "8", "--height", "8", "-o", "out.rtfilm"], "no film");

@@ -1,13 +1,13 @@
 //! Numerical stability: the f32 intersection (scalar and 8-wide) against the f64
-//! oracle of `rtow::tools::stress`, the ray offset, NaN-free films, and the quick form of
+//! oracle of `rtow::instruments::stress`, the ray offset, NaN-free films, and the quick form of
 //! `rtow stress` (sweeps, stress scenes, image comparisons) with both kernels.
 
 use glam::DVec3;
 use proptest::prelude::*;
-use rtow::geometry::{surface, Spheres};
+use rtow::instruments::stress::{self, check_group, Group, GroupResult};
+use rtow::internals::geometry::{surface, Spheres};
+use rtow::internals::vec3::V3;
 use rtow::scene;
-use rtow::tools::stress::{self, check_group, Group, GroupResult};
-use rtow::vec3::V3;
 use rtow::{KernelChoice, RenderOptions};
 use std::f64::consts::TAU;
 use wide::f32x8;
@@ -148,13 +148,10 @@ fn the_offset_is_needed_and_sufficient_on_the_sweep() {
 fn no_preset_produces_nan_or_inf() {
     for p in scene::presets() {
         let sc = (p.build)();
-        let mut st = rtow::default_settings(&sc);
-        st.width = 24;
-        st.height = 16;
-        st.spp = 2;
+        let st = rtow::Overrides { width: Some(24), height: Some(16), spp: Some(2), ..Default::default() };
         for kernel in [KernelChoice::Scalar, KernelChoice::Simd] {
             let opts = RenderOptions { kernel, threads: Some(2), tile: 16, ..RenderOptions::default() };
-            let r = rtow::render(&sc, st, opts, None).unwrap();
+            let r = rtow::render(&rtow::Job::new(&sc, &st, &opts).unwrap(), None).unwrap();
             assert_eq!(r.stats.rejected_samples, 0, "{} [{}]", p.name, kernel.name());
         }
     }
@@ -164,7 +161,7 @@ fn no_preset_produces_nan_or_inf() {
 /// form it compares against really does fail where the robust one does not.
 #[test]
 fn quick_stress_run_passes() {
-    let cfg = stress::Config { quick: true, seed: 1, threads: Some(2) };
+    let cfg = stress::StressConfig { quick: true, seed: 1, threads: Some(2) };
     let report = stress::run(&cfg, &mut |_| {}).unwrap();
     assert!(report.passed(), "{}", report.table());
     for kernel in ["scalar", "simd"] {

@@ -16,7 +16,7 @@
 # Slurm's configuration, state and logs live in $RTOW_SLURM_STATE
 # [/var/tmp/rtow-slurm], nothing is written to /etc/slurm.
 #
-# Environment: RTOW (an rtow binary; default: the one `cargo test` builds,
+# Environment: RTOW (an rtow binary; default: the one `cargo test --release` builds,
 # as .ci/run does), RTOW_SHARDS [4], RTOW_SPLIT [samples],
 # RTOW_ARGS [a small final-scene render], RTOW_SLURM_TIMEOUT seconds [300].
 set -euo pipefail
@@ -189,10 +189,10 @@ e2e() {
     fi
     local rtow=${RTOW:-}
     if [ -z "$rtow" ]; then
-        # The binary `cargo test` builds (same profile and features: nothing to
-        # compile again after the README's test command, as in .ci/run).
-        say "building rtow (cargo test --no-run)"
-        rtow=$(cd "$repo" && cargo test -q --no-run --message-format=json-render-diagnostics |
+        # The binary the README's test command builds (same profile and
+        # features: nothing to compile again after it, as in .ci/run).
+        say "building rtow (cargo test --release --no-run)"
+        rtow=$(cd "$repo" && cargo test --release -q --no-run --message-format=json-render-diagnostics |
             grep '"kind":\["bin"\]' | grep '"test":false' | sed -n 's/.*"executable":"\([^"]*\)".*/\1/p' | tail -1)
         [ -x "$rtow" ] || die "cargo did not build rtow"
     fi

@@ -1,11 +1,13 @@
 //! Flags shared by the commands, and their mapping onto the library's types
-//! (the library knows nothing of clap).
+//! (the library knows nothing of clap; this module decides nothing).
 
 use clap::builder::{PossibleValuesParser, TypedValueParser};
 use clap::Args;
-use rtow::estimator::{Adaptive, ADAPTIVE_MIN_SPP, ROULETTE_AFTER_RAYS};
-use rtow::sampling::Sampler;
-use rtow::{AccelChoice, KernelChoice, Overrides, RenderOptions, Result, Scene, Settings};
+use rtow::{
+    AccelChoice, Adaptive, KernelChoice, Mode, Overrides, RenderOptions, Result, Roulette, Sampler, Settings,
+    ADAPTIVE_MIN_SPP, DEFAULT_TILE, ROULETTE_AFTER_RAYS,
+};
+use std::path::PathBuf;
 use std::str::FromStr;
 
 /// A clap parser for one of the library's choice enums, listing its names.
@@ -19,71 +21,92 @@ pub fn kernel_parser() -> impl TypedValueParser<Value = KernelChoice> {
     choice::<KernelChoice>(KernelChoice::NAMES)
 }
 
-pub fn accel_parser() -> impl TypedValueParser<Value = AccelChoice> {
-    choice::<AccelChoice>(AccelChoice::NAMES)
-}
-
 pub fn sampler_parser() -> impl TypedValueParser<Value = Sampler> {
     choice::<Sampler>(Sampler::NAMES)
 }
 
-/// Image settings shared by every command that renders.
+/// Image size, depth and seed: what every rendering command can set.
 #[derive(Args, Clone, Debug)]
-pub struct ImageArgs {
+pub struct SizeArgs {
     /// Image width in pixels [default: the scene's]
-    #[arg(long)]
+    #[arg(long, allow_negative_numbers = true)]
     pub width: Option<u32>,
     /// Image height in pixels [default: the scene's]
-    #[arg(long)]
+    #[arg(long, allow_negative_numbers = true)]
     pub height: Option<u32>,
-    /// Samples per pixel [default: the scene's]
-    #[arg(long)]
-    pub spp: Option<u32>,
-    /// Maximum rays per path [default: the scene's, the book's 50]
-    #[arg(long)]
+    #[arg(long, allow_negative_numbers = true, help = depth_help())]
     pub depth: Option<u32>,
-    /// Seed of the random streams [default: the scene's, else 0]
-    #[arg(long)]
+    #[arg(long, allow_negative_numbers = true, help = seed_help())]
     pub seed: Option<u64>,
-    /// The book's final settings: 1200x675, 500 spp, depth 50 (flags given explicitly still win)
-    #[arg(long)]
+}
+
+/// The image settings a render may override: size, depth, seed, samples, sampler.
+#[derive(Args, Clone, Debug)]
+pub struct ImageArgs {
+    #[command(flatten)]
+    pub size: SizeArgs,
+    /// Samples per pixel [default: the scene's]
+    #[arg(long, allow_negative_numbers = true)]
+    pub spp: Option<u32>,
+    #[arg(long, help = book_help())]
     pub book: bool,
-    /// Worker threads [default: one per core]
-    #[arg(long)]
-    pub threads: Option<usize>,
-    /// Tile edge in pixels
-    #[arg(long, default_value_t = 16)]
-    pub tile: u32,
-    /// Closest-hit search: auto (by the plan), brute force, the BVH with packets, or one ray at a time
-    #[arg(long, value_parser = accel_parser(), default_value = "auto")]
-    pub accel: AccelChoice,
-    /// Random decisions from independent streams or Owen-scrambled Sobol points
-    /// (sobol-pixel, sobol-lens, sobol-bounce1: only those dimensions on Sobol points)
-    /// [default: the scene's, else independent]
-    #[arg(long, value_parser = sampler_parser())]
+    #[arg(long, value_parser = sampler_parser(), help = sampler_help())]
     pub sampler: Option<Sampler>,
 }
 
-impl ImageArgs {
-    pub fn overrides(&self) -> Overrides {
-        Overrides {
-            width: self.width,
-            height: self.height,
-            spp: self.spp,
-            max_depth: self.depth,
-            seed: self.seed,
-            book: self.book,
-        }
-    }
+/// `--depth`'s help, naming the library's default.
+fn depth_help() -> String {
+    format!("Maximum rays per path [default: the scene's, else {}, the book's]", Settings::default().max_depth)
+}
 
-    /// The settings of `scene` with these flags applied: resolved once, here.
-    pub fn settings(&self, scene: &Scene) -> Settings {
-        Settings::resolve(&scene.render, &self.overrides())
-    }
+/// `--seed`'s help, naming the library's default.
+fn seed_help() -> String {
+    format!("Seed of the random streams [default: the scene's, else {}]", Settings::default().seed)
+}
 
-    /// The sampler: the flag, else the scene's `render.sampler`, else independent.
-    pub fn sampler(&self, scene: &Scene) -> Sampler {
-        self.sampler.or(scene.render.sampler).unwrap_or_default()
+/// `--book`'s help, from the library's book settings.
+fn book_help() -> String {
+    let (w, h, spp, depth) = Settings::BOOK;
+    format!("The book's final settings: {w}x{h}, {spp} spp, depth {depth} (flags given explicitly still win)")
+}
+
+/// `--sampler`'s help, naming the default the library uses.
+fn sampler_help() -> String {
+    format!(
+        "Random decisions from Owen-scrambled Sobol points or independent streams (sobol-pixel, sobol-lens, \
+         sobol-bounce1: only those dimensions on Sobol points) [default: the scene's render.sampler, else {}]",
+        Sampler::default()
+    )
+}
+
+/// Worker threads, tile size and accelerator: how to render, never what.
+#[derive(Args, Clone, Debug)]
+pub struct RunArgs {
+    /// Worker threads [default: one per core]
+    #[arg(long, allow_negative_numbers = true)]
+    pub threads: Option<usize>,
+    #[arg(long, allow_negative_numbers = true, default_value_t = DEFAULT_TILE, help = tile_help())]
+    pub tile: u32,
+    /// Closest-hit search: auto (by the plan), brute force, the BVH with packets, or one ray at a time
+    #[arg(long, value_parser = choice::<AccelChoice>(AccelChoice::NAMES), default_value = "auto")]
+    pub accel: AccelChoice,
+}
+
+/// `--tile`'s help, from the library's bound.
+fn tile_help() -> String {
+    let max = rtow::limits::MAX_TILE;
+    format!(
+        "Tile edge in pixels (tiles are the unit of parallel work), at most {max}: the wavefront traces a tile's \
+         pixels together, one sample each, and its workspace holds {} paths, so {max}x{max} = {} pixels is the \
+         largest square tile",
+        rtow::internals::kernel::wavefront::MAX_PATHS,
+        max * max
+    )
+}
+
+impl RunArgs {
+    pub fn options(&self, kernel: KernelChoice) -> RenderOptions {
+        RenderOptions { kernel, threads: self.threads, tile: self.tile, accel: self.accel, ..Default::default() }
     }
 }
 
@@ -95,43 +118,104 @@ pub struct EstimatorArgs {
     #[arg(long)]
     pub rr: bool,
     /// With --rr: the roulette starts once a path has traced N rays.
-    #[arg(long, value_name = "N", default_value_t = ROULETTE_AFTER_RAYS)]
+    #[arg(long, allow_negative_numbers = true, value_name = "N", default_value_t = ROULETTE_AFTER_RAYS, requires = "rr")]
     pub rr_after: u32,
     /// Adaptive sampling: a pixel stops taking samples once the relative
     /// standard error of its mean is at most THRESHOLD (e.g. 0.02); --spp is the maximum.
-    #[arg(long, value_name = "THRESHOLD")]
+    #[arg(long, allow_negative_numbers = true, value_name = "THRESHOLD")]
     pub adaptive: Option<f32>,
     /// Adaptive sampling decides after N, 2N, 4N, ... samples.
-    #[arg(long, value_name = "N", default_value_t = ADAPTIVE_MIN_SPP)]
+    #[arg(long, allow_negative_numbers = true, value_name = "N", default_value_t = ADAPTIVE_MIN_SPP, requires = "adaptive")]
     pub adaptive_min: u32,
 }
 
 impl EstimatorArgs {
-    pub fn adaptive(&self) -> Result<Option<Adaptive>> {
-        self.adaptive.map(|t| Adaptive::new(t, self.adaptive_min)).transpose()
-    }
-
-    /// The render options of these flags, with the kernel and image flags.
-    pub fn options(&self, kernel: KernelChoice, image: &ImageArgs, scene: &Scene) -> Result<RenderOptions> {
-        let opts = RenderOptions {
-            kernel,
-            threads: image.threads,
-            tile: image.tile,
-            accel: image.accel,
-            rr: self.rr,
-            rr_after: self.rr_after,
-            adaptive: self.adaptive()?,
-            sampler: image.sampler(scene),
-        };
-        opts.validate()?;
-        Ok(opts)
+    /// `base` with these estimator options.
+    pub fn options(&self, base: RenderOptions) -> Result<RenderOptions> {
+        let roulette = if self.rr { Some(Roulette::new(self.rr_after)?) } else { None };
+        let adaptive = self.adaptive.map(|t| Adaptive::new(t, self.adaptive_min)).transpose()?;
+        Ok(RenderOptions { roulette, adaptive, ..base })
     }
 }
 
-pub fn positive_f32(s: &str) -> std::result::Result<f32, String> {
-    match s.parse::<f32>() {
-        Ok(v) if v.is_finite() && v > 0.0 => Ok(v),
-        Ok(v) => Err(format!("must be a finite number > 0, got {v}")),
-        Err(e) => Err(e.to_string()),
+/// The files a render or a merge writes.
+#[derive(Args, Clone, Debug)]
+pub struct OutputArgs {
+    /// Also write the linear image: .pfm or .exr.
+    #[arg(long, value_name = "FILE")]
+    pub float: Option<PathBuf>,
+    /// Write statistics as JSON (with the exact work counters: node visits,
+    /// box and sphere tests, square roots, lane occupancy).
+    #[arg(long, value_name = "FILE")]
+    pub stats_json: Option<PathBuf>,
+    #[arg(long, allow_negative_numbers = true, help = gamma_help())]
+    pub gamma: Option<f32>,
+}
+
+/// `--gamma`'s help, from the gamma the library gives each kind of scene.
+fn gamma_help() -> String {
+    format!(
+        "PNG gamma [default: {} for path traced scenes, {} for the debug chapters, as in the book]",
+        Mode::Path.default_gamma(),
+        Mode::Normals.default_gamma()
+    )
+}
+
+impl OutputArgs {
+    pub fn files(&self, output: PathBuf) -> rtow::files::RenderFiles {
+        rtow::files::RenderFiles {
+            output,
+            float: self.float.clone(),
+            stats: self.stats_json.clone(),
+            gamma: self.gamma,
+            names: rtow::files::FileNames { output: "-o", float: "--float", stats: "--stats-json" },
+        }
     }
+}
+
+impl SizeArgs {
+    pub fn overrides(&self) -> Overrides {
+        Overrides {
+            width: self.width,
+            height: self.height,
+            max_depth: self.depth,
+            seed: self.seed,
+            ..Overrides::default()
+        }
+    }
+}
+
+impl ImageArgs {
+    pub fn overrides(&self) -> Overrides {
+        Overrides { spp: self.spp, book: self.book, sampler: self.sampler, ..self.size.overrides() }
+    }
+}
+
+/// The flag that sets a library setting, for messages (`threads` -> `--threads`).
+pub fn flag_of(field: &str) -> Option<&'static str> {
+    Some(match field {
+        "width" => "--width",
+        "height" => "--height",
+        "spp" => "--spp",
+        "max_depth" => "--depth",
+        "threads" => "--threads",
+        "tile" => "--tile",
+        "roulette.after_rays" => "--rr-after",
+        "adaptive.threshold" => "--adaptive",
+        "adaptive.min_spp" => "--adaptive-min",
+        "shard" => "--shard",
+        "split" => "--split",
+        "resume" => "--resume",
+        "gamma" => "--gamma",
+        "kernels" => "--kernels",
+        "variants" => "--variants",
+        "spp_list" => "--spp-list",
+        "reference" => "--reference",
+        "reference_spp" => "--reference-spp",
+        "repeat" => "--repeat",
+        "at_spp" => "--at-spp",
+        "adaptive_min" => "--adaptive-min",
+        "tolerance" => "--tolerance",
+        _ => return None,
+    })
 }

@@ -1,12 +1,14 @@
 //! `rtow bench`: rays/s and work per ray of each kernel; baselines.
 
-use super::args::{kernel_parser, ImageArgs};
-use super::{load, say, tell};
+use super::args::{choice, kernel_parser, ImageArgs, RunArgs};
+use super::{say, tell};
 use clap::Args;
-use rtow::output::Outputs;
-use rtow::tools::bench::{self, Baseline, Verdict};
-use rtow::{Error, KernelChoice, Result};
-use std::path::{Path, PathBuf};
+use rtow::instruments::bench::{self, Baseline, BaselineVerdict, BenchConfig, Gate, DEFAULT_REPEAT, DEFAULT_TOLERANCE};
+use rtow::instruments::instructions::{self, InstructionsBaseline};
+use rtow::output::{OutputId, Outputs};
+use rtow::{Error, Job, KernelChoice, Result, SceneSource};
+use std::ffi::OsString;
+use std::path::PathBuf;
 
 #[derive(Args)]
 pub struct BenchArgs {
@@ -18,8 +20,10 @@ pub struct BenchArgs {
     kernels: Vec<KernelChoice>,
     #[command(flatten)]
     image: ImageArgs,
+    #[command(flatten)]
+    run: RunArgs,
     /// Timed renders per kernel; the median-time one is reported (plus one render with the work counters on).
-    #[arg(long, default_value_t = 3)]
+    #[arg(long, allow_negative_numbers = true, default_value_t = DEFAULT_REPEAT)]
     repeat: usize,
     /// Write the report as JSON.
     #[arg(long, value_name = "FILE")]
@@ -27,49 +31,89 @@ pub struct BenchArgs {
     /// Save the report as a baseline for later runs.
     #[arg(long, value_name = "FILE")]
     save: Option<PathBuf>,
-    /// Compare with a saved baseline: exit status 1 if the image changed, the work
-    /// per ray grew, or throughput fell by more than the tolerance.
+    /// Compare with a saved baseline of the same scene, settings and thread count:
+    /// exit status 1 if the image changed, the work per ray grew, or (--gate time)
+    /// throughput fell by more than the tolerance beyond the noise of the runs.
     #[arg(long, value_name = "FILE")]
     baseline: Option<PathBuf>,
     /// Allowed throughput drop against the baseline, in percent.
-    #[arg(long, default_value_t = 5.0)]
+    #[arg(long, default_value_t = DEFAULT_TOLERANCE, allow_negative_numbers = true)]
     tolerance: f64,
+    /// What a comparison with --baseline fails on: time (the image, the work, and a
+    /// slowdown the noise cannot explain) or work (the image and the exact work
+    /// counters only: for a noisy CI; timings are still printed).
+    #[arg(long, value_parser = choice::<Gate>(Gate::NAMES), default_value = "time")]
+    gate: Gate,
     /// Instead of timing: the traversal work per packet at each ray depth (how
     /// coherence is lost bounce by bounce), for each kernel, from one counted render.
     #[arg(long)]
     by_depth: bool,
+    /// Instead of timing: instructions per ray of each kernel, counted exactly by
+    /// valgrind's callgrind (this executable re-run under it, once per kernel):
+    /// deterministic on any load; --save / --baseline compare counts exactly. A build
+    /// with the `phases` feature also splits the render loop by phase.
+    #[arg(long, conflicts_with_all = ["by_depth", "gate", "tolerance", "repeat"])]
+    instructions: bool,
+    /// The process --instructions counts: render once, print the result.
+    #[arg(long, hide = true)]
+    instructions_child: bool,
 }
 
 /// Ok(false): a regression against the baseline (exit status 1).
 pub fn run(a: BenchArgs) -> Result<bool> {
-    rtow::limits::check_threads(a.image.threads)?;
-    let (scene, name) = load(&a.scene)?;
-    let s = a.image.settings(&scene);
-    if a.image.tile != 16 {
-        return Err(Error::invalid("--tile", "rtow bench uses the default tile size"));
+    let source = SceneSource::open(&a.scene)?;
+    let job = Job::from_source(&source, &a.image.overrides(), &a.run.options(KernelChoice::Simd))?;
+    let name = &source.name;
+    let cfg = BenchConfig { kernels: a.kernels.clone(), repeat: a.repeat, tolerance: a.tolerance, gate: a.gate };
+    if a.instructions_child {
+        // The process `--instructions` counts: one render of one kernel, no output file.
+        let kernel = a.kernels.first().copied().unwrap_or(KernelChoice::Simd);
+        let job = job.with_options(&rtow::RenderOptions { kernel, ..*job.options() })?;
+        say!("{}", instructions::child_render(&job)?);
+        return Ok(true);
     }
-    if !(a.tolerance >= 0.0) {
-        return Err(Error::invalid("--tolerance", "must be a percentage >= 0"));
-    }
-    let cfg = bench::Config {
-        settings: s,
-        kernels: a.kernels.clone(),
-        threads: a.image.threads,
-        accel: a.image.accel,
-        repeat: a.repeat,
-        sampler: a.image.sampler(&scene),
-    };
     // Everything is checked before anything is measured.
-    cfg.validate()?;
+    cfg.validate(&job)?;
+    if a.instructions {
+        return count_instructions(&a, &source, &job);
+    }
     let baseline = a.baseline.as_deref().map(Baseline::load).transpose()?;
     if let Some(b) = &baseline {
-        b.check(&name, &s, &a.kernels, cfg.sampler)?;
+        b.check(name, job.settings(), job.threads(), &a.kernels)?;
     }
-    // The outputs are one transaction: distinct from each other and from the
-    // inputs, checked now, written together after the measurements.
+    let (outputs, ids) = outputs(&a, &source)?;
+    if a.by_depth {
+        for (kernel, rows) in bench::work_by_depth_per_kernel(&job, &cfg)? {
+            say!("{}:", kernel.name());
+            say!("{}", bench::depth_table(&rows).trim_end());
+        }
+        return Ok(true);
+    }
+    let s = job.settings();
+    tell!(
+        "bench {name}: {}x{} {} spp depth {} seed {}, {} sampler, {} repetition(s) per kernel, built for {}",
+        s.width,
+        s.height,
+        s.spp,
+        s.max_depth,
+        s.seed,
+        s.sampler,
+        a.repeat,
+        rtow::isa()
+    );
+    let report = bench::run(&job, name, &cfg, |k, i, st| {
+        tell!("  {} run {}: {:.3} s, {:.2} Mrays/s", k.name(), i + 1, st.seconds, st.mrays_per_s)
+    })?;
+    write_report(&report.table(), &report.to_json(), outputs, ids)?;
+    Ok(baseline.as_ref().is_none_or(|b| print_comparison(&report, b, &cfg)))
+}
+
+/// The outputs are one transaction: distinct from each other and from the
+/// inputs, checked now, written together after the measurements.
+fn outputs(a: &BenchArgs, source: &SceneSource) -> Result<(Outputs, Vec<OutputId>)> {
     let mut outputs = Outputs::new();
-    if rtow::scene::preset(&a.scene).is_none() {
-        outputs.input(Path::new(&a.scene), "scene file");
+    if let Some(f) = &source.file {
+        outputs.input(f, "scene file");
     }
     if let Some(b) = &a.baseline {
         outputs.input(b, "baseline");
@@ -80,58 +124,132 @@ pub fn run(a: BenchArgs) -> Result<bool> {
             ids.push(outputs.add(p, flag)?);
         }
     }
-    if a.by_depth {
-        for &k in &a.kernels {
-            say!("{}:", rtow::Kernel::resolve(k)?.name());
-            say!("{}", bench::depth_table(&bench::work_by_depth(&scene, &cfg, k)?).trim_end());
-        }
-        return Ok(true);
+    Ok((outputs, ids))
+}
+
+/// Prints a report's table and writes its JSON to every output, together.
+fn write_report(table: &str, json: &str, mut outputs: Outputs, ids: Vec<OutputId>) -> Result<()> {
+    say!("{}", table.trim_end_matches('\n'));
+    for id in ids {
+        outputs.stage(id, json.as_bytes())?;
     }
+    outputs.commit()
+}
+
+/// `--instructions`: each kernel counted under callgrind; against a baseline, exactly.
+fn count_instructions(a: &BenchArgs, source: &SceneSource, job: &Job) -> Result<bool> {
+    let baseline = a.baseline.as_deref().map(InstructionsBaseline::load).transpose()?;
+    if let Some(b) = &baseline {
+        b.check(&source.name, job.settings(), job.threads(), &a.kernels)?;
+    }
+    let (outputs, ids) = outputs(a, source)?;
+    let program = std::env::current_exe().map_err(|e| Error::System(format!("cannot find this executable: {e}")))?;
+    // The counted process: this very command line's job, one kernel, rendered once.
+    let child_args = |job: &Job| -> Vec<OsString> {
+        let s = job.settings();
+        let mut v: Vec<String> = vec!["bench".into(), a.scene.clone()];
+        for (flag, value) in [
+            ("--width", s.width.to_string()),
+            ("--height", s.height.to_string()),
+            ("--spp", s.spp.to_string()),
+            ("--depth", s.max_depth.to_string()),
+            ("--seed", s.seed.to_string()),
+            ("--sampler", s.sampler.name().to_string()),
+            ("--threads", job.threads().to_string()),
+            ("--accel", job.options().accel.name().to_string()),
+            ("--kernels", job.kernel().name().to_string()),
+        ] {
+            v.push(flag.into());
+            v.push(value);
+        }
+        v.push("--instructions-child".into());
+        v.into_iter().map(OsString::from).collect()
+    };
+    rtow::instruments::callgrind::valgrind_version()?;
+    let s = job.settings();
     tell!(
-        "bench {name}: {}x{} {} spp depth {} seed {}, {} sampler, {} repetition(s) per kernel, built for {}",
+        "bench --instructions {}: {}x{} {} spp depth {} seed {}, {} sampler, {} thread(s), built for {}; \
+         each kernel under callgrind (about 50x slower than a plain render)",
+        source.name,
         s.width,
         s.height,
         s.spp,
         s.max_depth,
         s.seed,
-        cfg.sampler,
-        a.repeat,
+        s.sampler,
+        job.threads(),
         rtow::isa()
     );
-    let report = bench::run(&scene, &name, &cfg, |k, i, st| {
-        tell!("  {} run {}: {:.3} s, {:.2} Mrays/s", k.name(), i + 1, st.seconds, st.mrays_per_s)
+    let report = instructions::count(job, &source.name, &a.kernels, &program, child_args, |e| {
+        tell!("  {}: {} instructions, {:.2} per ray", e.kernel, e.instructions, e.per_ray)
     })?;
-    say!("{}", report.table().trim_end_matches('\n'));
-    let json = report.to_json();
-    for id in ids {
-        outputs.stage(id, json.as_bytes())?;
+    write_report(&report.table(), &report.to_json(), outputs, ids)?;
+    let Some(b) = baseline else { return Ok(true) };
+    if b.provenance.rustc != report.provenance.rustc {
+        say!(
+            "note: the baseline was built with {}, this run with {}: counts depend on the compiler",
+            rtow::output::clip(&b.provenance.rustc),
+            report.provenance.rustc
+        );
     }
-    outputs.commit()?;
     let mut ok = true;
-    if let Some(b) = &baseline {
-        for c in bench::compare(&report, b, a.tolerance) {
-            let work = match c.work_change_percent {
-                None => "work: not in the baseline".to_string(),
-                Some(0.0) => "work identical".to_string(),
-                Some(w) => format!("work {w:+.2}%"),
-            };
-            say!(
-                "{:<7} baseline {:.2} Mrays/s -> {:.2} Mrays/s ({:+.1}%), image {}, {work}: {}{}",
-                c.kernel,
-                c.baseline_mrays,
-                c.mrays,
-                c.change_percent,
-                if c.image_same { "identical" } else { "CHANGED" },
-                if c.regressed { "REGRESSION" } else { "ok" },
-                match c.verdict {
-                    Verdict::Same => "",
-                    Verdict::TimingOnly => " (timing only: same image and work)",
-                    Verdict::Work => " (the algorithm's work changed)",
-                    Verdict::Image => " (the image changed)",
-                }
-            );
-            ok &= !c.regressed;
-        }
+    for c in instructions::compare(&report, &b) {
+        let delta = c.instructions as i128 - c.baseline as i128;
+        let verdict = match (c.image_same, delta) {
+            (false, _) => "REGRESSION (the image changed)".to_string(),
+            (true, 0) => "ok (identical)".to_string(),
+            (true, d) if d > 0 => format!("REGRESSION ({d:+} instructions)"),
+            (true, d) => format!("ok ({d:+} instructions)"),
+        };
+        say!(
+            "{:<7} baseline {} -> {} instructions ({:.2} -> {:.2} per ray, {:+.3}%), image {}: {verdict}",
+            c.kernel,
+            c.baseline,
+            c.instructions,
+            c.baseline_per_ray,
+            c.per_ray,
+            100.0 * (c.instructions as f64 / c.baseline as f64 - 1.0),
+            if c.image_same { "identical" } else { "CHANGED" },
+        );
+        ok &= !c.regressed;
     }
     Ok(ok)
+}
+
+/// Prints the verdict of each kernel against the baseline; false on a regression.
+fn print_comparison(report: &bench::BenchReport, b: &Baseline, cfg: &BenchConfig) -> bool {
+    let mut ok = true;
+    for c in bench::compare(report, b, cfg.tolerance, cfg.gate) {
+        let work = match c.work_change_percent {
+            None => "work: not in the baseline".to_string(),
+            Some(0.0) => "work identical".to_string(),
+            Some(w) => format!("work {w:+.2}%"),
+        };
+        let noise = match c.change_ci {
+            Some(ci) => format!("{:.0}% CI {:+.1}% to {:+.1}%", 100.0 * ci.level, ci.lo, ci.hi),
+            None => "no noise estimate: give both runs --repeat 2 or more".to_string(),
+        };
+        let timing = if c.change_percent < 0.0 { "slower" } else { "faster" };
+        say!(
+            "{:<7} baseline {:.2} Mrays/s -> {:.2} Mrays/s ({:+.1}%, {noise}), image {}, {work}: {}{}",
+            c.kernel,
+            c.baseline_mrays,
+            c.mrays,
+            c.change_percent,
+            if c.image_same { "identical" } else { "CHANGED" },
+            if c.regressed { "REGRESSION" } else { "ok" },
+            match c.verdict {
+                BaselineVerdict::Same => format!(" (within the {}% tolerance)", cfg.tolerance),
+                BaselineVerdict::WithinNoise =>
+                    " (within noise: the runs cannot tell this change from the machine's noise)".into(),
+                BaselineVerdict::TimingOnly if cfg.gate == Gate::Work =>
+                    format!(" (timing only, {timing}: same image and work; not gated with --gate work)"),
+                BaselineVerdict::TimingOnly => format!(" (timing only, {timing}: same image and work)"),
+                BaselineVerdict::Work => " (the algorithm's work changed)".into(),
+                BaselineVerdict::Image => " (the image changed)".into(),
+            }
+        );
+        ok &= !c.regressed;
+    }
+    ok
 }

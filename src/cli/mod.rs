@@ -8,9 +8,9 @@ mod merge;
 mod render;
 
 use clap::{CommandFactory, FromArgMatches, Parser, Subcommand};
-use rtow::scene::{self, Scene};
+use rtow::scene;
 use rtow::{Error, Result};
-use std::path::{Path, PathBuf};
+use std::path::PathBuf;
 use std::process::ExitCode;
 
 /// `println!` that ignores a closed stdout (e.g. piped into `head`) instead of
@@ -45,9 +45,9 @@ enum Command {
     /// Merge partial films (.rtfilm: the shards of one render) into the image,
     /// bit for bit the one-process render's.
     Merge(merge::MergeArgs),
-    /// List the built-in scenes.
+    /// List the built-in scenes, by book (the stress scenes apart).
     Scenes,
-    /// Measure rays/s of each kernel on a scene; compare with a saved baseline.
+    /// Measure rays/s (or, with --instructions, instructions per ray) of each kernel on a scene; compare with a saved baseline.
     Bench(bench::BenchArgs),
     /// Run time against error: measure kernels and estimator variants at several
     /// sample counts against a reference; write a CSV, a markdown table and a log-log plot.
@@ -58,10 +58,10 @@ enum Command {
         #[arg(long)]
         quick: bool,
         /// Seed of the sweeps and renders.
-        #[arg(long, default_value_t = 1)]
+        #[arg(long, allow_negative_numbers = true, default_value_t = 1)]
         seed: u64,
         /// Worker threads [default: one per core]
-        #[arg(long)]
+        #[arg(long, allow_negative_numbers = true)]
         threads: Option<usize>,
     },
     /// Write a preset as a scene file (.json or .toml).
@@ -72,31 +72,24 @@ enum Command {
         #[arg(short, long)]
         output: PathBuf,
     },
+    /// Print a shell completion script: `rtow completions bash > ~/.local/share/bash-completion/completions/rtow`.
+    Completions {
+        /// The shell.
+        #[arg(value_enum)]
+        shell: clap_complete::Shell,
+    },
+    /// Print the manual page (roff): `rtow man > rtow.1; man ./rtow.1`.
+    Man,
 }
 
 pub(crate) use say;
 pub(crate) use tell;
 
-/// A preset or a file: the scene and a short name for default outputs.
-pub fn load(spec: &str) -> Result<(Scene, String)> {
-    if let Some(s) = scene::preset(spec) {
-        return Ok((s, spec.to_string()));
-    }
-    let path = Path::new(spec);
-    if path.extension().is_some() || path.exists() {
-        let s = scene::load_scene(path)?;
-        let name = path.file_stem().map(|s| s.to_string_lossy().into_owned()).unwrap_or_else(|| "scene".into());
-        return Ok((s, name));
-    }
-    Err(Error::Input(format!("unknown scene '{spec}': not a preset (see `rtow scenes`) and not a .json/.toml file")))
-}
-
 /// Prints the stress tables; exits with status 1 when a bound is broken.
 fn cmd_stress(quick: bool, seed: u64, threads: Option<usize>) -> Result<bool> {
     use std::io::Write;
-    rtow::limits::check_threads(threads)?;
-    let cfg = rtow::tools::stress::Config { quick, seed, threads };
-    let report = rtow::tools::stress::run(&cfg, &mut |part| tell!("done: {part}"))?;
+    let cfg = rtow::instruments::stress::StressConfig { quick, seed, threads };
+    let report = rtow::instruments::stress::run(&cfg, &mut |part| tell!("done: {part}"))?;
     say!("{}", report.table().trim_end_matches('\n'));
     let _ = std::io::stdout().flush();
     Ok(report.passed())
@@ -111,16 +104,33 @@ fn run(cli: Cli) -> Result<bool> {
         Command::Converge(a) => converge::run(a).map(|_| true),
         Command::Scenes => {
             let width = scene::presets().iter().map(|p| p.name.len()).max().unwrap_or(0);
-            for p in scene::presets() {
-                say!("{:<width$}  {}", p.name, p.description);
+            for (i, &group) in scene::PresetGroup::ALL.iter().enumerate() {
+                if i > 0 {
+                    say!();
+                }
+                say!("{}:", group.title());
+                for p in scene::presets().iter().filter(|p| p.group == group) {
+                    say!("  {:<width$}  {}", p.name, p.description);
+                }
             }
             Ok(true)
+        }
+        Command::Completions { shell } => {
+            let mut out = Vec::new();
+            clap_complete::generate(shell, &mut command(), "rtow", &mut out);
+            write_stdout(&out)
+        }
+        Command::Man => {
+            let mut out = Vec::new();
+            clap_mangen::Man::new(command().version(env!("CARGO_PKG_VERSION")))
+                .render(&mut out)
+                .map_err(|e| Error::System(format!("cannot render the manual page: {e}")))?;
+            write_stdout(&out)
         }
         Command::Stress { quick, seed, threads } => cmd_stress(quick, seed, threads),
         Command::Export { preset, output } => {
             let s = scene::preset(&preset)
                 .ok_or_else(|| Error::Input(format!("unknown preset '{preset}' (see `rtow scenes`)")))?;
-            rtow::output::check_extension(&output, &["json", "toml"], "-o")?;
             scene::save_scene(&s, &output).map(|_| true)
         }
     }
@@ -152,11 +162,34 @@ fn clap_exit(e: clap::Error) -> ! {
     std::process::exit(2)
 }
 
+/// An error as the command line says it: a setting named by its flag.
+pub(crate) fn message(e: &Error) -> String {
+    match e {
+        Error::Invalid { field, message } => format!("{}: {message}", args::flag_of(field).unwrap_or(field)),
+        Error::InFile { path, error } => format!("{}: {}", path.display(), message(error)),
+        e => e.to_string(),
+    }
+}
+
+/// The command line's definition, with the version this build reports.
+fn command() -> clap::Command {
+    let version = format!("{}\n{}", rtow::provenance::version(), rtow::build_description());
+    Cli::command().version(&*Box::leak(version.into_boxed_str()))
+}
+
+/// Writes generated text to stdout; a write error is an output failure (exit status 1).
+fn write_stdout(bytes: &[u8]) -> Result<bool> {
+    use std::io::Write as _;
+    let mut out = std::io::stdout().lock();
+    out.write_all(bytes)
+        .and_then(|_| out.flush())
+        .map_err(|e| Error::System(format!("cannot write to stdout: {e}")))?;
+    Ok(true)
+}
+
 pub fn main() -> ExitCode {
     rtow::output::install_signal_cleanup();
-    let version = format!("{} ({})", env!("CARGO_PKG_VERSION"), rtow::render::build_description());
-    let version: &'static str = Box::leak(version.into_boxed_str());
-    let cli = match Cli::command().version(version).try_get_matches().and_then(|m| Cli::from_arg_matches(&m)) {
+    let cli = match command().try_get_matches().and_then(|m| Cli::from_arg_matches(&m)) {
         Ok(c) => c,
         Err(e) => clap_exit(e),
     };
@@ -164,7 +197,7 @@ pub fn main() -> ExitCode {
         Ok(true) => ExitCode::SUCCESS,
         Ok(false) => ExitCode::from(1),
         Err(e) => {
-            tell!("error: {e}");
+            tell!("error: {}", message(&e));
             ExitCode::from(e.exit_code() as u8)
         }
     }

@@ -2,17 +2,15 @@
 //! or to a partial film (`.rtfilm`): a shard of the render (`--shard K/N`), or
 //! a whole render to be resumed (`--resume`) or merged later.
 
-use super::args::{choice, kernel_parser, positive_f32, EstimatorArgs, ImageArgs};
-use super::{load, say};
+use super::args::{choice, kernel_parser, EstimatorArgs, ImageArgs, OutputArgs, RunArgs};
+use super::{say, tell};
 use clap::Args;
 use indicatif::{ProgressBar, ProgressStyle};
-use rtow::film::part::{is_part_path, Part, Split, SplitKind};
-use rtow::output::{check_extension, Outputs};
-use rtow::render::{render_counted, Progress};
-use rtow::shard::{self, Job};
-use rtow::{Error, KernelChoice, Result};
+use rtow::files::{self, RenderRequest};
+use rtow::shard::{Split, SplitKind};
+use rtow::{Job, KernelChoice, Progress, Result, SceneSource, Stats};
 use std::io::IsTerminal;
-use std::path::{Path, PathBuf};
+use std::path::PathBuf;
 use std::time::Instant;
 
 #[derive(Args)]
@@ -43,21 +41,15 @@ pub struct RenderArgs {
     /// of this build (simd), or forced to 8 or 16 lanes.
     #[arg(long, value_parser = kernel_parser(), default_value = "simd")]
     kernel: KernelChoice,
-    /// Also write the linear image: .pfm or .exr.
-    #[arg(long, value_name = "FILE")]
-    float: Option<PathBuf>,
-    /// Write render statistics as JSON (with the exact work counters: node
-    /// visits, box and sphere tests, square roots, lane occupancy).
-    #[arg(long, value_name = "FILE")]
-    stats_json: Option<PathBuf>,
-    /// PNG gamma [default: 2 for path traced scenes, 1 for the debug chapters, as in the book]
-    #[arg(long, value_parser = positive_f32)]
-    gamma: Option<f32>,
+    #[command(flatten)]
+    run: RunArgs,
+    #[command(flatten)]
+    estimator: EstimatorArgs,
+    #[command(flatten)]
+    files: OutputArgs,
     /// Print the render plan (what the scene needs) before rendering.
     #[arg(long)]
     explain: bool,
-    #[command(flatten)]
-    estimator: EstimatorArgs,
     /// No progress bar and no summary line.
     #[arg(short, long)]
     quiet: bool,
@@ -75,11 +67,8 @@ fn progress_bar(quiet: bool) -> Option<ProgressBar> {
     Some(bar)
 }
 
-/// Renders with a progress bar (on a terminal) showing live Mrays/s.
-fn render_with_progress<T>(
-    quiet: bool,
-    render: impl FnOnce(Option<&(dyn Fn(Progress) + Sync)>) -> Result<T>,
-) -> Result<T> {
+/// Runs `work` with a progress bar (on a terminal) showing live Mrays/s.
+pub fn with_progress<T>(quiet: bool, work: impl FnOnce(Option<&(dyn Fn(Progress) + Sync)>) -> Result<T>) -> Result<T> {
     let bar = progress_bar(quiet);
     let start = Instant::now();
     let cb = |p: Progress| {
@@ -90,7 +79,7 @@ fn render_with_progress<T>(
             b.set_message(format!("{:.2} Mrays/s", p.rays as f64 / secs / 1e6));
         }
     };
-    let out = render(Some(&cb));
+    let out = work(Some(&cb));
     if let Some(b) = bar {
         b.finish_and_clear();
     }
@@ -98,115 +87,58 @@ fn render_with_progress<T>(
 }
 
 pub fn run(a: RenderArgs) -> Result<()> {
-    rtow::limits::check_threads(a.image.threads)?;
-    let (scene, name) = load(&a.scene)?;
-    let s = a.image.settings(&scene);
-    let out = a.output.clone().unwrap_or_else(|| PathBuf::from(format!("{name}.png")));
-    let film_out = is_part_path(&out);
-    check_extension(&out, &["png", "rtfilm"], "-o")?;
-    if let Some(f) = &a.float {
-        check_extension(f, &["pfm", "exr"], "--float")?;
+    let source = SceneSource::open(&a.scene)?;
+    let options = a.estimator.options(a.run.options(a.kernel))?;
+    let job = Job::from_source(&source, &a.image.overrides(), &options)?;
+    for w in job.warnings() {
+        tell!("warning: {}", super::message(w));
     }
-    // Bad input first (exit 2), then every output path, before the render:
-    // a failure after it would waste the render and leave some outputs written.
-    s.validate()?;
-    let opts = a.estimator.options(a.kernel, &a.image, &scene)?;
-    rtow::Kernel::resolve(opts.kernel)?;
     let split = match &a.shard {
         Some(k) => Split::parse(k, a.split)?,
         None => Split::WHOLE,
     };
-    if split.kind != SplitKind::None && !film_out {
-        return Err(Error::invalid(
-            "--shard",
-            format!("a shard writes a partial film: use -o {name}-{}.rtfilm, then rtow merge", split.shard),
-        ));
-    }
-    let resume = match &a.resume {
-        Some(p) => Some((p.clone(), Part::read(p)?)),
-        None => None,
+    let output = a.output.clone().unwrap_or_else(|| files::default_output(&source));
+    let req = RenderRequest {
+        source: &source,
+        job: &job,
+        split,
+        resume: a.resume.clone(),
+        files: a.files.files(output.clone()),
     };
-    let job = Job { split, resume };
-    let partial = film_out || job.resume.is_some();
-    if partial {
-        shard::check(&scene, &s, &opts, &job)?;
-    }
-    // The outputs are one transaction (see `rtow::output`): checked now,
-    // written only when all of them are ready. (The --resume film is read
-    // whole before, so -o may replace it: a render continued in place.)
-    let mut outputs = Outputs::new();
-    if rtow::scene::preset(&a.scene).is_none() {
-        outputs.input(Path::new(&a.scene), "scene file");
-    }
-    let png_id = outputs.add(&out, "-o")?;
-    let float_id = a.float.as_deref().map(|f| outputs.add(f, "--float")).transpose()?;
-    let stats_id = a.stats_json.as_deref().map(|j| outputs.add(j, "--stats-json")).transpose()?;
     if a.explain {
-        say!("{}", rtow::prepare::plan(&scene, &s, opts.accel).explain());
+        say!("{}", job.explain());
     }
-    let gamma = a.gamma.unwrap_or(scene.mode.default_gamma());
-    let r = if partial {
-        let (r, part) = render_with_progress(a.quiet, |cb| shard::render_part(&scene, s, opts, &job, cb))?;
-        r.stats.check_finite()?;
-        if film_out {
-            outputs.stage(png_id, &part.to_bytes())?;
-        } else {
-            outputs.stage(png_id, &rtow::output::image_bytes(&r.image, &out, gamma)?)?;
-        }
-        r
-    } else {
-        let counted = a.stats_json.is_some();
-        let r = render_with_progress(a.quiet, |cb| {
-            if counted {
-                render_counted(&scene, s, opts, cb)
-            } else {
-                rtow::render(&scene, s, opts, cb)
-            }
-        })?;
-        r.stats.check_finite()?;
-        outputs.stage(png_id, &rtow::output::image_bytes(&r.image, &out, gamma)?)?;
-        r
-    };
-    if let (Some(id), Some(f)) = (float_id, &a.float) {
-        outputs.stage(id, &rtow::output::image_bytes(&r.image, f, 1.0)?)?;
-    }
-    if let Some(id) = stats_id {
-        let text = serde_json::to_string_pretty(&r.stats).expect("stats serialize") + "\n";
-        outputs.stage(id, text.as_bytes())?;
-    }
-    outputs.commit()?;
+    let st = with_progress(a.quiet, |cb| files::render_to_files(&req, cb))?;
     if !a.quiet {
-        let st = &r.stats;
-        say!(
-            "{name}: {}x{} {} spp{} -> {}: {} rays, {} samples in {:.3} s = {:.2} Mrays/s ({} kernel, {} threads, {}){}",
-            st.width,
-            st.height,
-            st.spp,
-            match (&job_desc(&a), &a.resume) {
-                (Some(d), _) => format!(" ({d})"),
-                (None, Some(p)) => format!(" (resumed from {})", p.display()),
-                (None, None) => String::new(),
-            },
-            out.display(),
-            st.rays,
-            st.samples,
-            st.seconds,
-            st.mrays_per_s,
-            st.kernel,
-            st.threads,
-            st.isa,
-            if st.rejected_samples > 0 {
-                format!(", {} NaN/Inf samples rejected", st.rejected_samples)
-            } else {
-                String::new()
-            }
-        );
+        say!("{}", summary(&source.name, &st, &req, &output));
     }
     Ok(())
 }
 
-/// The shard a render does, for its summary line.
-fn job_desc(a: &RenderArgs) -> Option<String> {
-    let s = Split::parse(a.shard.as_deref()?, a.split).ok()?;
-    Some(s.describe())
+/// The one line a render ends with.
+fn summary(name: &str, st: &Stats, req: &RenderRequest, output: &std::path::Path) -> String {
+    let piece = match (&req.split, &req.resume) {
+        (s, _) if s.kind != SplitKind::None => format!(" ({})", s.describe()),
+        (_, Some(p)) => format!(" (resumed from {})", p.display()),
+        _ => String::new(),
+    };
+    let rejected = if st.rejected_samples > 0 {
+        format!(", {} NaN/Inf samples rejected", st.rejected_samples)
+    } else {
+        String::new()
+    };
+    format!(
+        "{name}: {}x{} {} spp{piece} -> {}: {} rays, {} samples in {:.3} s = {:.2} Mrays/s ({} kernel, {} threads, {}){rejected}",
+        st.width,
+        st.height,
+        st.spp,
+        output.display(),
+        st.rays,
+        st.samples,
+        st.seconds,
+        st.mrays_per_s,
+        st.kernel,
+        st.threads,
+        st.isa,
+    )
 }

@@ -11,6 +11,9 @@ pub mod part;
 
 use crate::error::{Error, Result};
 use std::io::Cursor;
+
+/// The image file types rtow writes: PNG (8-bit, gamma encoded), PFM and EXR (linear).
+pub const IMAGE_TYPES: [&str; 3] = ["png", "pfm", "exr"];
 use std::ops::Range;
 use std::path::Path;
 
@@ -300,21 +303,22 @@ impl Image {
         out
     }
 
+    /// The bytes of the image as the file type `path`'s extension names: PNG
+    /// (8-bit, `gamma`), PFM or EXR (linear); another is a usage error naming
+    /// `IMAGE_TYPES`, as `field`.
+    pub fn file_bytes(&self, path: &Path, gamma: f32, field: &str) -> Result<Vec<u8>> {
+        let ext = path.extension().and_then(|e| e.to_str()).map(|e| e.to_ascii_lowercase());
+        match ext.as_deref() {
+            Some("png") => Ok(self.png_bytes(gamma)),
+            Some("pfm") => Ok(self.pfm_bytes()),
+            Some("exr") => Ok(self.exr_bytes()),
+            _ => crate::output::check_extension(path, &IMAGE_TYPES, field).map(|_| Vec::new()),
+        }
+    }
+
     /// Writes the image atomically: PNG (8-bit, `gamma`), PFM or EXR (linear), by extension.
     pub fn save(&self, path: &Path, gamma: f32) -> Result<()> {
-        let ext = path.extension().and_then(|e| e.to_str()).map(|e| e.to_ascii_lowercase());
-        let bytes = match ext.as_deref() {
-            Some("png") => self.png_bytes(gamma),
-            Some("pfm") => self.pfm_bytes(),
-            Some("exr") => self.exr_bytes(),
-            _ => {
-                return Err(Error::Output {
-                    path: path.to_path_buf(),
-                    message: "unknown image type (use .png, .pfm or .exr)".into(),
-                })
-            }
-        };
-        crate::output::write_atomic(path, &bytes)
+        crate::output::write_atomic(path, &self.file_bytes(path, gamma, "image")?)
     }
 
     /// Reads a linear image back (PFM or EXR), e.g. a converge reference.

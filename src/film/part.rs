@@ -50,12 +50,39 @@ pub fn is_part_path(path: &Path) -> bool {
 
 /// FNV-1a, 64 bits.
 pub fn fnv1a(bytes: &[u8]) -> u64 {
-    let mut h: u64 = 0xcbf2_9ce4_8422_2325;
-    for &b in bytes {
-        h ^= b as u64;
-        h = h.wrapping_mul(0x0000_0100_0000_01b3);
+    let mut h = Fnv1a::default();
+    h.add(bytes);
+    h.0
+}
+
+/// FNV-1a, 64 bits, over bytes written to it (a value serialized into it is
+/// hashed without being held in memory).
+#[derive(Clone, Copy, Debug)]
+pub struct Fnv1a(pub u64);
+
+impl Default for Fnv1a {
+    fn default() -> Self {
+        Fnv1a(0xcbf2_9ce4_8422_2325)
     }
-    h
+}
+
+impl Fnv1a {
+    pub fn add(&mut self, bytes: &[u8]) {
+        for &b in bytes {
+            self.0 ^= b as u64;
+            self.0 = self.0.wrapping_mul(0x0000_0100_0000_01b3);
+        }
+    }
+}
+
+impl std::io::Write for Fnv1a {
+    fn write(&mut self, bytes: &[u8]) -> std::io::Result<usize> {
+        self.add(bytes);
+        Ok(bytes.len())
+    }
+    fn flush(&mut self) -> std::io::Result<()> {
+        Ok(())
+    }
 }
 
 /// How a render is split into shards.
@@ -71,8 +98,16 @@ pub enum SplitKind {
 }
 
 impl SplitKind {
-    /// The names `--split` takes.
+    /// The names a split can be given by (`none` is not one: it is no split).
     pub const NAMES: &'static [&'static str] = &["samples", "rows"];
+
+    pub fn name(self) -> &'static str {
+        match self {
+            SplitKind::None => "none",
+            SplitKind::Samples => "samples",
+            SplitKind::Rows => "rows",
+        }
+    }
 }
 
 impl std::str::FromStr for SplitKind {
@@ -105,9 +140,9 @@ impl Split {
     /// The whole render.
     pub const WHOLE: Split = Split { kind: SplitKind::None, shard: 1, of: 1 };
 
-    /// Parses `K/N` (`--shard`).
+    /// Parses `K/N`: shard K of N (the command line's `--shard`).
     pub fn parse(text: &str, kind: SplitKind) -> Result<Split> {
-        let bad = |m: &str| Error::invalid("--shard", format!("'{text}': {m}"));
+        let bad = |m: &str| Error::invalid("shard", format!("'{text}': {m}"));
         let (k, n) = text.split_once('/').ok_or_else(|| bad("expected K/N, e.g. 3/8"))?;
         let k: u32 = k.trim().parse().map_err(|_| bad("K must be a whole number"))?;
         let n: u32 = n.trim().parse().map_err(|_| bad("N must be a whole number"))?;
@@ -127,7 +162,7 @@ impl Split {
         };
         if self.of > limit {
             return Err(Error::invalid(
-                "--shard",
+                "shard",
                 format!("{} shards by {:?} leave some empty: the render has only {limit} {what}", self.of, self.kind)
                     .to_lowercase(),
             ));
@@ -387,48 +422,56 @@ impl Part {
             return Err(bad(format!("corrupted: {} bytes, the header says {expected:?}", bytes.len())));
         }
         Self::check_header(&h).map_err(|m| bad(format!("inconsistent header: {m}")))?;
+        let film = Self::pixels(&h, &bytes[header_end as usize..body_end]).map_err(bad)?;
+        Ok(Part { header: h, film })
+    }
+
+    /// The accumulators of a checked header's pixels, from the file's body:
+    /// per pixel the sample count, the three sums and (with moments) the three
+    /// sums of squares. The error says what is inconsistent.
+    fn pixels(h: &Header, body: &[u8]) -> std::result::Result<Film, String> {
         let mut film = Film::new(h.width, h.height, h.rows[0]..h.rows[1], h.moments);
         let nb = h.sum_bytes as usize;
         let max_count = h.samples[1] - h.samples[0];
-        let mut at = header_end as usize;
+        let mut at = 0;
         let mut accepted = 0u64;
         for i in 0..film.count.len() {
-            let n = u32_at(at);
+            let n = u32::from_le_bytes(body[at..at + 4].try_into().expect("4 bytes"));
             at += 4;
             if n > max_count {
-                return Err(bad(format!("corrupted: a pixel has {n} samples, more than the part's {max_count}")));
+                return Err(format!("corrupted: a pixel has {n} samples, more than the part's {max_count}"));
             }
             accepted += n as u64;
             film.count[i] = n;
             for k in 0..3 {
-                let mut b = if bytes[at + nb - 1] & 0x80 != 0 { [0xff; 16] } else { [0; 16] };
-                b[..nb].copy_from_slice(&bytes[at..at + nb]);
+                let mut b = if body[at + nb - 1] & 0x80 != 0 { [0xff; 16] } else { [0; 16] };
+                b[..nb].copy_from_slice(&body[at..at + nb]);
                 at += nb;
                 let s = i128::from_le_bytes(b);
                 // Each accepted sample is below 2^63 in fixed point.
                 if s.unsigned_abs() > (n as u128) << 63 {
-                    return Err(bad("corrupted: a pixel's sum is out of range for its samples".into()));
+                    return Err("corrupted: a pixel's sum is out of range for its samples".into());
                 }
                 film.sum[i][k] = s;
             }
             if h.moments {
                 for k in 0..3 {
-                    let v = f64::from_le_bytes(bytes[at..at + 8].try_into().expect("8 bytes"));
+                    let v = f64::from_le_bytes(body[at..at + 8].try_into().expect("8 bytes"));
                     at += 8;
                     if !(v.is_finite() && v >= 0.0) {
-                        return Err(bad("corrupted: a sum of squares is negative or not finite".into()));
+                        return Err("corrupted: a sum of squares is negative or not finite".into());
                     }
                     film.sum_sq[i][k] = v;
                 }
             }
         }
         if accepted + h.counters.rejected_samples != h.counters.samples {
-            return Err(bad(format!(
+            return Err(format!(
                 "inconsistent header: {} samples counted, but the pixels hold {accepted} and {} were rejected",
                 h.counters.samples, h.counters.rejected_samples
-            )));
+            ));
         }
-        Ok(Part { header: h, film })
+        Ok(film)
     }
 
     fn check_header(h: &Header) -> std::result::Result<(), String> {
@@ -861,7 +904,7 @@ mod tests {
         assert_eq!(Split::parse("3/8", SplitKind::Rows).unwrap(), Split { kind: SplitKind::Rows, shard: 3, of: 8 });
         for bad in ["0/4", "5/4", "1/0", "x/2", "3", "-1/2", ""] {
             let e = Split::parse(bad, SplitKind::Samples).unwrap_err().to_string();
-            assert!(e.starts_with("--shard:"), "{e}");
+            assert!(e.starts_with("shard:"), "{e}");
         }
         assert!(Split::parse("3/8", SplitKind::Samples).unwrap().check(7, 100).is_err());
         assert!(Split::parse("3/8", SplitKind::Rows).unwrap().check(7, 100).is_ok());

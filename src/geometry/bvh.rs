@@ -35,7 +35,7 @@
 use super::intersect::{sphere_disc, sphere_t, Closest};
 use super::spheres::{Spheres, MISS};
 use crate::probe::{Probe, Work, WorkTally};
-use crate::real::{Real, Wide};
+use crate::real::{Real, Wide, MAX_LANES};
 use crate::vec3::V3;
 use std::mem::MaybeUninit;
 use wide::f32x8;
@@ -388,10 +388,6 @@ impl Bvh {
         }
     }
 
-    pub fn node_count(&self) -> usize {
-        self.nodes.len()
-    }
-
     /// The spheres of a leaf (leaf-order slots `start..start + count`), each
     /// broadcast against the rays: the leaf test of the scalar and the packet
     /// walks (the sphere test and the tie rule are [`Closest::test`]'s).
@@ -498,8 +494,8 @@ impl Bvh {
         live: u32,
         probe: &mut P,
     ) -> (W::U32, W) {
-        let mut hit = [MISS; 16];
-        let mut t = [f32::INFINITY; 16];
+        let mut hit = [MISS; MAX_LANES];
+        let mut t = [f32::INFINITY; MAX_LANES];
         let mut m = live;
         while m != 0 {
             let k = m.trailing_zeros() as usize;

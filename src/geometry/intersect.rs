@@ -193,7 +193,7 @@ pub const OFFSET_ULPS: f32 = 1.0 / 1_048_576.0;
 /// epsilon fails both at r = 1e-4 and at r = 1e6. `rtow stress` measures it:
 /// zero re-hits over spheres of radius 1e-4 .. 1e4 placed 1e-4 .. 1e6 away,
 /// still zero at half this offset, entering rays falling short from a quarter,
-/// and each term alone failing (README, "Numerical stability").
+/// and each term alone failing (docs/stability.md, "Stress tests").
 ///
 /// The rule has a floor: the offset must stay below `|r|`, or a ray entering the
 /// sphere may be pushed through it. That holds while `|p|_inf < (1 / 16u - 1) |r|`,

@@ -1,13 +1,85 @@
 //! The kernels: the scalar reference (one path at a time) and the wavefront
 //! (queues of paths, packets of `W::LANES` rays, generic over the lane width),
-//! and what they share: the sky, the debug shadings, path ids for probes.
+//! and what they share: the sky, the debug shadings; which kernel runs
+//! ([`Kernel`]) and what this build's SIMD is ([`isa`]).
 
 pub mod scalar;
 pub mod wavefront;
 
+use crate::choice::KernelChoice;
 use crate::plan::SkyColours;
 use crate::real::Real;
 use crate::vec3::V3;
+use serde::Serialize;
+
+/// The kernel that runs, after `simd` was resolved to a lane width.
+#[derive(Clone, Copy, Debug, PartialEq, Eq, Serialize)]
+#[serde(rename_all = "lowercase")]
+pub enum Kernel {
+    Scalar,
+    Simd8,
+    Simd16,
+}
+
+impl Kernel {
+    pub fn name(self) -> &'static str {
+        match self {
+            Kernel::Scalar => "scalar",
+            Kernel::Simd8 => "simd8",
+            Kernel::Simd16 => "simd16",
+        }
+    }
+
+    pub fn lanes(self) -> u32 {
+        match self {
+            Kernel::Scalar => 1,
+            Kernel::Simd8 => 8,
+            Kernel::Simd16 => 16,
+        }
+    }
+
+    /// The kernel a choice runs on this build: `simd` is 16 lanes where
+    /// `f32x16` is one register (AVX-512), 8 otherwise; `simd8` and `simd16`
+    /// run on every build (without AVX-512, 16 lanes are two 8-lane halves:
+    /// the same image, measured slower).
+    pub fn resolve(choice: KernelChoice) -> Kernel {
+        match choice {
+            KernelChoice::Scalar => Kernel::Scalar,
+            KernelChoice::Simd8 => Kernel::Simd8,
+            KernelChoice::Simd if HAS_SIMD16 => Kernel::Simd16,
+            KernelChoice::Simd => Kernel::Simd8,
+            KernelChoice::Simd16 => Kernel::Simd16,
+        }
+    }
+}
+
+/// Whether `f32x16` is one register in this build (AVX-512F): then `simd` runs 16 lanes.
+pub const HAS_SIMD16: bool = cfg!(target_feature = "avx512f");
+
+/// The SIMD instruction set this binary was compiled for (`wide` picks its
+/// implementation at compile time, from the build's `target-cpu` or
+/// `target-feature` flags).
+pub const fn isa() -> &'static str {
+    if cfg!(all(target_feature = "avx512f", target_feature = "avx512vl", target_feature = "avx512bw")) {
+        "AVX-512 (x86-64-v4)"
+    } else if cfg!(all(target_feature = "avx2", target_feature = "fma")) {
+        "AVX2+FMA (x86-64-v3)"
+    } else if cfg!(target_feature = "avx") {
+        "AVX"
+    } else if cfg!(target_feature = "sse4.1") {
+        "SSE4.1"
+    } else if cfg!(target_feature = "sse2") {
+        "SSE2"
+    } else {
+        "scalar fallback"
+    }
+}
+
+/// The instruction set and the kernel `simd` runs, for `--version`.
+pub fn build_description() -> String {
+    let simd = if HAS_SIMD16 { "simd16 (f32x16)" } else { "simd8 (f32x8)" };
+    format!("SIMD: {}, kernel simd = {simd}", isa())
+}
 
 /// The sky seen in unit direction `d`: horizon to zenith by `0.5 (d.y + 1)`.
 #[inline(always)]

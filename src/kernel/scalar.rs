@@ -2,28 +2,23 @@
 //! Every formula comes from the width-generic modules, instantiated at `f32`.
 
 use super::{normal_colour, sky};
+use crate::choice::Mode;
 use crate::estimator::{roulette, roulette_applies};
 use crate::film::TileFilm;
 use crate::geometry::{spawn, surface, Surface, MISS};
 use crate::material::{dielectric, lambertian, metal, Kind};
-use crate::plan::{Mode, Prepared};
+use crate::plan::Prepared;
 use crate::probe::{PathId, Probe};
-use crate::sampling::{layout, Independent, PathSampler, Sampler, Sobol, Stream};
+use crate::sampling::{layout, PathSampler, Stream};
 use crate::vec3::V3;
 use std::ops::Range;
 
-/// Renders samples `samples` of every pixel of `tile`, in sample order; returns
-/// the rays traced. With adaptive sampling a pixel stops at the first decision
-/// point where its error estimate is low enough.
+/// Renders samples `samples` of every pixel of `tile`, in sample order, with
+/// the paths' values drawn by `sampler`; returns the rays traced. With
+/// adaptive sampling a pixel stops at the first decision point where its
+/// error estimate is low enough.
 #[cfg_attr(feature = "phases", inline(never))]
-pub fn render_tile<P: Probe>(prep: &Prepared, tile: &mut TileFilm, samples: Range<u32>, probe: &mut P) -> u64 {
-    match prep.estimator.sampler {
-        Sampler::Independent => render_tile_with(prep, Independent, tile, samples, probe),
-        Sampler::Sobol { dims } => render_tile_with(prep, Sobol { dims }, tile, samples, probe),
-    }
-}
-
-fn render_tile_with<S: PathSampler, P: Probe>(
+pub fn render_tile<S: PathSampler, P: Probe>(
     prep: &Prepared,
     sampler: S,
     tile: &mut TileFilm,

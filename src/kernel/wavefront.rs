@@ -24,14 +24,15 @@
 //! Memory is bounded: a workspace holds at most `MAX_PATHS` paths.
 
 use super::{normal_colour, sky};
+use crate::choice::Mode;
 use crate::estimator::{roulette, roulette_applies};
 use crate::film::TileFilm;
 use crate::geometry::{spawn, surface, Shade, Surface, MISS};
 use crate::material::{dielectric, lambertian, metal, Kind};
-use crate::plan::{Mode, Prepared};
+use crate::plan::Prepared;
 use crate::probe::{PathId, Probe, Stage};
-use crate::real::Wide;
-use crate::sampling::{layout, Independent, PathSampler, Sampler, Sobol, Stream};
+use crate::real::{Wide, MAX_LANES};
+use crate::sampling::{layout, PathSampler, Stream};
 use crate::vec3::V3;
 use std::ops::Range;
 
@@ -50,7 +51,7 @@ pub const MAX_PATHS: usize = 2048;
 ///   (debug builds assert it where the index comes from memory).
 const CAP: usize = 4096;
 const MASK: usize = CAP - 1;
-const _: () = assert!(CAP.is_power_of_two() && CAP >= MAX_PATHS + 16);
+const _: () = assert!(CAP.is_power_of_two() && CAP >= MAX_PATHS + MAX_LANES);
 
 /// A per-path array.
 type Arr<T> = Box<[T; CAP]>;
@@ -184,27 +185,14 @@ impl Workspace {
 }
 
 /// Renders samples `samples` of every pixel of `tile` (at most `MAX_PATHS`
-/// pixels); returns the rays traced.
+/// pixels), with the paths' values drawn by `sampler`; returns the rays traced.
 ///
 /// Samples are rendered in rounds that end at the adaptive decision points
 /// (one round without adaptive sampling). After each round, pixels whose error
 /// estimate is low enough leave the active list; the next round traces only
 /// the others, so fewer active pixels get more samples per batch and the
 /// packets stay full.
-pub fn render_tile<W: Wide, P: Probe>(
-    prep: &Prepared,
-    ws: &mut Workspace,
-    tile: &mut TileFilm,
-    samples: Range<u32>,
-    probe: &mut P,
-) -> u64 {
-    match prep.estimator.sampler {
-        Sampler::Independent => render_tile_with::<W, P, _>(prep, Independent, ws, tile, samples, probe),
-        Sampler::Sobol { dims } => render_tile_with::<W, P, _>(prep, Sobol { dims }, ws, tile, samples, probe),
-    }
-}
-
-fn render_tile_with<W: Wide, P: Probe, S: PathSampler>(
+pub fn render_tile<W: Wide, P: Probe, S: PathSampler>(
     prep: &Prepared,
     sampler: S,
     ws: &mut Workspace,

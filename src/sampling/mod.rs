@@ -18,7 +18,7 @@
 pub mod lanes;
 pub mod sobol;
 
-use crate::real::{Lanes32, Real, Wide};
+use crate::real::{Real, U32Lanes, Wide};
 use crate::vec3::V3;
 use rand_core::{Rng, SeedableRng};
 use rand_xoshiro::Xoshiro128Plus;
@@ -155,6 +155,26 @@ pub trait PathSampler: Copy + Send + Sync {
     fn lane_words<W: Wide>(s: &Self::Lanes<W>) -> [W::U; 4];
 }
 
+/// Evaluates `$body` with `$s` bound to the [`PathSampler`] that the
+/// [`Sampler`] value `$sampler` names: the one place a sampler choice becomes
+/// a type. The kernels are instantiated per sampler, so the hot path has no
+/// dispatch.
+macro_rules! with_path_sampler {
+    ($sampler:expr, $s:ident => $body:expr) => {
+        match $sampler {
+            $crate::sampling::Sampler::Independent => {
+                let $s = $crate::sampling::Independent;
+                $body
+            }
+            $crate::sampling::Sampler::Sobol { dims } => {
+                let $s = $crate::sampling::Sobol { dims };
+                $body
+            }
+        }
+    };
+}
+pub(crate) use with_path_sampler;
+
 /// The independent sampler: rand_xoshiro's stream per path (scalar), the same
 /// xoshiro128+ lane-wise (wavefront).
 #[derive(Clone, Copy, Debug, Default)]
@@ -246,10 +266,6 @@ pub mod layout {
     pub const fn roulette(depth: u32) -> u32 {
         scatter(depth).wrapping_add(2)
     }
-
-    /// Sobol dimensions of the groups measured apart: pixel only, + lens,
-    /// + first bounce (scatter and roulette), + every bounce of the layout.
-    pub const GROUPS: [(&str, u32); 4] = [("pixel", 2), ("lens", 4), ("bounce1", 7), ("all", scatter(SOBOL_BOUNCES))];
 }
 
 /// A path's Sobol sample, lane-wise: the pixel's key and the sample index per
@@ -312,12 +328,12 @@ pub struct XoshiroLanes<U> {
 /// Eight lanes, as the tests and the 8-wide kernel name them.
 pub type Xoshiro128PlusX8 = XoshiroLanes<u32x8>;
 
-impl<U: Lanes32> XoshiroLanes<U> {
+impl<U: U32Lanes> XoshiroLanes<U> {
     /// The next 32 bits of every lane: exactly `Xoshiro128Plus::next_u32`.
     #[inline(always)]
     pub fn next_u32(&mut self) -> U {
         let [s0, s1, s2, s3] = self.s;
-        let result = s0 + s3; // wrapping, as in rand_xoshiro
+        let result = s0.wrapping_add(s3); // as in rand_xoshiro
         let t = s1 << 9;
         let s2 = s2 ^ s0;
         let s3 = s3 ^ s1;

@@ -8,7 +8,7 @@
 //!    (the generator matrix times the index over GF(2)); no Gray code, so any
 //!    index is computed directly and any split of the sample range gives the
 //!    same points. Direction numbers: Joe and Kuo's `new-joe-kuo-6.21201`
-//!    parameters ([`JOE_KUO`]), expanded by the Bratley-Fox recurrence at
+//!    parameters (`JOE_KUO`), expanded by the Bratley-Fox recurrence at
 //!    compile time; dimension 0 is van der Corput.
 //! 2. **Owen scramble**, hash-based (Burley, "Practical Hash-based Owen
 //!    Scrambling", JCGT 2020): the bits are reversed, permuted by a

@@ -1,23 +1,28 @@
-//! The user-facing scene: what a scene file or a preset describes, validated.
+//! The user side of the bridge: what a scene file or a preset describes.
 //!
-//! This is also the schema of scene files (JSON or TOML, see `file.rs`), so a
-//! scene written by `rtow export` loads back into the identical value.
+//! These types are also the schema of scene files (JSON or TOML, see
+//! `file.rs`), so a scene written by `rtow export` loads back into the
+//! identical value. Loading parses (with bounded memory); [`Scene::validate`]
+//! checks every value against the documented ranges, once, when a render
+//! job is resolved from the scene (`crate::job`). Nothing here knows the
+//! kernels: the job module reads this side and lays it out for them.
 
 pub(crate) mod de;
 mod file;
 mod presets;
+mod render_table;
+mod source;
+mod validate;
 
+pub use crate::choice::Mode;
 pub use file::{load_scene, save_scene, scene_from_bytes, scene_from_str, scene_to_string, Format};
-pub use presets::{final_scene, preset, presets, Preset};
+pub use presets::{final_scene, preset, presets, Preset, PresetGroup};
+pub use render_table::RenderTable;
+pub use source::SceneSource;
 
-use crate::error::{Error, Result};
-use crate::limits::MAX_SPHERES;
-pub use crate::material::Kind;
-pub use crate::plan::Mode;
-pub use crate::settings::RenderDefaults;
 use serde::{Deserialize, Serialize};
 
-/// Written as `{"type": "<kind>", ...fields}`. Read through [`MaterialFields`]:
+/// Written as `{"type": "<kind>", ...fields}`. Read through `MaterialFields`:
 /// serde reads an internally tagged enum through a buffer, and errors inside it
 /// (`"ior": "abc"`) would name neither the field nor its position.
 #[derive(Serialize, Deserialize, Clone, Copy, Debug, PartialEq)]
@@ -34,7 +39,7 @@ pub enum Material {
 #[serde(deny_unknown_fields)]
 struct MaterialFields {
     #[serde(rename = "type")]
-    kind: Kind,
+    kind: MaterialType,
     #[serde(default, deserialize_with = "de::opt_vec3")]
     albedo: Option<[f32; 3]>,
     #[serde(default, deserialize_with = "de::opt_f32")]
@@ -52,12 +57,14 @@ impl TryFrom<MaterialFields> for Material {
         }
         let present = [("albedo", m.albedo.is_some()), ("fuzz", m.fuzz.is_some()), ("ior", m.ior.is_some())];
         let (material, fields) = match m.kind {
-            Kind::Lambertian => (Material::Lambertian { albedo: need(m.albedo, "albedo", name)? }, &["albedo"][..]),
-            Kind::Metal => (
+            MaterialType::Lambertian => {
+                (Material::Lambertian { albedo: need(m.albedo, "albedo", name)? }, &["albedo"][..])
+            }
+            MaterialType::Metal => (
                 Material::Metal { albedo: need(m.albedo, "albedo", name)?, fuzz: need(m.fuzz, "fuzz", name)? },
                 &["albedo", "fuzz"][..],
             ),
-            Kind::Dielectric => (Material::Dielectric { ior: need(m.ior, "ior", name)? }, &["ior"][..]),
+            MaterialType::Dielectric => (Material::Dielectric { ior: need(m.ior, "ior", name)? }, &["ior"][..]),
         };
         match present.iter().find(|(f, p)| *p && !fields.contains(f)) {
             Some((f, _)) => Err(format!(
@@ -69,12 +76,32 @@ impl TryFrom<MaterialFields> for Material {
     }
 }
 
-impl Material {
-    pub fn kind(&self) -> Kind {
+/// A material's `type` as files write it.
+#[derive(Deserialize, Clone, Copy, Debug, PartialEq, Eq)]
+#[serde(rename_all = "lowercase")]
+enum MaterialType {
+    Lambertian,
+    Metal,
+    Dielectric,
+}
+
+impl MaterialType {
+    fn name(self) -> &'static str {
         match self {
-            Material::Lambertian { .. } => Kind::Lambertian,
-            Material::Metal { .. } => Kind::Metal,
-            Material::Dielectric { .. } => Kind::Dielectric,
+            MaterialType::Lambertian => "lambertian",
+            MaterialType::Metal => "metal",
+            MaterialType::Dielectric => "dielectric",
+        }
+    }
+}
+
+impl Material {
+    /// The material's `type`, as scene files write it.
+    pub fn type_name(&self) -> &'static str {
+        match self {
+            Material::Lambertian { .. } => "lambertian",
+            Material::Metal { .. } => "metal",
+            Material::Dielectric { .. } => "dielectric",
         }
     }
 }
@@ -188,182 +215,8 @@ pub struct Scene {
     pub spheres: Vec<Sphere>,
     #[serde(default)]
     pub sky: Sky,
+    /// The render table: size, samples, depth, seed and sampler a scene asks
+    /// for (overrides win; see `crate::job`).
     #[serde(default, skip_serializing_if = "is_default")]
-    pub render: RenderDefaults,
-}
-
-fn finite3(field: &str, v: [f32; 3]) -> Result<()> {
-    if v.iter().all(|x| x.is_finite()) {
-        Ok(())
-    } else {
-        Err(Error::invalid(field, format!("must be finite, got {v:?}")))
-    }
-}
-
-fn finite(field: &str, v: f32) -> Result<()> {
-    if v.is_finite() {
-        Ok(())
-    } else {
-        Err(Error::invalid(field, format!("must be finite, got {v}")))
-    }
-}
-
-/// A point of the world: finite and inside the range where the kernels'
-/// error bounds hold ([`crate::limits::MAX_COORD`]).
-fn point(field: &str, v: [f32; 3]) -> Result<()> {
-    finite3(field, v)?;
-    let m = crate::limits::MAX_COORD;
-    if v.iter().any(|x| x.abs() > m) {
-        return Err(Error::invalid(
-            field,
-            format!(
-                "coordinates must be within [-{m:e}, {m:e}] (the range rtow's f32 kernels are verified in), got {v:?}"
-            ),
-        ));
-    }
-    Ok(())
-}
-
-fn colour(field: &str, v: [f32; 3]) -> Result<()> {
-    finite3(field, v)?;
-    if v.iter().any(|&x| x < 0.0) {
-        return Err(Error::invalid(field, format!("colour components must be >= 0, got {v:?}")));
-    }
-    Ok(())
-}
-
-impl Scene {
-    /// The focus distance and the lens, checked in f64 to be what the f32
-    /// camera can represent: the camera's pixel grid (relative to the eye, at
-    /// the focus distance) and its lens vectors must be finite and normal f32
-    /// numbers whatever the image size (see [`crate::camera::Camera::check`]).
-    fn check_lens(&self) -> Result<()> {
-        use crate::limits::{MAX_FOCUS, MAX_LENS_RADIUS, MIN_FOCUS};
-        let c = &self.camera;
-        let focus = c.focus_distance();
-        let field = if c.focus_dist.is_some() { "camera.focus_dist" } else { "camera.look_at" };
-        if !(focus >= MIN_FOCUS as f64 && focus <= MAX_FOCUS as f64) {
-            return Err(Error::invalid(
-                field,
-                format!(
-                    "the focus distance{} must be in [{MIN_FOCUS:e}, {MAX_FOCUS:e}], got {focus:e}",
-                    if c.focus_dist.is_some() { "" } else { " |look_from - look_at|" }
-                ),
-            ));
-        }
-        if c.vfov_deg < crate::limits::MIN_VFOV_DEG {
-            return Err(Error::invalid(
-                "camera.vfov_deg",
-                format!(
-                    "must be at least {:e} degrees for the f32 camera, got {}",
-                    crate::limits::MIN_VFOV_DEG,
-                    c.vfov_deg
-                ),
-            ));
-        }
-        let lr = c.lens_radius();
-        if !(lr.is_finite() && lr <= MAX_LENS_RADIUS as f64) {
-            let field = if c.aperture.is_some() { "camera.aperture" } else { "camera.defocus_angle_deg" };
-            return Err(Error::invalid(
-                field,
-                format!("the lens radius must be at most {MAX_LENS_RADIUS:e}, got {lr:e}"),
-            ));
-        }
-        crate::camera::Camera::check(c)
-    }
-
-    /// Checks every value a render depends on; the error names the field.
-    pub fn validate(&self) -> Result<()> {
-        let c = &self.camera;
-        point("camera.look_from", c.look_from)?;
-        point("camera.look_at", c.look_at)?;
-        finite3("camera.vup", c.vup)?;
-        finite("camera.vfov_deg", c.vfov_deg)?;
-        if self.mode != Mode::Gradient {
-            if c.look_from == c.look_at {
-                return Err(Error::invalid("camera.look_at", "must differ from camera.look_from"));
-            }
-            let w: [f64; 3] = std::array::from_fn(|i| c.look_from[i] as f64 - c.look_at[i] as f64);
-            let up = glam::DVec3::from_array(c.vup.map(|x| x as f64));
-            let wv = glam::DVec3::from_array(w);
-            if up.length() == 0.0 {
-                return Err(Error::invalid("camera.vup", "must not be zero"));
-            }
-            let sin = up.cross(wv).length() / (up.length() * wv.length());
-            if !(sin > 1e-6) {
-                return Err(Error::invalid("camera.vup", "must not be parallel to the view direction"));
-            }
-        }
-        if !(c.vfov_deg > 0.0 && c.vfov_deg < 180.0) {
-            return Err(Error::invalid("camera.vfov_deg", format!("must be in (0, 180), got {}", c.vfov_deg)));
-        }
-        if c.defocus_angle_deg.is_some() && c.aperture.is_some() {
-            return Err(Error::invalid("camera.aperture", "give either aperture or defocus_angle_deg, not both"));
-        }
-        if let Some(a) = c.defocus_angle_deg {
-            finite("camera.defocus_angle_deg", a)?;
-            if !(0.0..180.0).contains(&a) {
-                return Err(Error::invalid("camera.defocus_angle_deg", format!("must be in [0, 180), got {a}")));
-            }
-        }
-        if let Some(a) = c.aperture {
-            finite("camera.aperture", a)?;
-            if a < 0.0 {
-                return Err(Error::invalid("camera.aperture", format!("must be >= 0, got {a}")));
-            }
-        }
-        if let Some(f) = c.focus_dist {
-            finite("camera.focus_dist", f)?;
-            if f <= 0.0 {
-                return Err(Error::invalid("camera.focus_dist", format!("must be > 0, got {f}")));
-            }
-        }
-        if self.mode != Mode::Gradient {
-            self.check_lens()?;
-        }
-        self.render.validate()?;
-        colour("sky.horizon", self.sky.horizon)?;
-        colour("sky.zenith", self.sky.zenith)?;
-        if self.spheres.len() > MAX_SPHERES {
-            return Err(Error::invalid(
-                "spheres",
-                format!("at most {MAX_SPHERES} spheres, got {}", self.spheres.len()),
-            ));
-        }
-        for (i, s) in self.spheres.iter().enumerate() {
-            let f = |name: &str| format!("spheres[{i}].{name}");
-            point(&f("center"), s.center)?;
-            finite(&f("radius"), s.radius)?;
-            if s.radius == 0.0 {
-                return Err(Error::invalid(f("radius"), "must not be 0"));
-            }
-            let (lo, hi) = (crate::limits::MIN_RADIUS, crate::limits::MAX_RADIUS);
-            if !(lo..=hi).contains(&s.radius.abs()) {
-                return Err(Error::invalid(
-                    f("radius"),
-                    format!(
-                        "|radius| must be in [{lo:e}, {hi:e}] (the range rtow's f32 kernels are verified in), got {}",
-                        s.radius
-                    ),
-                ));
-            }
-            match s.material {
-                Material::Lambertian { albedo } => colour(&f("material.albedo"), albedo)?,
-                Material::Metal { albedo, fuzz } => {
-                    colour(&f("material.albedo"), albedo)?;
-                    finite(&f("material.fuzz"), fuzz)?;
-                    if !(0.0..=1.0).contains(&fuzz) {
-                        return Err(Error::invalid(f("material.fuzz"), format!("must be in [0, 1], got {fuzz}")));
-                    }
-                }
-                Material::Dielectric { ior } => {
-                    finite(&f("material.ior"), ior)?;
-                    if ior <= 0.0 {
-                        return Err(Error::invalid(f("material.ior"), format!("must be > 0, got {ior}")));
-                    }
-                }
-            }
-        }
-        Ok(())
-    }
+    pub render: RenderTable,
 }

@@ -1,6 +1,6 @@
 //! A preset for every image of the seed (SEED-NOTES.md), with the book's physics.
 
-use super::{Camera, Material, Mode, RenderDefaults, Scene, Sky, Sphere};
+use super::{Camera, Material, Mode, RenderTable, Scene, Sky, Sphere};
 use crate::real::Real;
 use rand_core::{Rng, SeedableRng};
 use rand_xoshiro::Xoshiro128Plus;
@@ -8,7 +8,32 @@ use rand_xoshiro::Xoshiro128Plus;
 pub struct Preset {
     pub name: &'static str,
     pub description: &'static str,
+    /// Which list `rtow scenes` shows it in.
+    pub group: PresetGroup,
     pub build: fn() -> Scene,
+}
+
+/// The lists of presets: the images of a book, or the scenes of `rtow stress`.
+/// A later book adds its own group (and its presets' names their prefix).
+#[derive(Clone, Copy, Debug, PartialEq, Eq)]
+pub enum PresetGroup {
+    /// *Ray Tracing in One Weekend*, chapter by chapter.
+    Weekend,
+    /// Numerical stress scenes (`rtow stress`), not images of a book.
+    Stress,
+}
+
+impl PresetGroup {
+    /// Every group, in the order `rtow scenes` lists them.
+    pub const ALL: &'static [PresetGroup] = &[PresetGroup::Weekend, PresetGroup::Stress];
+
+    /// The heading `rtow scenes` gives the group.
+    pub fn title(self) -> &'static str {
+        match self {
+            PresetGroup::Weekend => "Ray Tracing in One Weekend",
+            PresetGroup::Stress => "Stress scenes (numerical robustness, for rtow stress)",
+        }
+    }
 }
 
 const fn lam(albedo: [f32; 3]) -> Material {
@@ -24,8 +49,8 @@ const fn sphere(center: [f32; 3], radius: f32, material: Material) -> Sphere {
     Sphere { center, radius, material }
 }
 
-fn settings(width: u32, height: u32, spp: u32, depth: u32) -> RenderDefaults {
-    RenderDefaults {
+fn settings(width: u32, height: u32, spp: u32, depth: u32) -> RenderTable {
+    RenderTable {
         width: Some(width),
         height: Some(height),
         samples_per_pixel: Some(spp),
@@ -41,11 +66,11 @@ fn origin_camera() -> Camera {
     Camera::looking([0.0, 0.0, 0.0], [0.0, 0.0, -1.0], 90.0)
 }
 
-fn scene(mode: Mode, camera: Camera, spheres: Vec<Sphere>, render: RenderDefaults) -> Scene {
+fn scene(mode: Mode, camera: Camera, spheres: Vec<Sphere>, render: RenderTable) -> Scene {
     Scene { mode, camera, spheres, sky: Sky::default(), render }
 }
 
-const SMALL: fn() -> RenderDefaults = || settings(400, 225, 1, 1);
+const SMALL: fn() -> RenderTable = || settings(400, 225, 1, 1);
 
 fn ch01() -> Scene {
     scene(Mode::Gradient, origin_camera(), vec![], settings(1280, 720, 1, 1))
@@ -219,85 +244,121 @@ static PRESETS: &[Preset] = &[
     Preset {
         name: "ch01-gradient",
         description: "ch. 1: the first image, a red/green gradient (no rays)",
+        group: PresetGroup::Weekend,
         build: ch01,
     },
-    Preset { name: "ch03-sky", description: "ch. 3: camera rays and the white-to-blue sky", build: ch03 },
-    Preset { name: "ch04-sphere", description: "ch. 4: a sphere hit test, drawn flat red over the sky", build: ch04 },
-    Preset { name: "ch05-normals", description: "ch. 5: the sphere shaded by its surface normal", build: ch05_normals },
+    Preset {
+        name: "ch03-sky",
+        description: "ch. 3: camera rays and the white-to-blue sky",
+        group: PresetGroup::Weekend,
+        build: ch03,
+    },
+    Preset {
+        name: "ch04-sphere",
+        description: "ch. 4: a sphere hit test, drawn flat red over the sky",
+        group: PresetGroup::Weekend,
+        build: ch04,
+    },
+    Preset {
+        name: "ch05-normals",
+        description: "ch. 5: the sphere shaded by its surface normal",
+        group: PresetGroup::Weekend,
+        build: ch05_normals,
+    },
     Preset {
         name: "ch05-ground",
         description: "ch. 5: normal shading of a list of hitables (sphere + ground)",
+        group: PresetGroup::Weekend,
         build: ch05_ground,
     },
     Preset {
         name: "ch06-antialias",
         description: "ch. 6: the same, antialiased with 100 samples per pixel",
+        group: PresetGroup::Weekend,
         build: ch06,
     },
     Preset {
         name: "ch07-diffuse",
         description: "ch. 7: Lambertian spheres reflecting half the light, gamma 2",
+        group: PresetGroup::Weekend,
         build: ch07,
     },
     Preset {
         name: "ch08-metal",
         description: "ch. 8: two polished metal spheres beside a diffuse one",
+        group: PresetGroup::Weekend,
         build: ch08_metal,
     },
     Preset {
         name: "ch08-fuzz",
         description: "ch. 8: the metal spheres with fuzz 0.3 (left) and 1.0 (right)",
+        group: PresetGroup::Weekend,
         build: ch08_fuzz,
     },
     Preset {
         name: "ch09-glass",
         description: "ch. 9: a hollow glass ball (negative-radius inner sphere)",
+        group: PresetGroup::Weekend,
         build: ch09,
     },
     Preset {
         name: "ch10-wide-fov",
         description: "ch. 10: two touching spheres seen with a 90 degree field of view",
+        group: PresetGroup::Weekend,
         build: ch10_wide,
     },
     Preset {
         name: "ch10-look-from",
         description: "ch. 10: the glass scene from (-2,2,1) with vfov 90",
+        group: PresetGroup::Weekend,
         build: || ch10_look(90.0),
     },
     Preset {
         name: "ch10-zoom",
         description: "ch. 10: the glass scene from (-2,2,1) with vfov 20",
+        group: PresetGroup::Weekend,
         build: || ch10_look(20.0),
     },
-    Preset { name: "ch11-defocus", description: "ch. 11: defocus blur, aperture 2.0 from (3,3,2)", build: ch11 },
+    Preset {
+        name: "ch11-defocus",
+        description: "ch. 11: defocus blur, aperture 2.0 from (3,3,2)",
+        group: PresetGroup::Weekend,
+        build: ch11,
+    },
     Preset {
         name: "final",
-        description: "ch. 12: the book's random spheres (487 spheres, thin lens)",
+        description: "ch. 12: the book's random spheres (486 spheres, thin lens)",
+        group: PresetGroup::Weekend,
         build: final_scene,
     },
     Preset {
         name: "stress-final-small",
         description: "stress: the final scene scaled by 1e-3 (spheres of radius 2e-4)",
+        group: PresetGroup::Stress,
         build: stress_final_small,
     },
     Preset {
         name: "stress-final-large",
         description: "stress: the final scene scaled by 1e3 (a ground of radius 1e6)",
+        group: PresetGroup::Stress,
         build: stress_final_large,
     },
     Preset {
         name: "stress-horizon",
         description: "stress: a sphere of radius 1e6 seen from 1 above its surface",
+        group: PresetGroup::Stress,
         build: stress_horizon,
     },
     Preset {
         name: "stress-tiny",
         description: "stress: ch. 9's scene with spheres of radius 1e-4",
+        group: PresetGroup::Stress,
         build: stress_tiny,
     },
     Preset {
         name: "stress-far-camera",
         description: "stress: the final scene from 1e5 away, vfov 0.0027 degrees",
+        group: PresetGroup::Stress,
         build: stress_far_camera,
     },
 ];
@@ -324,14 +385,27 @@ mod tests {
     }
 
     #[test]
+    fn the_final_scenes_description_counts_its_spheres() {
+        let p = presets().iter().find(|p| p.name == "final").unwrap();
+        let n = final_scene().spheres.len();
+        assert!(p.description.contains(&format!("({n} spheres")), "{}: {n} spheres", p.description);
+    }
+
+    #[test]
+    fn stress_presets_are_grouped_apart() {
+        for p in presets() {
+            assert_eq!(p.name.starts_with("stress-"), p.group == PresetGroup::Stress, "{}", p.name);
+        }
+    }
+
+    #[test]
     fn final_scene_has_the_book_shape() {
         let s = final_scene();
         assert!(s.spheres.len() > 400 && s.spheres.len() <= 1 + 22 * 22 + 3, "{}", s.spheres.len());
         assert_eq!(s.spheres[0].radius, 1000.0);
-        let kinds = |k| s.spheres.iter().filter(|sp| sp.material.kind() == k).count();
-        use crate::scene::Kind;
+        let kinds = |k| s.spheres.iter().filter(|sp| sp.material.type_name() == k).count();
         let small = (s.spheres.len() - 4) as f64;
-        assert!((kinds(Kind::Lambertian) as f64 - 2.0) / small > 0.7);
-        assert!(kinds(Kind::Metal) > 30 && kinds(Kind::Dielectric) > 10);
+        assert!((kinds("lambertian") as f64 - 2.0) / small > 0.7);
+        assert!(kinds("metal") > 30 && kinds("dielectric") > 10);
     }
 }

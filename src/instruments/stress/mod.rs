@@ -12,14 +12,14 @@
 //! 2. **Self-intersection sweeps.** Hit points on spheres of radius 10^U(-4,4)
 //!    whose centre (or, for half of them, the hit point) lies 10^U(-4,6) from the
 //!    origin, 1000 rays scattered from each (every material's scatter, plus
-//!    synthetic grazing directions), each spawned with [`spawn`] and intersected
+//!    synthetic grazing directions), each spawned with `geometry::spawn` and intersected
 //!    again: a ray leaving the sphere that hits it again is a re-hit; a ray
 //!    entering it that misses the far wall is a wrong decision. Hit points where
 //!    the offset exceeds the radius (`|p|_inf > ~1e6 |r|`, below f32 resolution)
 //!    are reported apart: there entering rays can be pushed through the sphere.
 //! 3. **Scenes.** The stress presets, rendered by the real renderer with every
 //!    kernel and accelerator (and with Russian roulette and adaptive sampling)
-//!    under a probe ([`scenes::StressProbe`]) that judges every ray by the oracle
+//!    under a probe (`StressProbe`) that judges every ray by the oracle
 //!    against every sphere and checks every bounce for re-hits; every
 //!    configuration must trace the same rays bit for bit. Plus image comparisons
 //!    (scaled scenes against the unscaled one, the horizon against its analytic
@@ -27,26 +27,26 @@
 //!    the NaN count of every preset.
 //!
 //! The textbook test (`b*b - 4ac`, `t_min = 0.001`, no re-projection, no offset)
-//! is implemented here only, as a reference for the README; it never gates.
+//! is implemented here only, as a reference for docs/stability.md; it never gates.
 
 mod oracle;
 mod report;
 mod scenes;
 mod sweeps;
 
-pub use oracle::{textbook_hit, RayF64, Truth, Verdict, SIDE_EPS, TEXTBOOK_T_MIN, U, Z_LIMIT};
-pub use report::{Check, Decade, Gate, OffsetScan, Report, Row, Tally};
+pub use oracle::{textbook_hit, HitVerdict, RayF64, Truth, SIDE_EPS, TEXTBOOK_T_MIN, U, Z_LIMIT};
+pub use report::{Check, Decade, Gate, OffsetScan, StressReport, StressRow, Tally};
 pub use scenes::COLOUR_FLOOR;
 pub use sweeps::{check_group, offset_rehits, Group, GroupResult, IsectCase, Scatter};
 
+use crate::choice::{AccelChoice, KernelChoice, Mode};
 use crate::error::{Error, Result};
-use crate::estimator::{Adaptive, Estimator};
+use crate::estimator::{Adaptive, Roulette};
+use crate::film::part::Fnv1a;
 use crate::film::Image;
-use crate::plan::Mode;
-use crate::prepare::prepare;
+use crate::job::{Job, RenderOptions};
 use crate::sampling::mix64;
 use crate::scene;
-use crate::settings::{AccelChoice, KernelChoice, RenderOptions};
 use crate::vec3::V3;
 use glam::DVec3;
 use rand_core::{Rng, SeedableRng};
@@ -74,24 +74,19 @@ pub(super) fn finite3(v: V3<f32>) -> bool {
 }
 
 /// FNV-1a, to compare long streams of results between kernels.
-#[derive(Clone, Copy)]
-pub(super) struct Fnv(u64);
-
-impl Default for Fnv {
-    fn default() -> Self {
-        Fnv::new()
-    }
-}
+#[derive(Clone, Copy, Default)]
+pub(super) struct Fnv(Fnv1a);
 
 impl Fnv {
     pub(super) fn new() -> Self {
-        Fnv(0xcbf2_9ce4_8422_2325)
+        Fnv::default()
+    }
+    /// The hash so far.
+    pub(super) fn value(&self) -> u64 {
+        self.0 .0
     }
     pub(super) fn u32(&mut self, x: u32) {
-        for b in x.to_le_bytes() {
-            self.0 ^= b as u64;
-            self.0 = self.0.wrapping_mul(0x0000_0100_0000_01b3);
-        }
+        self.0.add(&x.to_le_bytes());
     }
     pub(super) fn f(&mut self, x: f32) {
         self.u32(x.to_bits())
@@ -141,7 +136,7 @@ impl Gen {
 
 /// How much `rtow stress` does.
 #[derive(Clone, Copy, Debug)]
-pub struct Config {
+pub struct StressConfig {
     /// The small version `cargo test` runs.
     pub quick: bool,
     pub seed: u64,
@@ -165,7 +160,7 @@ pub(super) struct Sizes {
     pub(super) offset_scan: bool,
 }
 
-impl Config {
+impl StressConfig {
     pub(super) fn sizes(&self) -> Sizes {
         if self.quick {
             Sizes {
@@ -194,70 +189,98 @@ impl Config {
 }
 
 /// Runs every sweep and scene; `progress` gets a line per finished part.
-pub fn run(cfg: &Config, progress: &mut dyn FnMut(&str)) -> Result<Report> {
+pub fn run(cfg: &StressConfig, progress: &mut dyn FnMut(&str)) -> Result<StressReport> {
+    crate::limits::check_threads(cfg.threads)?;
     let start = Instant::now();
     let sz = cfg.sizes();
-    let mut rows = Vec::new();
-    let mut checks = Vec::new();
+    let mut out = Parts::default();
+    intersection(cfg, &sz, &mut out, progress);
+    self_intersection(cfg, &sz, &mut out, progress);
+    let images = scenes(cfg, &sz, &mut out, progress)?;
+    scaled_scenes(cfg, &sz, &images, &mut out)?;
+    every_preset(cfg, &mut out)?;
+    progress("presets");
+    Ok(StressReport {
+        quick: cfg.quick,
+        seed: cfg.seed,
+        isa: crate::kernel::isa(),
+        rows: out.rows,
+        checks: out.checks,
+        decades: out.decades,
+        offset_scan: out.offset_scan,
+        seconds: start.elapsed().as_secs_f64(),
+    })
+}
 
-    // 1. Intersection.
-    let mut decades: Vec<Decade> = (-6..0).map(|e| Decade { ratio_exp: e, ..Decade::default() }).collect();
+/// What the parts of a run add to its report.
+#[derive(Default)]
+struct Parts {
+    rows: Vec<StressRow>,
+    checks: Vec<Check>,
+    decades: Vec<Decade>,
+    offset_scan: Vec<OffsetScan>,
+}
+
+/// Part 1, intersection: rays against one sphere, every case, every implementation.
+fn intersection(cfg: &StressConfig, sz: &Sizes, out: &mut Parts, progress: &mut dyn FnMut(&str)) {
+    out.decades = (-6..0).map(|e| Decade { ratio_exp: e, ..Decade::default() }).collect();
     let (mut mismatches, mut disc_ratio) = (0, 0.0f64);
     let sec = "intersection (1 sphere, f64 oracle)";
     for case in IsectCase::ALL {
-        let out = isect_sweep(case, sz.groups, cfg.seed, &mut decades);
-        mismatches += out.mismatches;
-        disc_ratio = disc_ratio.max(out.max_disc_ratio);
-        for (kernel, tally, gate) in [
-            ("scalar", out.scalar, Gate::Full),
-            ("simd", out.simd, Gate::Full),
-            ("textbook", out.textbook, Gate::Reference),
-        ] {
-            rows.push(Row { section: sec, case: case.name().into(), kernel, tally, gate });
+        let r = isect_sweep(case, sz.groups, cfg.seed, &mut out.decades);
+        mismatches += r.mismatches;
+        disc_ratio = disc_ratio.max(r.max_disc_ratio);
+        for (kernel, tally, gate) in
+            [("scalar", r.scalar, Gate::Full), ("simd", r.simd, Gate::Full), ("textbook", r.textbook, Gate::Reference)]
+        {
+            out.rows.push(StressRow { section: sec, case: case.name().into(), kernel, tally, gate });
         }
         progress(&format!("intersection: {}", case.name()));
     }
-    checks.push(Check::at_most(
+    out.checks.push(Check::at_most(
         "intersection: scalar and 8-wide answers differ (lanes)",
         mismatches as f64,
         0.0,
         "index, t and disc compared bit for bit",
     ));
-    checks.push(Check::at_most(
+    out.checks.push(Check::at_most(
         "intersection: |disc error| / its bound, largest",
         disc_ratio,
         1.0,
         "the rounding band rests on this bound",
     ));
+}
 
-    // 2. Self-intersection.
+/// Part 2, self-intersection: rays spawned from hit points, every scatter
+/// kind; in the full run, the offset rule against smaller and partial offsets.
+fn self_intersection(cfg: &StressConfig, sz: &Sizes, out: &mut Parts, progress: &mut dyn FnMut(&str)) {
     let sec = "self-intersection (1000 rays per hit point)";
     let mut below: [Tally; 3] = Default::default();
     for scatter in Scatter::ALL {
-        let run1 = |imp| self_sweep(scatter, imp, &sz, cfg.seed, OffsetRule::Scaled(1.0));
+        let run1 = |imp| self_sweep(scatter, imp, sz, cfg.seed, OffsetRule::Scaled(1.0));
         let s = run1(Impl::Scalar);
         let v = run1(Impl::Simd);
         let tb = run1(Impl::Textbook);
-        checks.push(Check::at_most(
+        out.checks.push(Check::at_most(
             format!("self-intersection, {}: scalar != simd", scatter.name()),
             (s.hash != v.hash) as u8 as f64,
             0.0,
             "every spawned ray, bit for bit",
         ));
-        for (i, (kernel, out, gate)) in
+        for (i, (kernel, r, gate)) in
             [("scalar", s, Gate::Full), ("simd", v, Gate::Full), ("textbook", tb, Gate::Reference)]
                 .into_iter()
                 .enumerate()
         {
-            add(&mut below[i], &out.unresolved);
-            rows.push(Row { section: sec, case: scatter.name().into(), kernel, tally: out.resolved, gate });
+            add(&mut below[i], &r.unresolved);
+            out.rows.push(StressRow { section: sec, case: scatter.name().into(), kernel, tally: r.resolved, gate });
         }
         progress(&format!("self-intersection: {}", scatter.name()));
     }
     for (i, (kernel, gate)) in
         [("scalar", Gate::NoLeaks), ("simd", Gate::NoLeaks), ("textbook", Gate::Reference)].into_iter().enumerate()
     {
-        rows.push(Row {
+        out.rows.push(StressRow {
             section: sec,
             case: "below f32 resolution, all of the above".into(),
             kernel,
@@ -265,40 +288,48 @@ pub fn run(cfg: &Config, progress: &mut dyn FnMut(&str)) -> Result<Report> {
             gate,
         });
     }
-    let mut offset_scan = Vec::new();
     if sz.offset_scan {
-        let rules: Vec<(String, OffsetRule)> = vec![
-            ("16u (|r| + |p|_inf) / 16".into(), OffsetRule::Scaled(1.0 / 16.0)),
-            ("16u (|r| + |p|_inf) / 8".into(), OffsetRule::Scaled(1.0 / 8.0)),
-            ("16u (|r| + |p|_inf) / 4".into(), OffsetRule::Scaled(0.25)),
-            ("16u (|r| + |p|_inf) / 2".into(), OffsetRule::Scaled(0.5)),
-            ("16u (|r| + |p|_inf) (the kernels')".into(), OffsetRule::Scaled(1.0)),
-            ("16u |r| only".into(), OffsetRule::Terms { kr: 16.0, kp: 0.0 }),
-            ("16u |p|_inf only".into(), OffsetRule::Terms { kr: 0.0, kp: 16.0 }),
-            ("u (9 |r| + 4 |p|_inf) (derived)".into(), OffsetRule::Terms { kr: 9.0, kp: 4.0 }),
-        ];
-        for (name, rule) in rules {
-            let mut t = Tally::default();
-            for scatter in Scatter::ALL {
-                let s = self_sweep(scatter, Impl::Scalar, &sz, cfg.seed, rule);
-                add(&mut t, &s.resolved);
-            }
-            offset_scan.push(OffsetScan { rule: name, rays: t.rays, rehits: t.rehits, wrong: t.wrong });
-        }
+        out.offset_scan = offset_scan(cfg, sz);
         progress("offset rules");
     }
+}
 
-    // 3. Scenes: the real renderer under the stress probe, every kernel and accelerator.
-    let sec = "scenes (every ray vs f64 oracle)";
-    let mut images: Vec<(String, Image)> = Vec::new();
-    let stress_scenes =
-        ["stress-final-small", "stress-final-large", "stress-horizon", "stress-tiny", "stress-far-camera"];
+/// Re-hits and wrong decisions of smaller and partial offset rules.
+fn offset_scan(cfg: &StressConfig, sz: &Sizes) -> Vec<OffsetScan> {
+    let rules: Vec<(String, OffsetRule)> = vec![
+        ("16u (|r| + |p|_inf) / 16".into(), OffsetRule::Scaled(1.0 / 16.0)),
+        ("16u (|r| + |p|_inf) / 8".into(), OffsetRule::Scaled(1.0 / 8.0)),
+        ("16u (|r| + |p|_inf) / 4".into(), OffsetRule::Scaled(0.25)),
+        ("16u (|r| + |p|_inf) / 2".into(), OffsetRule::Scaled(0.5)),
+        ("16u (|r| + |p|_inf) (the kernels')".into(), OffsetRule::Scaled(1.0)),
+        ("16u |r| only".into(), OffsetRule::Terms { kr: 16.0, kp: 0.0 }),
+        ("16u |p|_inf only".into(), OffsetRule::Terms { kr: 0.0, kp: 16.0 }),
+        ("u (9 |r| + 4 |p|_inf) (derived)".into(), OffsetRule::Terms { kr: 9.0, kp: 4.0 }),
+    ];
+    rules
+        .into_iter()
+        .map(|(rule, r)| {
+            let mut t = Tally::default();
+            for scatter in Scatter::ALL {
+                add(&mut t, &self_sweep(scatter, Impl::Scalar, sz, cfg.seed, r).resolved);
+            }
+            OffsetScan { rule, rays: t.rays, rehits: t.rehits, wrong: t.wrong }
+        })
+        .collect()
+}
+
+/// The stress presets the scene part renders.
+const STRESS_SCENES: [&str; 5] =
+    ["stress-final-small", "stress-final-large", "stress-horizon", "stress-tiny", "stress-far-camera"];
+
+/// The configurations of the scene part: (label, options, group); every
+/// configuration of a group must trace the same rays.
+fn scene_configs(cfg: &StressConfig) -> Result<Vec<(&'static str, RenderOptions, u8)>> {
     let base = RenderOptions { threads: cfg.threads, ..RenderOptions::default() };
     let with = |kernel, accel| RenderOptions { kernel, accel, ..base };
     let adaptive = Some(Adaptive::new(0.05, 2)?);
-    let estimators = RenderOptions { rr: true, rr_after: 2, adaptive, ..base };
-    // (label, options, group): every configuration of a group must trace the same rays.
-    let mut configs: Vec<(&'static str, RenderOptions, u8)> = vec![
+    let estimators = RenderOptions { roulette: Some(Roulette::new(2)?), adaptive, ..base };
+    let mut configs = vec![
         ("scalar", with(KernelChoice::Scalar, AccelChoice::Auto), 0),
         ("scalar, brute force", with(KernelChoice::Scalar, AccelChoice::Brute), 0),
         ("simd", with(KernelChoice::Simd, AccelChoice::Auto), 0),
@@ -307,28 +338,43 @@ pub fn run(cfg: &Config, progress: &mut dyn FnMut(&str)) -> Result<Report> {
         ("scalar, rr + adaptive", RenderOptions { kernel: KernelChoice::Scalar, ..estimators }, 1),
         ("simd, rr + adaptive", RenderOptions { kernel: KernelChoice::Simd, ..estimators }, 1),
     ];
-    if crate::render::HAS_SIMD16 {
+    if crate::kernel::HAS_SIMD16 {
         configs.push(("simd8", with(KernelChoice::Simd8, AccelChoice::Auto), 0));
     }
-    for name in stress_scenes {
+    Ok(configs)
+}
+
+/// Part 3, scenes: the real renderer under the stress probe, every kernel
+/// and accelerator; returns the scalar kernel's image of each stress preset.
+fn scenes(
+    cfg: &StressConfig,
+    sz: &Sizes,
+    out: &mut Parts,
+    progress: &mut dyn FnMut(&str),
+) -> Result<Vec<(String, Image)>> {
+    let sec = "scenes (every ray vs f64 oracle)";
+    let configs = scene_configs(cfg)?;
+    let mut images = Vec::new();
+    for name in STRESS_SCENES {
         let scene = preset(name)?;
         let spp = if name == "stress-horizon" { sz.horizon_spp } else { sz.spp };
-        let st = settings(&scene, sz.width, sz.height, spp, cfg.seed);
-        let prep = prepare(&scene, st, AccelChoice::Brute, Estimator::default())?;
-        if prep.plan.mode != Mode::Path {
+        let st = settings(sz.width, sz.height, spp, cfg.seed);
+        let brute = Job::new(&scene, &st, &RenderOptions { accel: AccelChoice::Brute, ..Default::default() })?;
+        if brute.mode() != Mode::Path {
             return Err(Error::Input(format!("{name}: stress scenes must be path traced")));
         }
+        let prep = brute.prepared();
         let oracle = SceneOracle::new(&prep.spheres);
         let mut first: [Option<(&str, u64, u64)>; 2] = [None, None];
         let mut scalar_image = None;
         for &(label, opts, group) in &configs {
-            let tr = trace(&scene, st, opts, &oracle, None)?;
+            let tr = trace(&Job::new(&scene, &st, &opts)?, &oracle, None)?;
             let mut tally = tr.tally.clone();
             tally.nan += tr.rejected;
-            rows.push(Row { section: sec, case: name.into(), kernel: label, tally, gate: Gate::Full });
+            out.rows.push(StressRow { section: sec, case: name.into(), kernel: label, tally, gate: Gate::Full });
             match first[group as usize] {
                 None => first[group as usize] = Some((label, tr.hash, tr.rays)),
-                Some((l0, h0, r0)) => checks.push(Check::at_most(
+                Some((l0, h0, r0)) => out.checks.push(Check::at_most(
                     format!("{name}: rays of [{label}] != [{l0}]"),
                     ((tr.hash != h0) as u8 + (tr.rays != r0) as u8) as f64,
                     0.0,
@@ -341,8 +387,8 @@ pub fn run(cfg: &Config, progress: &mut dyn FnMut(&str)) -> Result<Report> {
         }
         let img = scalar_image.ok_or_else(|| Error::Input("stress: no scalar render".into()))?;
         if name == "stress-horizon" {
-            let (z, n, mean, want) = horizon_check(&scene, &prep, &img)?;
-            checks.push(Check::at_most(
+            let (z, n, mean, want) = horizon_check(&scene, prep, &img)?;
+            out.checks.push(Check::at_most(
                 "stress-horizon: ground vs analytic colour, max |z|",
                 z,
                 Z_LIMIT,
@@ -359,9 +405,9 @@ pub fn run(cfg: &Config, progress: &mut dyn FnMut(&str)) -> Result<Report> {
                 let (o, dh) = (v64(o), v64(d).normalize());
                 v32(o + dh * ((at - o).dot(dh) - 30.0))
             };
-            let near = trace(&scene, st, configs[0].1, &oracle, Some(&shift))?;
+            let near = trace(&Job::new(&scene, &st, &configs[0].1)?, &oracle, Some(&shift))?;
             let (zg, zb) = compare(&img, &near.image, 8);
-            checks.push(Check::at_most(
+            out.checks.push(Check::at_most(
                 "stress-far-camera vs same rays started near, max z",
                 zg.max(zb),
                 Z_LIMIT,
@@ -371,13 +417,17 @@ pub fn run(cfg: &Config, progress: &mut dyn FnMut(&str)) -> Result<Report> {
         images.push((name.to_string(), img));
         progress(&format!("scene: {name}"));
     }
-    // Scaled scenes against the unscaled ones.
+    Ok(images)
+}
+
+/// Scaled scenes against the unscaled ones.
+fn scaled_scenes(cfg: &StressConfig, sz: &Sizes, images: &[(String, Image)], out: &mut Parts) -> Result<()> {
     for (name, reference) in
         [("stress-final-small", "final"), ("stress-final-large", "final"), ("stress-tiny", "ch09-glass")]
     {
         let scene = preset(reference)?;
-        let st = settings(&scene, sz.width, sz.height, sz.spp, cfg.seed);
-        let r = render_with(&scene, st, KernelChoice::Simd, cfg.threads)?;
+        let st = settings(sz.width, sz.height, sz.spp, cfg.seed);
+        let r = render_with(&scene, &st, KernelChoice::Simd, cfg.threads)?;
         let img = images
             .iter()
             .find(|(n, _)| n == name)
@@ -385,7 +435,7 @@ pub fn run(cfg: &Config, progress: &mut dyn FnMut(&str)) -> Result<Report> {
             .ok_or_else(|| Error::Input(format!("stress: no image of {name}")))?;
         let (zg, zb) = compare(img, &r.image, 8);
         let (ma, mb) = (mean_colour(img), mean_colour(&r.image));
-        checks.push(Check::at_most(
+        out.checks.push(Check::at_most(
             format!("{name} vs {reference}, max z"),
             zg.max(zb),
             Z_LIMIT,
@@ -395,33 +445,26 @@ pub fn run(cfg: &Config, progress: &mut dyn FnMut(&str)) -> Result<Report> {
             ),
         ));
     }
-    // Every preset, both kernels: no sample rejected.
+    Ok(())
+}
+
+/// Every preset, both kernels: no sample rejected.
+fn every_preset(cfg: &StressConfig, out: &mut Parts) -> Result<()> {
     let mut rejected = 0u64;
     let mut presets = 0;
     for p in scene::presets() {
         let scene = (p.build)();
-        let st = settings(&scene, 32, 18, 2, cfg.seed);
+        let st = settings(32, 18, 2, cfg.seed);
         for kernel in [KernelChoice::Scalar, KernelChoice::Simd] {
-            rejected += render_with(&scene, st, kernel, cfg.threads)?.stats.rejected_samples;
+            rejected += render_with(&scene, &st, kernel, cfg.threads)?.stats.rejected_samples;
         }
         presets += 1;
     }
-    checks.push(Check::at_most(
+    out.checks.push(Check::at_most(
         format!("every preset ({presets}), both kernels: NaN/Inf samples rejected"),
         rejected as f64,
         0.0,
         "32x18, 2 spp",
     ));
-    progress("presets");
-
-    Ok(Report {
-        quick: cfg.quick,
-        seed: cfg.seed,
-        isa: crate::isa(),
-        rows,
-        checks,
-        decades,
-        offset_scan,
-        seconds: start.elapsed().as_secs_f64(),
-    })
+    Ok(())
 }

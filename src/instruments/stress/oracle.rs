@@ -54,7 +54,7 @@ impl RayF64 {
 
 /// How a kernel's answer compares with the oracle's.
 #[derive(Clone, Copy, Debug, PartialEq, Eq)]
-pub enum Verdict {
+pub enum HitVerdict {
     Right,
     /// Inside the rounding band of a bound: any answer is acceptable.
     InBand,
@@ -154,16 +154,16 @@ impl Truth {
     }
 
     /// Judges a kernel's answer (hit at `t`, or miss) against this sphere alone.
-    pub fn judge(&self, hit: bool, t: f64) -> Verdict {
+    pub fn judge(&self, hit: bool, t: f64) -> HitVerdict {
         if self.grazing() {
-            return Verdict::InBand;
+            return HitVerdict::InBand;
         }
         if !hit {
-            return if self.required.is_some() { Verdict::Wrong } else { Verdict::Right };
+            return if self.required.is_some() { HitVerdict::Wrong } else { HitVerdict::Right };
         }
         match (self.roots, self.nearest(t)) {
-            (Some(roots), Some(i)) if Some(i) == self.optional || Some(roots[i]) == self.required => Verdict::Right,
-            _ => Verdict::Wrong,
+            (Some(roots), Some(i)) if Some(i) == self.optional || Some(roots[i]) == self.required => HitVerdict::Right,
+            _ => HitVerdict::Wrong,
         }
     }
 

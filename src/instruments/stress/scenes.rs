@@ -9,15 +9,16 @@ use super::oracle::*;
 use super::report::Tally;
 use super::sweeps::{add, classify_spawn};
 use super::{dir32, finite3, v32, v64, Fnv};
+use crate::choice::KernelChoice;
 use crate::error::{Error, Result};
 use crate::film::Image;
 use crate::geometry::{Spheres, MISS};
+use crate::job::{Job, Overrides, RenderOptions, DEFAULT_TILE};
 use crate::plan::Prepared;
 use crate::probe::{PathId, Probe};
 use crate::real::Real;
-use crate::render::{render, render_probed};
+use crate::render::{render, render_probed, Rendered};
 use crate::scene::{self, Material, Scene};
-use crate::settings::{KernelChoice, RenderOptions, Settings};
 use crate::vec3::V3;
 use glam::DVec3;
 use std::collections::HashMap;
@@ -73,7 +74,7 @@ impl SceneOracle {
         }
         let ray = RayF64::new(o, d);
         let th64 = th as f64;
-        let mut verdict_k = Verdict::Wrong;
+        let mut verdict_k = HitVerdict::Wrong;
         let mut tol_k = 0.0;
         let mut truth_k = None;
         let (mut best, mut best_tol) = (f64::INFINITY, 0.0);
@@ -95,27 +96,27 @@ impl SceneOracle {
         }
         let verdict = if hit == MISS {
             if best.is_finite() {
-                Verdict::Wrong
+                HitVerdict::Wrong
             } else if any_in_band {
-                Verdict::InBand
+                HitVerdict::InBand
             } else {
-                Verdict::Right
+                HitVerdict::Right
             }
-        } else if verdict_k == Verdict::Wrong || best < th64 - (tol_k + best_tol) {
-            Verdict::Wrong
+        } else if verdict_k == HitVerdict::Wrong || best < th64 - (tol_k + best_tol) {
+            HitVerdict::Wrong
         } else {
             verdict_k
         };
         match verdict {
-            Verdict::Wrong => t.wrong += 1,
-            Verdict::InBand => t.in_band += 1,
-            Verdict::Right => {}
+            HitVerdict::Wrong => t.wrong += 1,
+            HitVerdict::InBand => t.in_band += 1,
+            HitVerdict::Right => {}
         }
         if let Some(tr) = truth_k {
             let c = self.c[hit as usize];
             let dist = ((ray.at(th64) - c).length() - tr.r).abs();
-            t.err(dist, tr.r, Some(tr.dist_bound(th64)), verdict == Verdict::InBand);
-            if verdict_k == Verdict::Right {
+            t.err(dist, tr.r, Some(tr.dist_bound(th64)), verdict == HitVerdict::InBand);
+            if verdict_k == HitVerdict::Right {
                 if let Some(fo) = tr.nearest(th64).and_then(|i| tr.front_at(&ray, c, i)) {
                     if fo != front {
                         t.faces += 1;
@@ -222,20 +223,14 @@ pub(super) struct Traced {
     pub rejected: u64,
 }
 
-/// Renders `scene` with the real renderer and the stress probe.
-pub(super) fn trace(
-    scene: &Scene,
-    s: Settings,
-    opts: RenderOptions,
-    oracle: &SceneOracle,
-    shift: Option<&Shift>,
-) -> Result<Traced> {
-    let (r, probes) = render_probed(scene, s, opts, None, &|| StressProbe::new(oracle, shift))?;
+/// Renders `job` with the real renderer and the stress probe.
+pub(super) fn trace(job: &Job, oracle: &SceneOracle, shift: Option<&Shift>) -> Result<Traced> {
+    let (r, probes) = render_probed(job, None, &|| StressProbe::new(oracle, shift))?;
     let mut tally = Tally::default();
     let mut paths: Vec<((u32, u32), u64)> = Vec::new();
     for p in probes {
         add(&mut tally, &p.tally);
-        paths.extend(p.paths.into_iter().map(|(k, v)| (k, v.hash.0)));
+        paths.extend(p.paths.into_iter().map(|(k, v)| (k, v.hash.value())));
     }
     paths.sort_unstable();
     let mut h = Fnv::new();
@@ -243,7 +238,7 @@ pub(super) fn trace(
         h.u32((ph >> 32) as u32);
         h.u32(ph as u32);
     }
-    Ok(Traced { image: r.image, tally, hash: h.0, rays: r.stats.rays, rejected: r.stats.rejected_samples })
+    Ok(Traced { image: r.image, tally, hash: h.value(), rays: r.stats.rays, rejected: r.stats.rejected_samples })
 }
 
 /// Differences below this (linear colour, about 1/40 of an 8-bit step at mid
@@ -307,22 +302,19 @@ pub(super) fn preset(name: &str) -> Result<Scene> {
     scene::preset(name).ok_or_else(|| Error::Input(format!("stress: preset '{name}' is missing")))
 }
 
-pub(super) fn settings(scene: &Scene, w: u32, h: u32, spp: u32, seed: u64) -> Settings {
-    let mut s = crate::default_settings(scene);
-    s.width = w;
-    s.height = h;
-    s.spp = spp;
-    s.seed = seed;
-    s
+/// A stress render's size, samples and seed (the scene's depth and sampler).
+pub(super) fn settings(w: u32, h: u32, spp: u32, seed: u64) -> Overrides {
+    Overrides { width: Some(w), height: Some(h), spp: Some(spp), seed: Some(seed), ..Overrides::default() }
 }
 
 pub(super) fn render_with(
     scene: &Scene,
-    s: Settings,
+    o: &Overrides,
     kernel: KernelChoice,
     threads: Option<usize>,
-) -> Result<crate::Rendered> {
-    render(scene, s, RenderOptions { kernel, threads, tile: 16, ..RenderOptions::default() }, None)
+) -> Result<Rendered> {
+    let opts = RenderOptions { kernel, threads, tile: DEFAULT_TILE, ..RenderOptions::default() };
+    render(&Job::new(scene, o, &opts)?, None)
 }
 
 /// The horizon scene's ground against its analytic colour: a lambertian

@@ -21,18 +21,21 @@ mod plot;
 mod report;
 mod variant;
 
-pub use curve::{compare, Comparison, Cost, Curve};
-pub use metrics::{error_metrics, Metrics, Row, RELMSE_EPSILON, SIGNED_EPSILON};
+pub use curve::{compare, Cost, Curve, CurveComparison};
+pub use metrics::{error_metrics, ConvergeRow, Metrics, RELMSE_EPSILON, SIGNED_EPSILON};
 pub use variant::{Variant, DEFAULT_ADAPTIVE_THRESHOLD};
 
+use crate::choice::KernelChoice;
 use crate::error::{Error, Result};
-use crate::estimator::{Adaptive, ROULETTE_AFTER_RAYS};
+use crate::estimator::Adaptive;
 use crate::film::Image;
+use crate::job::{Job, Overrides, RenderOptions};
 use crate::render::render;
-use crate::sampling::mix64;
-use crate::scene::Scene;
-use crate::settings::{KernelChoice, RenderOptions, Settings};
+use crate::sampling::{mix64, Sampler};
 use std::path::PathBuf;
+
+/// The reference's samples per pixel when none is given: this many times the largest measured count.
+pub const REFERENCE_SPP_FACTOR: u32 = 8;
 
 /// Where the reference image comes from.
 #[derive(Clone, Debug, PartialEq)]
@@ -43,17 +46,15 @@ pub enum Reference {
     Spp(u32),
 }
 
-/// What `rtow converge` measures.
+/// What `rtow converge` measures, on a job's scene, image size, depth, seed,
+/// threads and tile size (its sample count, sampler and estimator options are
+/// the variants' and the sample list's).
 #[derive(Clone, Debug)]
-pub struct Config {
-    /// Image size, depth and seed of the measured renders (`spp` is ignored).
-    pub settings: Settings,
+pub struct ConvergeConfig {
     pub kernels: Vec<KernelChoice>,
     pub variants: Vec<Variant>,
     pub spp_list: Vec<u32>,
     pub reference: Reference,
-    pub threads: Option<usize>,
-    pub tile: u32,
     /// Passes over every measurement; the fastest time counts (the image is the same every time).
     pub repeat: u32,
     /// First adaptive decision point.
@@ -63,57 +64,115 @@ pub struct Config {
     pub at_spp: Option<u32>,
 }
 
-impl Config {
+/// One measurement of a run: a kernel, a variant, a sample count, and the job that renders it.
+struct Measurement {
+    kernel: KernelChoice,
+    variant: Variant,
+    spp: u32,
+    job: Job,
+}
+
+impl Reference {
+    /// The reference a run of `spp_list` renders when none is given:
+    /// [`REFERENCE_SPP_FACTOR`] times its largest sample count.
+    pub fn default_for(spp_list: &[u32]) -> Result<Reference> {
+        let max = spp_list.iter().copied().max().unwrap_or(1);
+        max.checked_mul(REFERENCE_SPP_FACTOR).map(Reference::Spp).ok_or_else(|| {
+            Error::invalid(
+                "spp_list",
+                format!("{max} is too large for the default reference ({REFERENCE_SPP_FACTOR}x)"),
+            )
+        })
+    }
+}
+
+impl ConvergeConfig {
+    /// The configuration's own values (lists, repeat, reference); the renders'
+    /// settings are checked when the run resolves their jobs.
     pub fn validate(&self) -> Result<()> {
         if self.kernels.is_empty() {
-            return Err(Error::invalid("--kernels", "name at least one kernel (scalar, simd)"));
+            return Err(Error::invalid("kernels", "name at least one kernel (scalar, simd)"));
         }
         if self.variants.is_empty() {
-            return Err(Error::invalid("--variants", "name at least one variant"));
+            return Err(Error::invalid("variants", "name at least one variant"));
         }
         for (i, v) in self.variants.iter().enumerate() {
             if self.variants[..i].contains(v) {
-                return Err(Error::invalid("--variants", format!("'{}' is listed twice", v.name())));
+                return Err(Error::invalid("variants", format!("'{}' is listed twice", v.name())));
             }
         }
         for (i, k) in self.kernels.iter().enumerate() {
             if self.kernels[..i].contains(k) {
-                return Err(Error::invalid("--kernels", format!("'{}' is listed twice", k.name())));
+                return Err(Error::invalid("kernels", format!("'{}' is listed twice", k.name())));
             }
         }
         if self.spp_list.is_empty() {
-            return Err(Error::invalid("--spp-list", "give at least one sample count"));
+            return Err(Error::invalid("spp_list", "give at least one sample count"));
         }
         if self.spp_list.contains(&0) {
-            return Err(Error::invalid("--spp-list", "sample counts must be at least 1"));
+            return Err(Error::invalid("spp_list", "sample counts must be at least 1"));
         }
         if self.spp_list.windows(2).any(|w| w[0] >= w[1]) {
-            return Err(Error::invalid("--spp-list", "sample counts must increase strictly"));
+            return Err(Error::invalid("spp_list", "sample counts must increase strictly"));
         }
         if let Some(n) = self.at_spp {
             if !self.spp_list.contains(&n) {
-                return Err(Error::invalid("--at-spp", format!("{n} is not one of --spp-list")));
+                return Err(Error::invalid("at_spp", format!("{n} is not one of the sample counts measured")));
             }
         }
         if self.repeat == 0 {
-            return Err(Error::invalid("--repeat", "must be at least 1"));
+            return Err(Error::invalid("repeat", "must be at least 1"));
         }
         if let Reference::Spp(0) = self.reference {
-            return Err(Error::invalid("--reference-spp", "must be at least 1"));
+            return Err(Error::invalid("reference_spp", "must be at least 1"));
         }
         if self.variants.iter().any(|v| v.adaptive.is_some()) {
             Adaptive::new(DEFAULT_ADAPTIVE_THRESHOLD, self.adaptive_min).map_err(|e| match e {
-                Error::Invalid { message, .. } => Error::invalid("--adaptive-min", message),
+                Error::Invalid { message, .. } => Error::invalid("adaptive_min", message),
                 e => e,
             })?;
         }
-        for &spp in self.spp_list.iter().chain(match &self.reference {
-            Reference::Spp(n) => std::slice::from_ref(n),
-            _ => &[],
-        }) {
-            Settings { spp, ..self.settings }.validate()?;
-        }
         Ok(())
+    }
+
+    /// Every measurement's job (checked, not yet rendered), in run order:
+    /// kernels, then variants, then sample counts.
+    fn measurements(&self, job: &Job) -> Result<Vec<Measurement>> {
+        let mut out = Vec::new();
+        for &kernel in &self.kernels {
+            for &variant in &self.variants {
+                for &spp in &self.spp_list {
+                    let adaptive = match variant.adaptive {
+                        Some(t) => Some(Adaptive::new(t, self.adaptive_min).map_err(|e| match e {
+                            Error::Invalid { message, .. } => Error::invalid("variants", message),
+                            e => e,
+                        })?),
+                        None => None,
+                    };
+                    let opts = RenderOptions { kernel, roulette: variant.rr, adaptive, ..*job.options() };
+                    let o = Overrides {
+                        spp: Some(spp),
+                        sampler: Some(variant.sampler),
+                        ..Overrides::from(*job.settings())
+                    };
+                    out.push(Measurement { kernel, variant, spp, job: Job::new(job.scene(), &o, &opts)? });
+                }
+            }
+        }
+        Ok(out)
+    }
+
+    /// The reference render's job: `n` samples per pixel with [`reference_seed`],
+    /// the widest SIMD kernel, independent sampling, no roulette or adaptive sampling.
+    fn reference_job(&self, job: &Job, n: u32) -> Result<Job> {
+        let opts = RenderOptions { kernel: KernelChoice::Simd, roulette: None, adaptive: None, ..*job.options() };
+        let o = Overrides {
+            spp: Some(n),
+            seed: Some(reference_seed(job.settings().seed)),
+            sampler: Some(Sampler::Independent),
+            ..Overrides::from(*job.settings())
+        };
+        Job::new(job.scene(), &o, &opts)
     }
 }
 
@@ -130,7 +189,7 @@ pub fn reference_seed(seed: u64) -> u64 {
 /// Error of an image against the reference.
 /// Everything a converge run measured.
 #[derive(Clone, Debug)]
-pub struct Report {
+pub struct ConvergeReport {
     pub scene: String,
     pub width: u32,
     pub height: u32,
@@ -141,126 +200,72 @@ pub struct Report {
     /// Renders per measurement (the fastest counts) and worker threads.
     pub repeat: u32,
     pub threads: usize,
-    /// See [`Config::at_spp`].
+    /// See [`ConvergeConfig::at_spp`].
     pub at_spp: Option<u32>,
     /// The reference, when this run rendered it (written out for reuse with `--reference`).
     pub rendered_reference: Option<Image>,
-    pub rows: Vec<Row>,
+    /// The build, machine, date and command of the run (written to `<scene>.json`).
+    pub provenance: crate::provenance::Provenance,
+    pub rows: Vec<ConvergeRow>,
 }
 
 /// What a run tells its caller as it goes.
 pub enum Event<'a> {
-    ReferenceStart(u32),
-    ReferenceDone { seconds: f64 },
-    Measured(&'a Row),
+    /// The reference render starts: its samples per pixel and seed.
+    ReferenceStart {
+        spp: u32,
+        seed: u64,
+    },
+    ReferenceDone {
+        seconds: f64,
+    },
+    Measured(&'a ConvergeRow),
+}
+
+/// The reference: a float image of the job's size, or rendered by `job` (seconds reported).
+fn load_reference(path: &std::path::Path, width: u32, height: u32) -> Result<Image> {
+    let img = Image::load_float(path).map_err(|e| Error::invalid("reference", e.to_string()))?;
+    if (img.width, img.height) != (width, height) {
+        return Err(Error::invalid(
+            "reference",
+            format!(
+                "{} is {}x{} but the renders are {width}x{height} (set the width and height to match)",
+                path.display(),
+                img.width,
+                img.height,
+            ),
+        ));
+    }
+    if img.data.iter().flatten().any(|v| !v.is_finite()) {
+        return Err(Error::invalid("reference", format!("{} has NaN or infinite values", path.display())));
+    }
+    Ok(img)
 }
 
 /// Renders (or loads) the reference, then measures every kernel, variant and
-/// sample count, in that order.
-pub fn run(scene: &Scene, name: &str, cfg: &Config, mut on: impl FnMut(Event)) -> Result<Report> {
+/// sample count of `cfg` on `job`'s scene and settings, in that order.
+pub fn run(job: &Job, name: &str, cfg: &ConvergeConfig, mut on: impl FnMut(Event)) -> Result<ConvergeReport> {
     cfg.validate()?;
-    let s = cfg.settings;
-    // The reference is always rendered with independent sampling, whatever the default sampler.
-    let base = RenderOptions {
-        kernel: KernelChoice::Simd,
-        threads: cfg.threads,
-        tile: cfg.tile,
-        sampler: crate::sampling::Sampler::Independent,
-        ..RenderOptions::default()
+    let s = *job.settings();
+    // Every job is resolved (and so checked) before anything renders.
+    let plan = cfg.measurements(job)?;
+    let reference_job = match &cfg.reference {
+        Reference::Spp(n) => Some((*n, cfg.reference_job(job, *n)?)),
+        Reference::File(_) => None,
     };
-    let (reference, ref_text, rendered) = match &cfg.reference {
-        Reference::File(path) => {
-            let img = Image::load_float(path).map_err(|e| Error::invalid("--reference", e.to_string()))?;
-            if (img.width, img.height) != (s.width, s.height) {
-                return Err(Error::invalid(
-                    "--reference",
-                    format!(
-                        "{} is {}x{} but the renders are {}x{} (set --width/--height to match)",
-                        path.display(),
-                        img.width,
-                        img.height,
-                        s.width,
-                        s.height
-                    ),
-                ));
-            }
-            if img.data.iter().flatten().any(|v| !v.is_finite()) {
-                return Err(Error::invalid("--reference", format!("{} has NaN or infinite values", path.display())));
-            }
-            (img, format!("{}", path.display()), false)
-        }
-        Reference::Spp(n) => {
-            on(Event::ReferenceStart(*n));
-            let seed = reference_seed(s.seed);
-            let r = render(scene, Settings { spp: *n, seed, ..s }, base, None)?;
+    let (reference, ref_text, rendered) = match (&cfg.reference, reference_job) {
+        (Reference::File(path), _) => (load_reference(path, s.width, s.height)?, format!("{}", path.display()), false),
+        (_, Some((n, rj))) => {
+            on(Event::ReferenceStart { spp: n, seed: rj.settings().seed });
+            let r = render(&rj, None)?;
             on(Event::ReferenceDone { seconds: r.stats.seconds });
+            let seed = rj.settings().seed;
             (r.image, format!("{n} spp, seed {seed} (simd kernel, plain: independent sampling)"), true)
         }
+        (Reference::Spp(_), None) => unreachable!("a rendered reference has its job"),
     };
-    // Every measurement once per pass, `repeat` passes: a change of load on
-    // the machine then falls on every configuration alike instead of on
-    // whichever ran at the time. The fastest time counts; the image (and so
-    // the error) is the same in every pass.
-    let mut plan = Vec::new();
-    for &kernel in &cfg.kernels {
-        for &variant in &cfg.variants {
-            for &spp in &cfg.spp_list {
-                let adaptive = match variant.adaptive {
-                    Some(t) => Some(Adaptive::new(t, cfg.adaptive_min).map_err(|e| match e {
-                        Error::Invalid { message, .. } => Error::invalid("--variants", message),
-                        e => e,
-                    })?),
-                    None => None,
-                };
-                let opts = RenderOptions {
-                    kernel,
-                    rr: variant.rr.is_some(),
-                    rr_after: variant.rr.unwrap_or(ROULETTE_AFTER_RAYS),
-                    adaptive,
-                    sampler: variant.sampler,
-                    ..base
-                };
-                plan.push((kernel, variant, spp, opts));
-            }
-        }
-    }
-    let mut rows: Vec<Row> = Vec::with_capacity(plan.len());
-    let mut threads = 0;
-    for pass in 0..cfg.repeat {
-        for (i, &(kernel, variant, spp, opts)) in plan.iter().enumerate() {
-            let r = render(scene, Settings { spp, ..s }, opts, None)?;
-            threads = r.stats.threads;
-            if pass == 0 {
-                let m = error_metrics(&r.image, &reference);
-                rows.push(Row {
-                    kernel,
-                    variant,
-                    spp,
-                    seconds: r.stats.seconds,
-                    rays: r.stats.rays,
-                    samples: r.stats.samples,
-                    rmse: m.rmse,
-                    relmse: m.relmse,
-                    mean_rel_error: m.mean_rel_error,
-                    image_hash: r.stats.image_hash,
-                });
-            } else {
-                let row = &mut rows[i];
-                if row.image_hash != r.stats.image_hash {
-                    return Err(Error::Input(format!(
-                        "{} at {spp} spp rendered a different image on pass {}: renders must be deterministic",
-                        row.label(),
-                        pass + 1
-                    )));
-                }
-                row.seconds = row.seconds.min(r.stats.seconds);
-            }
-            if pass + 1 == cfg.repeat {
-                on(Event::Measured(&rows[i]));
-            }
-        }
-    }
-    Ok(Report {
+    let (rows, threads) = measure(&plan, cfg.repeat, &reference, &mut on)?;
+    Ok(ConvergeReport {
         scene: name.to_string(),
         width: s.width,
         height: s.height,
@@ -271,14 +276,66 @@ pub fn run(scene: &Scene, name: &str, cfg: &Config, mut on: impl FnMut(Event)) -
         threads,
         at_spp: cfg.at_spp,
         rendered_reference: rendered.then_some(reference),
+        provenance: crate::provenance::Provenance::collect(),
         rows,
     })
+}
+
+/// Every measurement once per pass, `repeat` passes: a change of load on the
+/// machine then falls on every configuration alike instead of on whichever
+/// ran at the time. The fastest time counts; the image (and so the error) is
+/// the same in every pass. Returns the rows and the worker threads used.
+fn measure(
+    plan: &[Measurement],
+    repeat: u32,
+    reference: &Image,
+    on: &mut impl FnMut(Event),
+) -> Result<(Vec<ConvergeRow>, usize)> {
+    let mut rows: Vec<ConvergeRow> = Vec::with_capacity(plan.len());
+    let mut threads = 0;
+    for pass in 0..repeat {
+        for (i, m) in plan.iter().enumerate() {
+            let r = render(&m.job, None)?;
+            threads = r.stats.threads;
+            if pass == 0 {
+                let e = error_metrics(&r.image, reference);
+                rows.push(ConvergeRow {
+                    kernel: m.kernel,
+                    variant: m.variant,
+                    spp: m.spp,
+                    seconds: r.stats.seconds,
+                    rays: r.stats.rays,
+                    samples: r.stats.samples,
+                    rmse: e.rmse,
+                    relmse: e.relmse,
+                    mean_rel_error: e.mean_rel_error,
+                    image_hash: r.stats.image_hash,
+                });
+            } else {
+                let row = &mut rows[i];
+                if row.image_hash != r.stats.image_hash {
+                    return Err(Error::Input(format!(
+                        "{} at {} spp rendered a different image on pass {}: renders must be deterministic",
+                        row.label(),
+                        m.spp,
+                        pass + 1
+                    )));
+                }
+                row.seconds = row.seconds.min(r.stats.seconds);
+            }
+            if pass + 1 == repeat {
+                on(Event::Measured(&rows[i]));
+            }
+        }
+    }
+    Ok((rows, threads))
 }
 
 /// Axis ticks of a log scale: 1, 2 and 5 times the powers of ten in `lo..=hi`.
 #[cfg(test)]
 mod tests {
     use super::*;
+    use crate::estimator::Roulette;
 
     fn curve(label: &str, c: f64, times: &[f64]) -> Curve {
         // An unbiased estimator: MSE = c / t.
@@ -291,19 +348,19 @@ mod tests {
         assert_eq!(Variant::parse("rr").unwrap().name(), "rr");
         assert_eq!(Variant::parse("adaptive").unwrap().adaptive, Some(DEFAULT_ADAPTIVE_THRESHOLD));
         let v = Variant::parse("rr+adaptive:0.05").unwrap();
-        assert_eq!((v.rr, v.adaptive), (Some(ROULETTE_AFTER_RAYS), Some(0.05)));
+        assert_eq!((v.rr, v.adaptive), (Some(Roulette::default()), Some(0.05)));
         assert_eq!(Variant::parse(&v.name()).unwrap(), v);
         let v = Variant::parse("sobol+rr").unwrap();
         assert_eq!(
             (v.sampler, v.rr, v.name().as_str()),
-            (crate::sampling::Sampler::SOBOL, Some(ROULETTE_AFTER_RAYS), "sobol+rr")
+            (crate::sampling::Sampler::SOBOL, Some(Roulette::default()), "sobol+rr")
         );
         assert_eq!(Variant::parse(&v.name()).unwrap(), v);
         let v = Variant::parse("rr+sobol-lens+adaptive:0.05").unwrap();
         assert_eq!(v.name(), "sobol-lens+rr+adaptive:0.05");
         assert_eq!(Variant::parse(&v.name()).unwrap(), v);
         let v = Variant::parse("adaptive:0.1+rr:3").unwrap();
-        assert_eq!((v.rr, v.adaptive), (Some(3), Some(0.1)));
+        assert_eq!((v.rr, v.adaptive), (Some(Roulette { after_rays: 3 }), Some(0.1)));
         assert_eq!(v.name(), "rr:3+adaptive:0.1");
         assert_eq!(Variant::parse(&v.name()).unwrap(), v);
         for bad in [
@@ -326,7 +383,7 @@ mod tests {
             "sobolx",
         ] {
             let e = Variant::parse(bad).unwrap_err().to_string();
-            assert!(e.starts_with("--variants:"), "{bad}: {e}");
+            assert!(e.starts_with("variants:"), "{bad}: {e}");
         }
     }
 
@@ -353,7 +410,7 @@ mod tests {
     #[test]
     fn report_compares_in_seconds_and_in_rays() {
         // `simd/rr` traces half the rays for the same errors but takes as long.
-        let row = |variant: Variant, spp: u32, rays: u64, rmse: f64| Row {
+        let row = |variant: Variant, spp: u32, rays: u64, rmse: f64| ConvergeRow {
             kernel: KernelChoice::Simd,
             variant,
             spp,
@@ -372,7 +429,7 @@ mod tests {
             row(rr, 4, 200, 0.5),
             row(rr, 16, 800, 0.25),
         ];
-        let report = Report {
+        let report = ConvergeReport {
             scene: "s".into(),
             width: 1,
             height: 1,
@@ -382,6 +439,7 @@ mod tests {
             repeat: 1,
             threads: 1,
             at_spp: Some(16),
+            provenance: crate::provenance::Provenance::collect(),
             rendered_reference: None,
             rows,
         };
@@ -439,45 +497,42 @@ mod tests {
     }
 
     #[test]
-    fn bad_configs_name_their_flag() {
-        let good = Config {
-            settings: Settings { width: 8, height: 4, spp: 1, max_depth: 5, seed: 0 },
+    fn bad_configs_name_their_setting() {
+        let good = ConvergeConfig {
             kernels: vec![KernelChoice::Simd],
             variants: vec![Variant::PLAIN],
             spp_list: vec![1, 2],
             reference: Reference::Spp(4),
-            threads: Some(1),
-            tile: 16,
             repeat: 1,
             adaptive_min: 16,
             at_spp: None,
         };
         good.validate().unwrap();
-        type Break = Box<dyn Fn(&mut Config)>;
+        type Break = Box<dyn Fn(&mut ConvergeConfig)>;
         let cases: Vec<(&str, Break)> = vec![
-            ("--kernels", Box::new(|c| c.kernels.clear())),
-            ("--kernels", Box::new(|c| c.kernels = vec![KernelChoice::Simd, KernelChoice::Simd])),
-            ("--variants", Box::new(|c| c.variants.clear())),
-            ("--variants", Box::new(|c| c.variants = vec![Variant::PLAIN, Variant::PLAIN])),
-            ("--spp-list", Box::new(|c| c.spp_list.clear())),
-            ("--spp-list", Box::new(|c| c.spp_list = vec![0, 1])),
-            ("--spp-list", Box::new(|c| c.spp_list = vec![4, 2])),
-            ("--reference-spp", Box::new(|c| c.reference = Reference::Spp(0))),
-            ("--repeat", Box::new(|c| c.repeat = 0)),
-            ("--at-spp", Box::new(|c| c.at_spp = Some(3))),
+            ("kernels", Box::new(|c| c.kernels.clear())),
+            ("kernels", Box::new(|c| c.kernels = vec![KernelChoice::Simd, KernelChoice::Simd])),
+            ("variants", Box::new(|c| c.variants.clear())),
+            ("variants", Box::new(|c| c.variants = vec![Variant::PLAIN, Variant::PLAIN])),
+            ("spp_list", Box::new(|c| c.spp_list.clear())),
+            ("spp_list", Box::new(|c| c.spp_list = vec![0, 1])),
+            ("spp_list", Box::new(|c| c.spp_list = vec![4, 2])),
+            ("reference_spp", Box::new(|c| c.reference = Reference::Spp(0))),
+            ("repeat", Box::new(|c| c.repeat = 0)),
+            ("at_spp", Box::new(|c| c.at_spp = Some(3))),
             (
-                "--adaptive-min",
+                "adaptive_min",
                 Box::new(|c| {
                     c.variants = vec![Variant::parse("adaptive").unwrap()];
                     c.adaptive_min = 1;
                 }),
             ),
         ];
-        for (flag, f) in cases {
+        for (field, f) in cases {
             let mut c = good.clone();
             f(&mut c);
             let e = c.validate().unwrap_err().to_string();
-            assert!(e.starts_with(&format!("{flag}:")), "{flag}: {e}");
+            assert!(e.starts_with(&format!("{field}:")), "{field}: {e}");
         }
     }
 }

@@ -1,6 +1,6 @@
 //! The log-log SVG plot of `rtow converge` (the `plot` feature: plotters).
 
-use super::Report;
+use super::ConvergeReport;
 use crate::error::{Error, Result};
 
 pub(super) fn ticks(lo: f64, hi: f64) -> Vec<f64> {
@@ -31,7 +31,7 @@ pub(super) fn tick_label(v: f64) -> String {
 }
 
 /// A configuration's measurements as (seconds, RMSE) points, in sample-count order.
-impl Report {
+impl ConvergeReport {
     /// The log-log plot of RMSE against seconds, as SVG text.
     pub fn svg(&self) -> Result<String> {
         use plotters::prelude::*;

@@ -10,7 +10,7 @@
 
 use super::oracle::*;
 use super::report::{Decade, Tally};
-use super::{dir32, finite3, v32, v64, Config, Fnv, Gen, Sizes};
+use super::{dir32, finite3, v32, v64, Fnv, Gen, Sizes, StressConfig};
 use crate::geometry::{closest_hit, spawn, sphere_disc, surface, Spheres, Surface, MISS};
 use crate::material::{dielectric, lambertian, metal};
 use crate::real::Real;
@@ -168,14 +168,14 @@ fn record_hit(t: &mut Tally, tr: &Truth, ray: &RayF64, c: DVec3, hit: bool, tk: 
     }
     let v = tr.judge(hit, tk as f64);
     match v {
-        Verdict::Wrong => t.wrong += 1,
-        Verdict::InBand => t.in_band += 1,
-        Verdict::Right => {}
+        HitVerdict::Wrong => t.wrong += 1,
+        HitVerdict::InBand => t.in_band += 1,
+        HitVerdict::Right => {}
     }
     if hit {
         let dist = ((ray.at(tk as f64) - c).length() - tr.r).abs();
-        t.err(dist, tr.r, gated.then(|| tr.dist_bound(tk as f64)), v == Verdict::InBand);
-        if v == Verdict::Right {
+        t.err(dist, tr.r, gated.then(|| tr.dist_bound(tk as f64)), v == HitVerdict::InBand);
+        if v == HitVerdict::Right {
             if let Some(fo) = tr.nearest(tk as f64).and_then(|i| tr.front_at(ray, c, i)) {
                 if fo != front {
                     t.faces += 1;
@@ -516,7 +516,7 @@ fn kernel_sweep<R: SweepLanes>(scatter: Scatter, sizes: &Sizes, seed: u64, rule:
             // No hit point to start from; a miss the oracle calls wrong is counted.
             let ray = RayF64::new(hs.o, hs.d);
             let resolved = kernel_offset(r_abs, c64) <= r_abs;
-            if Truth::new(&ray, c64, hs.r as f64).judge(false, 0.0) == Verdict::Wrong {
+            if Truth::new(&ray, c64, hs.r as f64).judge(false, 0.0) == HitVerdict::Wrong {
                 ts[!resolved as usize].wrong += 1;
             }
             continue;
@@ -563,7 +563,7 @@ fn kernel_sweep<R: SweepLanes>(scatter: Scatter, sizes: &Sizes, seed: u64, rule:
         }
     }
     let [resolved, unresolved] = ts;
-    SelfOut { resolved, unresolved, hash: h.0 }
+    SelfOut { resolved, unresolved, hash: h.value() }
 }
 
 /// The book's way, as a reference: `p = o + t d`, `n = (p - c) / r`, the next
@@ -605,7 +605,7 @@ fn textbook_sweep(scatter: Scatter, sizes: &Sizes, seed: u64) -> SelfOut {
 /// points) with the kernels' offset multiplied by `scale`: `(rays, re-hits,
 /// entering rays short of the far wall)`. At `scale = 1`, the kernels' behaviour.
 pub fn offset_rehits(scale: f32, hit_points: usize, seed: u64) -> (u64, u64, u64) {
-    let sizes = Sizes { hit_points, ..Config { quick: true, seed, threads: None }.sizes() };
+    let sizes = Sizes { hit_points, ..StressConfig { quick: true, seed, threads: None }.sizes() };
     let mut t = Tally::default();
     for scatter in Scatter::ALL {
         let out = self_sweep(scatter, Impl::Scalar, &sizes, seed, OffsetRule::Scaled(scale));

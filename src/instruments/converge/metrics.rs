@@ -1,8 +1,8 @@
 //! Error of an image against a reference, and one measured row.
 
 use super::variant::Variant;
+use crate::choice::KernelChoice;
 use crate::film::Image;
-use crate::settings::KernelChoice;
 
 /// Added to a pixel's squared reference value in relMSE.
 pub const RELMSE_EPSILON: f64 = 0.01;
@@ -43,7 +43,7 @@ pub fn error_metrics(image: &Image, reference: &Image) -> Metrics {
 
 /// One measured render.
 #[derive(Clone, Debug, PartialEq)]
-pub struct Row {
+pub struct ConvergeRow {
     pub kernel: KernelChoice,
     pub variant: Variant,
     pub spp: u32,
@@ -56,7 +56,7 @@ pub struct Row {
     pub image_hash: String,
 }
 
-impl Row {
+impl ConvergeRow {
     pub fn mse(&self) -> f64 {
         self.rmse * self.rmse
     }

@@ -2,7 +2,7 @@
 //! sampling, Sobol points, or combinations.
 
 use crate::error::{Error, Result};
-use crate::estimator::ROULETTE_AFTER_RAYS;
+use crate::estimator::{Roulette, ROULETTE_AFTER_RAYS};
 use crate::sampling::Sampler;
 
 /// The threshold of the `adaptive` variant when none is given (`adaptive:T`).
@@ -11,8 +11,7 @@ pub const DEFAULT_ADAPTIVE_THRESHOLD: f32 = 0.02;
 /// An estimator variant: plain, Russian roulette, adaptive sampling, or both.
 #[derive(Clone, Copy, Debug, PartialEq)]
 pub struct Variant {
-    /// Russian roulette from this many rays on.
-    pub rr: Option<u32>,
+    pub rr: Option<Roulette>,
     /// Relative error threshold of adaptive sampling.
     pub adaptive: Option<f32>,
     /// The sampler (`plain` is independent sampling).
@@ -27,7 +26,7 @@ impl Variant {
     /// the layout on Sobol points) or a `+`-joined combination such as
     /// `sobol+rr+adaptive:0.05`.
     pub fn parse(text: &str) -> Result<Variant> {
-        let bad = |m: String| Error::invalid("--variants", m);
+        let bad = |m: String| Error::invalid("variants", m);
         let mut v = Variant::PLAIN;
         let text = text.trim();
         if text == "plain" {
@@ -52,7 +51,7 @@ impl Variant {
                             }
                         },
                     };
-                    v.rr = Some(n);
+                    v.rr = Some(Roulette { after_rays: n });
                 }
                 name if value.is_none() && v.sampler == Sampler::Independent && name.starts_with("sobol") => {
                     v.sampler = Sampler::parse(name).ok_or_else(|| {
@@ -83,8 +82,8 @@ impl Variant {
 
     pub fn name(&self) -> String {
         let rr = match self.rr {
-            Some(n) if n == ROULETTE_AFTER_RAYS => "rr".to_string(),
-            Some(n) => format!("rr:{n}"),
+            Some(r) if r.after_rays == ROULETTE_AFTER_RAYS => "rr".to_string(),
+            Some(r) => format!("rr:{}", r.after_rays),
             None => String::new(),
         };
         let mut parts: Vec<String> = Vec::new();

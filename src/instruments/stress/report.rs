@@ -62,7 +62,7 @@ pub enum Gate {
 
 /// One line of the table.
 #[derive(Clone, Debug)]
-pub struct Row {
+pub struct StressRow {
     pub section: &'static str,
     pub case: String,
     pub kernel: &'static str,
@@ -70,7 +70,7 @@ pub struct Row {
     pub gate: Gate,
 }
 
-impl Row {
+impl StressRow {
     pub fn ok(&self) -> bool {
         self.tally.clean(self.gate)
     }
@@ -111,20 +111,20 @@ pub struct OffsetScan {
 }
 
 #[derive(Clone, Debug)]
-pub struct Report {
+pub struct StressReport {
     pub quick: bool,
     pub seed: u64,
     pub isa: &'static str,
-    pub rows: Vec<Row>,
+    pub rows: Vec<StressRow>,
     pub checks: Vec<Check>,
     pub decades: Vec<Decade>,
     pub offset_scan: Vec<OffsetScan>,
     pub seconds: f64,
 }
 
-impl Report {
+impl StressReport {
     pub fn passed(&self) -> bool {
-        self.rows.iter().all(Row::ok) && self.checks.iter().all(|c| c.ok)
+        self.rows.iter().all(StressRow::ok) && self.checks.iter().all(|c| c.ok)
     }
 
     fn failures(&self) -> Vec<String> {

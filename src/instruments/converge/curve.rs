@@ -67,7 +67,7 @@ pub enum Cost {
 
 /// How `other` compares to `base`.
 #[derive(Clone, Debug, PartialEq)]
-pub struct Comparison {
+pub struct CurveComparison {
     pub base: String,
     pub other: String,
     /// (RMSE level, base seconds / other seconds) at the lowest error both reach.
@@ -77,8 +77,8 @@ pub struct Comparison {
     pub equal_time: Option<(f64, f64)>,
 }
 
-/// Compares two curves (see [`Comparison`]).
-pub fn compare(base: &Curve, other: &Curve) -> Comparison {
+/// Compares two curves (see [`CurveComparison`]).
+pub fn compare(base: &Curve, other: &Curve) -> CurveComparison {
     let equal_error = match (base.min_error(), other.min_error()) {
         (Some(a), Some(b)) => {
             let e = a.max(b);
@@ -99,5 +99,5 @@ pub fn compare(base: &Curve, other: &Curve) -> Comparison {
         }
         _ => None,
     };
-    Comparison { base: base.label.clone(), other: other.label.clone(), equal_error, equal_time }
+    CurveComparison { base: base.label.clone(), other: other.label.clone(), equal_error, equal_time }
 }

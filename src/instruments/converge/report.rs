@@ -1,13 +1,13 @@
 //! The outputs of `rtow converge`: CSV, markdown, the comparison lines, files.
 
-use super::curve::{compare, Comparison, Cost, Curve};
-use super::Report;
+use super::curve::{compare, Cost, Curve, CurveComparison};
+use super::ConvergeReport;
+use crate::choice::KernelChoice;
 use crate::error::{Error, Result};
-use crate::settings::KernelChoice;
 use std::fmt::Write as _;
 use std::path::{Path, PathBuf};
 
-impl Report {
+impl ConvergeReport {
     /// One curve per (kernel, variant), in the order measured.
     pub fn curves(&self) -> Vec<Curve> {
         self.curves_by(Cost::Seconds)
@@ -32,12 +32,12 @@ impl Report {
 
     /// Every configuration against the first one, and, for every other kernel,
     /// its variants against its own first variant.
-    pub fn comparisons(&self) -> Vec<Comparison> {
+    pub fn comparisons(&self) -> Vec<CurveComparison> {
         self.comparisons_by(Cost::Seconds)
     }
 
-    /// [`Report::comparisons`] with `cost` in place of seconds.
-    pub fn comparisons_by(&self, cost: Cost) -> Vec<Comparison> {
+    /// [`ConvergeReport::comparisons`] with `cost` in place of seconds.
+    pub fn comparisons_by(&self, cost: Cost) -> Vec<CurveComparison> {
         let curves = self.curves_by(cost);
         let mut out = Vec::new();
         let Some(first) = curves.first() else {
@@ -197,6 +197,26 @@ impl Report {
     /// Writes `<scene>.csv`, `<scene>.md` and (with the `plot` feature) `<scene>.svg` into `dir` (created
     /// if missing), and `<scene>-reference.exr` if the run rendered its
     /// reference; returns their paths.
+    /// The run's description beside its tables: what was measured, the
+    /// files, and the provenance (docs/figures.md).
+    pub fn json(&self, files: &[String]) -> String {
+        let v = serde_json::json!({
+            "schema": "rtow-converge/1",
+            "scene": self.scene,
+            "width": self.width,
+            "height": self.height,
+            "max_depth": self.max_depth,
+            "seed": self.seed,
+            "reference": self.reference,
+            "repeat": self.repeat,
+            "threads": self.threads,
+            "at_spp": self.at_spp,
+            "files": files,
+            "provenance": self.provenance,
+        });
+        serde_json::to_string_pretty(&v).expect("serializes") + "\n"
+    }
+
     pub fn write(&self, dir: &Path) -> Result<Vec<PathBuf>> {
         std::fs::create_dir_all(dir)
             .map_err(|e| Error::Output { path: dir.to_path_buf(), message: format!("--out: {e}") })?;
@@ -210,7 +230,10 @@ impl Report {
         #[cfg(not(feature = "plot"))]
         let svg = None;
         let mut paths = Vec::new();
-        for (ext, text) in [("csv", self.csv()), ("md", self.markdown())].into_iter().chain(svg) {
+        let files: Vec<(&str, String)> =
+            [("csv", self.csv()), ("md", self.markdown())].into_iter().chain(svg).collect();
+        let names: Vec<String> = files.iter().map(|(ext, _)| format!("{stem}.{ext}")).collect();
+        for (ext, text) in files.into_iter().chain([("json", self.json(&names))]) {
             let p = dir.join(format!("{stem}.{ext}"));
             crate::output::write_atomic(&p, text.as_bytes())?;
             paths.push(p);

@@ -1,20 +1,25 @@
-//! From a validated scene and settings to what the kernels read: the [`Plan`]
-//! (what the scene needs), SoA spheres, per-kind material tables, the camera
-//! and, when the plan chose it, the BVH.
+//! From a validated scene to what the kernels read: the [`Plan`] (what the
+//! scene needs), SoA spheres, per-kind material tables, the camera and, when
+//! the plan chose it, the BVH. The scene's types are read here and nowhere
+//! on the kernel side.
 
-use crate::camera::{Camera, View};
-use crate::error::Result;
+use crate::camera::{PreparedCamera, View};
+use crate::choice::{AccelChoice, Mode};
 use crate::estimator::Estimator;
 use crate::geometry::{Bvh, Spheres, Walk};
 use crate::material::{Kind, MaterialTables};
-use crate::plan::{Accel, KindSet, Mode, Plan, Prepared, SkyColours, BVH_CROSSOVER};
-use crate::scene::{Material, Scene};
-use crate::settings::{AccelChoice, Settings};
+use crate::plan::{Accel, KindSet, Plan, Prepared, SkyColours};
+use crate::scene::{Camera, Material, Scene};
+use crate::settings::Settings;
 use glam::DVec3;
+
+/// With at least this many spheres `auto` builds a BVH. Measured with
+/// `rtow bench` on random scenes (docs/performance.md, "Brute force against the BVH").
+pub const BVH_CROSSOVER: usize = 16;
 
 /// The closest-hit search for `spheres` spheres: brute force below the
 /// crossover (and where no ray is traced), the BVH above it, or as forced.
-pub fn choose_accel(choice: AccelChoice, spheres: usize, mode: Mode) -> Accel {
+pub(super) fn choose_accel(choice: AccelChoice, spheres: usize, mode: Mode) -> Accel {
     if spheres == 0 || mode == Mode::Gradient {
         return Accel::Brute;
     }
@@ -27,10 +32,19 @@ pub fn choose_accel(choice: AccelChoice, spheres: usize, mode: Mode) -> Accel {
     }
 }
 
-/// The plan alone (cheap: no BVH is built), e.g. for `rtow render --explain`.
-pub fn plan(scene: &Scene, settings: &Settings, accel: AccelChoice) -> Plan {
+/// The material kind of a scene material (each kind gets a wavefront queue).
+fn kind(m: &Material) -> Kind {
+    match m {
+        Material::Lambertian { .. } => Kind::Lambertian,
+        Material::Metal { .. } => Kind::Metal,
+        Material::Dielectric { .. } => Kind::Dielectric,
+    }
+}
+
+/// The plan (cheap: no geometry is built).
+pub(super) fn plan(scene: &Scene, settings: &Settings, accel: AccelChoice) -> Plan {
     let kinds: KindSet = match scene.mode {
-        Mode::Path => scene.spheres.iter().map(|s| s.material.kind()).collect(),
+        Mode::Path => scene.spheres.iter().map(|s| kind(&s.material)).collect(),
         Mode::Gradient | Mode::Flat | Mode::Normals => KindSet::default(),
     };
     Plan {
@@ -43,7 +57,7 @@ pub fn plan(scene: &Scene, settings: &Settings, accel: AccelChoice) -> Plan {
 }
 
 /// The scene's camera in f64.
-pub fn view(c: &crate::scene::Camera) -> View {
+pub(super) fn view(c: &Camera) -> View {
     let v = |a: [f32; 3]| DVec3::from_array(a.map(f64::from));
     View {
         look_from: v(c.look_from),
@@ -55,26 +69,24 @@ pub fn view(c: &crate::scene::Camera) -> View {
     }
 }
 
-/// Validates `scene` and `settings`, decides the plan and lays the scene out.
-pub fn prepare(scene: &Scene, settings: Settings, accel: AccelChoice, estimator: Estimator) -> Result<Prepared> {
-    scene.validate()?;
-    settings.validate()?;
-    let plan = plan(scene, &settings, accel);
+/// Lays a validated scene out for the kernels, as `plan` says.
+pub(super) fn prepare(scene: &Scene, settings: Settings, plan: Plan, estimator: Estimator) -> Prepared {
     let mut materials = MaterialTables::default();
     let mut spheres = Spheres::default();
     for s in &scene.spheres {
-        let (kind, row) = match s.material {
-            Material::Lambertian { albedo } => (Kind::Lambertian, push(&mut materials.lambertian, albedo)),
-            Material::Metal { albedo, fuzz } => (Kind::Metal, push(&mut materials.metal, (albedo, fuzz))),
-            Material::Dielectric { ior } => (Kind::Dielectric, push(&mut materials.dielectric, ior)),
+        let row = match s.material {
+            Material::Lambertian { albedo } => push(&mut materials.lambertian, albedo),
+            Material::Metal { albedo, fuzz } => push(&mut materials.metal, (albedo, fuzz)),
+            Material::Dielectric { ior } => push(&mut materials.dielectric, ior),
         };
-        spheres.push(s.center, s.radius, kind, row);
+        spheres.push(s.center, s.radius, kind(&s.material), row);
     }
     spheres.pad();
     // The wavefront's per-sphere shading records (geometry::Shade).
     spheres.shade_with(&materials);
     let view = view(&scene.camera);
-    let camera = Camera { lens: plan.lens, ..Camera::new(&view, settings.width, settings.height, plan.jitter) };
+    let camera =
+        PreparedCamera { lens: plan.lens, ..PreparedCamera::new(&view, settings.width, settings.height, plan.jitter) };
     let bvh = (plan.accel != Accel::Brute).then(|| {
         // Ray origins lie within the camera's lens of the eye.
         let extent = scene.camera.look_from.iter().fold(0.0f32, |m, x| m.max(x.abs())) + view.lens_radius as f32;
@@ -82,7 +94,7 @@ pub fn prepare(scene: &Scene, settings: Settings, accel: AccelChoice, estimator:
         let walk = if plan.accel == Accel::BvhRays { Walk::Wide8 } else { Walk::OneByOne };
         Bvh::build_for(&spheres, extent, walk)
     });
-    Ok(Prepared {
+    Prepared {
         plan,
         settings,
         spheres,
@@ -91,7 +103,7 @@ pub fn prepare(scene: &Scene, settings: Settings, accel: AccelChoice, estimator:
         sky: SkyColours { horizon: scene.sky.horizon, zenith: scene.sky.zenith },
         bvh,
         estimator,
-    })
+    }
 }
 
 /// Appends to a material table; returns the row.
@@ -103,10 +115,11 @@ fn push<T>(table: &mut Vec<T>, v: T) -> u32 {
 #[cfg(test)]
 mod tests {
     use super::*;
+    use crate::job::{Job, Overrides, RenderOptions};
     use crate::scene::preset;
 
     fn settings(spp: u32) -> Settings {
-        Settings { width: 40, height: 20, spp, max_depth: 5, seed: 0 }
+        Settings { width: 40, height: 20, spp, max_depth: 5, ..Settings::default() }
     }
 
     #[test]
@@ -141,9 +154,10 @@ mod tests {
         assert_eq!(choose_accel(AccelChoice::Bvh, 0, Mode::Path), Accel::Brute);
         assert_eq!(choose_accel(AccelChoice::Bvh, 100, Mode::Gradient), Accel::Brute);
         let fin = preset("final").unwrap();
-        let prep = prepare(&fin, settings(2), AccelChoice::Auto, Estimator::default()).unwrap();
-        assert!(prep.bvh.is_some());
-        let prep = prepare(&fin, settings(2), AccelChoice::Brute, Estimator::default()).unwrap();
-        assert!(prep.bvh.is_none());
+        let o = Overrides::from(settings(2));
+        let auto = Job::new(&fin, &o, &RenderOptions::default()).unwrap();
+        assert!(auto.prepared().bvh.is_some());
+        let brute = RenderOptions { accel: AccelChoice::Brute, ..Default::default() };
+        assert!(Job::new(&fin, &o, &brute).unwrap().prepared().bvh.is_none());
     }
 }

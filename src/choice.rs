@@ -1,0 +1,127 @@
+//! The named choices of a render, spoken alike by scene files, the command
+//! line, the library's options and the kernels' plan: what the renderer
+//! computes ([`Mode`]), which kernel runs ([`KernelChoice`]) and how closest
+//! hits are found ([`AccelChoice`]). A foundation module: it imports nothing
+//! of the crate, so both sides of the bridge (`scene/` and the kernels) can
+//! name these without importing each other.
+
+use serde::{Deserialize, Serialize};
+use std::fmt;
+use std::str::FromStr;
+
+/// Names and parsing for a small choice enum: `ALL`, `NAMES`, `name()`,
+/// `Display`, `FromStr` (an unknown name lists the known ones) and `Serialize`.
+macro_rules! choice {
+    ($(#[$m:meta])* $name:ident { $($(#[$vm:meta])* $v:ident = $s:literal),+ $(,)? }) => {
+        $(#[$m])*
+        #[derive(Clone, Copy, Debug, PartialEq, Eq, Serialize)]
+        pub enum $name { $($(#[$vm])* #[serde(rename = $s)] $v),+ }
+        impl $name {
+            pub const ALL: &'static [$name] = &[$($name::$v),+];
+            pub const NAMES: &'static [&'static str] = &[$($s),+];
+            pub fn name(self) -> &'static str {
+                match self { $($name::$v => $s),+ }
+            }
+        }
+        impl fmt::Display for $name {
+            fn fmt(&self, f: &mut fmt::Formatter<'_>) -> fmt::Result {
+                f.write_str(self.name())
+            }
+        }
+        impl FromStr for $name {
+            type Err = String;
+            fn from_str(s: &str) -> std::result::Result<Self, String> {
+                $name::ALL.iter().copied().find(|k| k.name() == s).ok_or_else(|| {
+                    format!("'{s}' is not one of {}", $name::NAMES.join(", "))
+                })
+            }
+        }
+    };
+}
+
+/// What the renderer computes for each camera ray.
+#[derive(Serialize, Deserialize, Clone, Copy, Debug, PartialEq, Eq, Default)]
+#[serde(rename_all = "lowercase")]
+pub enum Mode {
+    /// Chapter 1: no rays; r = x / width, g = (rows from the bottom) / height, b = 0.2.
+    Gradient,
+    /// Chapters 3-4: the sky where a camera ray misses, the hit material's colour where it hits.
+    Flat,
+    /// Chapters 5-6: 0.5 * (n + 1) of the outward normal where a camera ray hits.
+    Normals,
+    /// Chapter 7 on: the path tracer.
+    #[default]
+    Path,
+}
+
+impl Mode {
+    /// The book writes the debug images without gamma and the path traced ones with gamma 2.
+    pub fn default_gamma(self) -> f32 {
+        match self {
+            Mode::Path => 2.0,
+            Mode::Gradient | Mode::Flat | Mode::Normals => 1.0,
+        }
+    }
+
+    /// The mode's name as scene files write it.
+    pub fn name(self) -> &'static str {
+        match self {
+            Mode::Gradient => "gradient",
+            Mode::Flat => "flat",
+            Mode::Normals => "normals",
+            Mode::Path => "path",
+        }
+    }
+}
+
+choice!(
+    /// Which kernel renders.
+    KernelChoice {
+        /// One path at a time: the reference.
+        Scalar = "scalar",
+        /// The wavefront kernel at the widest lane count this binary was built for.
+        Simd = "simd",
+        /// The wavefront kernel with 8 lanes (`f32x8`, the design's packets).
+        Simd8 = "simd8",
+        /// The wavefront kernel with 16 lanes (`f32x16`: one register on AVX-512 builds,
+        /// two 8-lane halves elsewhere).
+        Simd16 = "simd16",
+    }
+);
+
+choice!(
+    /// How closest hits are found.
+    AccelChoice {
+        /// Brute force below the measured crossover, BVH with packets above it.
+        Auto = "auto",
+        /// Every ray tests every sphere (a packet of rays per sphere in the SIMD kernel).
+        Brute = "brute",
+        /// The 8-wide BVH; the SIMD kernel walks it with packets of rays.
+        Bvh = "bvh",
+        /// The same BVH; the SIMD kernel walks it one ray at a time with 8-wide
+        /// node and leaf tests (kept for comparison).
+        BvhRay = "bvh-ray",
+    }
+);
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    #[test]
+    fn choices_parse_their_names_and_list_them_on_error() {
+        for k in KernelChoice::ALL {
+            assert_eq!(k.name().parse::<KernelChoice>(), Ok(*k));
+        }
+        assert_eq!("bvh-ray".parse::<AccelChoice>(), Ok(AccelChoice::BvhRay));
+        let e = "gpu".parse::<KernelChoice>().unwrap_err();
+        assert!(e.contains("scalar, simd, simd8, simd16"), "{e}");
+    }
+
+    #[test]
+    fn mode_names_are_the_serialized_names() {
+        for m in [Mode::Gradient, Mode::Flat, Mode::Normals, Mode::Path] {
+            assert_eq!(serde_json::to_value(m).unwrap(), serde_json::Value::String(m.name().into()));
+        }
+    }
+}

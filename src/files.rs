@@ -1,0 +1,408 @@
+//! A render (or a merge of partial films) to its output files, as one
+//! transaction: every input read and checked, every output checked, then the
+//! work, then all outputs written together (see [`crate::output`]). What a
+//! command-line run decides beyond its flags lives here: whether the run
+//! renders a whole image or a partial film, whether it counts work for the
+//! statistics, and the order of the checks.
+
+use crate::error::{Error, Result};
+use crate::estimator::{Adaptive, Roulette};
+use crate::film::part::{self, is_part_path, Header, Part, Split, SplitKind};
+use crate::job::Job;
+use crate::output::{check_extension, OutputId, Outputs};
+use crate::plan::Plan;
+use crate::probe::WorkCounters;
+use crate::provenance::Provenance;
+use crate::render::{render, render_counted, Progress, Rendered, Stats};
+use crate::sampling::Sampler;
+use crate::scene::SceneSource;
+use crate::shard::{self, FilmRequest};
+use rayon::prelude::*;
+use serde::Serialize;
+use std::path::{Path, PathBuf};
+use std::time::Instant;
+
+/// The files a render or a merge writes.
+#[derive(Clone, Debug, Default)]
+pub struct RenderFiles {
+    /// The image (`.png`, 8-bit, gamma encoded) or a partial film (`.rtfilm`).
+    pub output: PathBuf,
+    /// The linear image: `.pfm` or `.exr`.
+    pub float: Option<PathBuf>,
+    /// The statistics, as JSON.
+    pub stats: Option<PathBuf>,
+    /// The PNG gamma (default: the scene's, 2 for path tracing, 1 for the debug chapters).
+    pub gamma: Option<f32>,
+    /// What errors call the three files (default: `output`, `float`, `stats`).
+    pub names: FileNames,
+}
+
+/// What errors call a run's files: the field names by default; a command
+/// line names its flags.
+#[derive(Clone, Copy, Debug)]
+pub struct FileNames {
+    pub output: &'static str,
+    pub float: &'static str,
+    pub stats: &'static str,
+}
+
+impl Default for FileNames {
+    fn default() -> Self {
+        FileNames { output: "output", float: "float", stats: "stats" }
+    }
+}
+
+impl RenderFiles {
+    fn check_types(&self) -> Result<()> {
+        check_extension(&self.output, &["png", part::EXTENSION], self.names.output)?;
+        if let Some(f) = &self.float {
+            check_extension(f, &["pfm", "exr"], self.names.float)?;
+        }
+        if let Some(g) = self.gamma {
+            if !(g.is_finite() && g > 0.0) {
+                return Err(Error::invalid("gamma", format!("must be a finite number > 0, got {g}")));
+            }
+        }
+        Ok(())
+    }
+
+    /// Checks every file as an output of `outputs`.
+    fn add_to(&self, outputs: &mut Outputs) -> Result<(OutputId, Option<OutputId>, Option<OutputId>)> {
+        let n = &self.names;
+        let out = outputs.add(&self.output, n.output)?;
+        let float = self.float.as_deref().map(|f| outputs.add(f, n.float)).transpose()?;
+        let stats = self.stats.as_deref().map(|f| outputs.add(f, n.stats)).transpose()?;
+        Ok((out, float, stats))
+    }
+
+    /// Whether the output is a partial film.
+    pub fn writes_film(&self) -> bool {
+        is_part_path(&self.output)
+    }
+}
+
+/// A render to files: the job, which piece of it (a shard, or all), a film
+/// to resume from, and the files to write.
+#[derive(Clone, Debug)]
+pub struct RenderRequest<'a> {
+    pub source: &'a SceneSource,
+    pub job: &'a Job,
+    /// [`Split::WHOLE`], or one shard (which writes a partial film).
+    pub split: Split,
+    /// A partial film of the first samples of this very render, to continue.
+    pub resume: Option<PathBuf>,
+    pub files: RenderFiles,
+}
+
+/// Renders `req` and writes its files; returns the statistics (the run's,
+/// written to `files.stats` too). Bad input is refused (exit status 2), then
+/// an output that cannot be written (1), before any rendering.
+pub fn render_to_files(req: &RenderRequest, progress: Option<&(dyn Fn(Progress) + Sync)>) -> Result<Stats> {
+    let files = &req.files;
+    files.check_types()?;
+    if req.split.kind != SplitKind::None && !files.writes_film() {
+        return Err(Error::invalid(
+            "shard",
+            format!(
+                "a shard writes a partial film: write it to {}-{}.rtfilm, then merge the parts",
+                req.source.name, req.split.shard
+            ),
+        ));
+    }
+    let resume = match &req.resume {
+        Some(p) => Some((p.clone(), Part::read(p)?)),
+        None => None,
+    };
+    let film = FilmRequest { split: req.split, resume };
+    let partial = files.writes_film() || film.resume.is_some();
+    if partial {
+        shard::check(req.job, &film)?;
+    }
+    // The outputs are one transaction: checked now, written only when all
+    // of them are ready. (The resume film was read whole above, so the
+    // output may replace it: a render continued in place.)
+    let mut outputs = Outputs::new();
+    if let Some(f) = &req.source.file {
+        outputs.input(f, "scene file");
+    }
+    let (out_id, float_id, stats_id) = files.add_to(&mut outputs)?;
+    let gamma = files.gamma.unwrap_or(req.job.default_gamma());
+    let r = if partial {
+        let (r, part) = shard::render_part(req.job, &film, progress)?;
+        r.stats.check_finite()?;
+        let bytes = if files.writes_film() {
+            part.to_bytes()
+        } else {
+            r.image.file_bytes(&files.output, gamma, files.names.output)?
+        };
+        outputs.stage(out_id, &bytes)?;
+        r
+    } else {
+        // Statistics come with the exact work counters (a counted render costs nothing measurable).
+        let r: Rendered =
+            if files.stats.is_some() { render_counted(req.job, progress)? } else { render(req.job, progress)? };
+        r.stats.check_finite()?;
+        outputs.stage(out_id, &r.image.file_bytes(&files.output, gamma, files.names.output)?)?;
+        r
+    };
+    if let (Some(id), Some(f)) = (float_id, &files.float) {
+        outputs.stage(id, &r.image.file_bytes(f, 1.0, files.names.float)?)?;
+    }
+    if let Some(id) = stats_id {
+        outputs.stage(id, json(&StatsFile::of_render(&r.stats, req.split)).as_bytes())?;
+    }
+    outputs.commit()?;
+    Ok(r.stats)
+}
+
+/// The schema of every statistics file rtow writes (`render --stats-json`
+/// and `merge --stats-json`), named by its `schema` field; docs/figures.md
+/// lists the fields. A merge fills what its parts carry: the render's
+/// settings, counters and image; its seconds are the merge's; what only a
+/// render knows (kernel, lanes, rate, work counters, plan) is `null`.
+#[derive(Clone, Debug, Serialize)]
+pub struct StatsFile {
+    /// [`STATS_SCHEMA`].
+    pub schema: &'static str,
+    /// `render` or `merge`.
+    pub command: &'static str,
+    pub rays: u64,
+    /// Samples traced (accepted and rejected).
+    pub samples: u64,
+    /// Render: the render alone (scene preparation apart). Merge: the whole
+    /// merge (reading, merging, writing; see `merge`).
+    pub seconds: f64,
+    pub prepare_seconds: Option<f64>,
+    pub mrays_per_s: Option<f64>,
+    pub kernel: Option<&'static str>,
+    pub lanes: Option<u32>,
+    pub threads: usize,
+    /// The instruction set of the build that wrote the file.
+    pub isa: &'static str,
+    pub width: u32,
+    pub height: u32,
+    pub spp: u32,
+    pub max_depth: u32,
+    pub seed: u64,
+    pub russian_roulette: Option<Roulette>,
+    pub adaptive: Option<Adaptive>,
+    pub sampler: Sampler,
+    pub rejected_samples: u64,
+    pub work: Option<WorkCounters>,
+    pub image_hash: String,
+    pub plan: Option<Plan>,
+    /// Render: the piece rendered (`none`: the whole image). Merge: the
+    /// parts' split (`shard` 1 of `of` parts).
+    pub split: Split,
+    /// A merge's parts and the split of its seconds; `null` for a render.
+    pub merge: Option<MergeTimes>,
+    pub provenance: Provenance,
+}
+
+/// The value of [`StatsFile::schema`].
+pub const STATS_SCHEMA: &str = "rtow-stats/1";
+
+/// What a merge spent its time on.
+#[derive(Clone, Copy, Debug, Serialize)]
+pub struct MergeTimes {
+    pub parts: usize,
+    pub read_seconds: f64,
+    pub merge_seconds: f64,
+    pub write_seconds: f64,
+}
+
+impl StatsFile {
+    /// A render's statistics, of the piece `split`.
+    pub fn of_render(st: &Stats, split: Split) -> StatsFile {
+        StatsFile {
+            schema: STATS_SCHEMA,
+            command: "render",
+            rays: st.rays,
+            samples: st.samples,
+            seconds: st.seconds,
+            prepare_seconds: Some(st.prepare_seconds),
+            mrays_per_s: Some(st.mrays_per_s),
+            kernel: Some(st.kernel),
+            lanes: Some(st.lanes),
+            threads: st.threads,
+            isa: st.isa,
+            width: st.width,
+            height: st.height,
+            spp: st.spp,
+            max_depth: st.max_depth,
+            seed: st.seed,
+            russian_roulette: st.russian_roulette,
+            adaptive: st.adaptive,
+            sampler: st.sampler,
+            rejected_samples: st.rejected_samples,
+            work: st.work,
+            image_hash: st.image_hash.clone(),
+            plan: Some(st.plan.clone()),
+            split,
+            merge: None,
+            provenance: Provenance::collect(),
+        }
+    }
+
+    /// A merge's statistics.
+    pub fn of_merge(st: &MergeStats) -> StatsFile {
+        StatsFile {
+            schema: STATS_SCHEMA,
+            command: "merge",
+            rays: st.rays,
+            samples: st.samples,
+            seconds: st.seconds,
+            prepare_seconds: None,
+            mrays_per_s: None,
+            kernel: None,
+            lanes: None,
+            threads: st.threads,
+            isa: crate::kernel::isa(),
+            width: st.width,
+            height: st.height,
+            spp: st.spp,
+            max_depth: st.max_depth,
+            seed: st.seed,
+            russian_roulette: st.russian_roulette,
+            adaptive: st.adaptive,
+            sampler: st.sampler,
+            rejected_samples: st.rejected_samples,
+            work: None,
+            image_hash: st.image_hash.clone(),
+            plan: None,
+            split: Split { kind: st.split, shard: 1, of: st.parts as u32 },
+            merge: Some(MergeTimes {
+                parts: st.parts,
+                read_seconds: st.read_seconds,
+                merge_seconds: st.merge_seconds,
+                write_seconds: st.write_seconds,
+            }),
+            provenance: Provenance::collect(),
+        }
+    }
+}
+
+/// Pretty JSON with a final newline.
+fn json<T: Serialize>(v: &T) -> String {
+    serde_json::to_string_pretty(v).expect("statistics serialize") + "\n"
+}
+
+/// What a merge did, and the settings of the render its parts are of.
+#[derive(Clone, Debug, Serialize)]
+pub struct MergeStats {
+    pub parts: usize,
+    pub split: SplitKind,
+    pub width: u32,
+    pub height: u32,
+    pub spp: u32,
+    pub max_depth: u32,
+    pub seed: u64,
+    pub sampler: Sampler,
+    pub russian_roulette: Option<Roulette>,
+    pub adaptive: Option<Adaptive>,
+    /// Worker threads of the merge.
+    pub threads: usize,
+    pub rays: u64,
+    pub samples: u64,
+    pub rejected_samples: u64,
+    pub read_seconds: f64,
+    pub merge_seconds: f64,
+    pub write_seconds: f64,
+    pub seconds: f64,
+    pub image_hash: String,
+}
+
+/// Merges the partial films `parts` (every shard of one render) and writes
+/// `files`: the image (bit for bit the one-process render's) or the whole
+/// render's film (to resume later), the linear image, the statistics.
+pub fn merge_to_files(parts: &[PathBuf], files: &RenderFiles) -> Result<MergeStats> {
+    let t0 = Instant::now();
+    files.check_types()?;
+    // The outputs are one transaction; no output may be one of the parts.
+    let mut outputs = Outputs::new();
+    for p in parts {
+        outputs.input(p, "partial film");
+    }
+    let (out_id, float_id, stats_id) = files.add_to(&mut outputs)?;
+    // Read (and check) every part; the first failure in the order given is reported.
+    let read: Vec<Result<Part>> = parts.par_iter().map(|p| Part::read(p)).collect();
+    let mut read_parts = Vec::with_capacity(read.len());
+    for (p, r) in parts.iter().zip(read) {
+        read_parts.push((p.clone(), r?));
+    }
+    let read_seconds = t0.elapsed().as_secs_f64();
+    let t1 = Instant::now();
+    let merged = part::merge(&read_parts)?;
+    let image = merged.film.image();
+    let merge_seconds = t1.elapsed().as_secs_f64();
+    let t2 = Instant::now();
+    if files.writes_film() {
+        outputs.stage(out_id, &merged.to_bytes())?;
+    } else {
+        let gamma = files.gamma.unwrap_or_else(|| shard::default_gamma(&merged));
+        outputs.stage(out_id, &image.file_bytes(&files.output, gamma, files.names.output)?)?;
+    }
+    if let (Some(id), Some(f)) = (float_id, &files.float) {
+        outputs.stage(id, &image.file_bytes(f, 1.0, files.names.float)?)?;
+    }
+    let h = &merged.header;
+    let s = RenderSettings::of(h).map_err(|m| Error::Input(format!("{}: {m}", parts[0].display())))?;
+    let mut stats = MergeStats {
+        parts: parts.len(),
+        split: read_parts[0].1.header.split.kind,
+        width: h.width,
+        height: h.height,
+        spp: h.spp,
+        max_depth: s.max_depth,
+        seed: s.seed,
+        sampler: s.sampler,
+        russian_roulette: s.roulette,
+        adaptive: s.adaptive,
+        threads: rayon::current_num_threads(),
+        rays: h.counters.rays,
+        samples: h.counters.samples,
+        rejected_samples: h.counters.rejected_samples,
+        read_seconds,
+        merge_seconds,
+        write_seconds: 0.0,
+        seconds: 0.0,
+        image_hash: format!("{:016x}", image.hash()),
+    };
+    stats.write_seconds = t2.elapsed().as_secs_f64();
+    stats.seconds = t0.elapsed().as_secs_f64();
+    if let Some(id) = stats_id {
+        outputs.stage(id, json(&StatsFile::of_merge(&stats)).as_bytes())?;
+    }
+    outputs.commit()?;
+    Ok(stats)
+}
+
+/// The settings a partial film's header carries, as the statistics name them.
+struct RenderSettings {
+    max_depth: u32,
+    seed: u64,
+    sampler: Sampler,
+    roulette: Option<Roulette>,
+    adaptive: Option<Adaptive>,
+}
+
+impl RenderSettings {
+    fn of(h: &Header) -> std::result::Result<RenderSettings, String> {
+        let get = |k: &str| h.settings.get(k).map(String::as_str).ok_or(format!("the header has no setting '{k}'"));
+        let bad = |k: &str, v: &str| format!("the header's {k} '{}' is not one rtow writes", crate::output::clip(v));
+        let (d, s, sm, rr, ad) =
+            (get("max_depth")?, get("seed")?, get("sampler")?, get("russian_roulette")?, get("adaptive")?);
+        Ok(RenderSettings {
+            max_depth: d.parse().map_err(|_| bad("max_depth", d))?,
+            seed: s.parse().map_err(|_| bad("seed", s))?,
+            sampler: sm.parse().map_err(|_| bad("sampler", sm))?,
+            roulette: Roulette::from_description(rr).ok_or_else(|| bad("russian_roulette", rr))?,
+            adaptive: Adaptive::from_description(ad).ok_or_else(|| bad("adaptive", ad))?,
+        })
+    }
+}
+
+/// The default name of a render's output: `<scene name>.png`.
+pub fn default_output(source: &SceneSource) -> PathBuf {
+    Path::new(&format!("{}.png", source.name)).to_path_buf()
+}

@@ -1,0 +1,372 @@
+//! `rtow bench --instructions`: instructions per ray of each kernel, counted
+//! exactly by callgrind ([`super::callgrind`]), with saved baselines compared
+//! exactly. The count does not depend on the machine's load, so this is the
+//! cost a noisy CI can gate on, beside the image hash and the work counters.
+//!
+//! Each kernel is counted in a process of its own: the current executable,
+//! re-run under `valgrind --tool=callgrind` with the job's settings and one
+//! kernel (a caller says how, [`count`]'s `child_args`), which renders once
+//! without writing an image ([`child_render`]) and prints what it rendered.
+//! Its profile gives the render loop's instructions (every tile through its
+//! kernel), the whole process's, and, in a build with the `phases` feature,
+//! the render loop by phase.
+
+use super::callgrind::{self, PhaseCount};
+use crate::choice::KernelChoice;
+use crate::error::{Error, Result};
+use crate::job::{Job, RenderOptions};
+use crate::kernel::Kernel;
+use crate::provenance::Provenance;
+use crate::render::render;
+use crate::settings::Settings;
+use serde::{Deserialize, Serialize};
+use std::ffi::OsString;
+use std::path::Path;
+
+/// The value of [`InstructionsReport::schema`].
+pub const INSTRUCTIONS_SCHEMA: &str = "rtow-instructions/1";
+
+/// What a counted process rendered (the one line it prints).
+#[derive(Clone, Debug, PartialEq, Serialize, Deserialize)]
+pub struct ChildRender {
+    pub kernel: String,
+    pub rays: u64,
+    pub image_hash: String,
+}
+
+/// The counted process's work: `job` rendered once (no image written, no
+/// counters); returns the line to print.
+pub fn child_render(job: &Job) -> Result<String> {
+    let r = render(job, None)?;
+    r.stats.check_finite()?;
+    let c = ChildRender { kernel: r.stats.kernel.to_string(), rays: r.stats.rays, image_hash: r.stats.image_hash };
+    Ok(serde_json::to_string(&c).expect("serializes"))
+}
+
+/// One phase of the render loop, per ray.
+#[derive(Clone, Debug, PartialEq, Serialize, Deserialize)]
+pub struct PhaseRow {
+    pub phase: String,
+    pub instructions: u64,
+    pub per_ray: f64,
+}
+
+/// One kernel's instructions.
+#[derive(Clone, Debug, PartialEq, Serialize, Deserialize)]
+pub struct InstructionsEntry {
+    pub kernel: String,
+    pub lanes: u32,
+    pub rays: u64,
+    pub image_hash: String,
+    /// The render loop's instructions (every tile through its kernel): the
+    /// figure baselines compare exactly.
+    pub instructions: u64,
+    pub per_ray: f64,
+    /// Every instruction of the counted process (start-up, scene, BVH,
+    /// render), for information.
+    pub process_instructions: u64,
+    pub process_per_ray: f64,
+    /// The render loop by phase (a `phases` build's wavefront kernels only).
+    pub phases: Option<Vec<PhaseRow>>,
+    /// The command that was counted.
+    pub command: Vec<String>,
+}
+
+/// What `rtow bench --instructions` measured (the JSON `--json` and `--save` write).
+#[derive(Clone, Debug, Serialize)]
+pub struct InstructionsReport {
+    /// [`INSTRUCTIONS_SCHEMA`].
+    pub schema: &'static str,
+    pub scene: String,
+    #[serde(flatten)]
+    pub settings: Settings,
+    pub threads: usize,
+    /// `valgrind --version`.
+    pub valgrind: String,
+    pub kernels: Vec<InstructionsEntry>,
+    pub provenance: Provenance,
+}
+
+/// Counts `kernels` on `job`: each one's process is `program` run with
+/// `child_args(job with that kernel)`, under callgrind.
+pub fn count(
+    job: &Job,
+    name: &str,
+    kernels: &[KernelChoice],
+    program: &Path,
+    child_args: impl Fn(&Job) -> Vec<OsString>,
+    mut on_kernel: impl FnMut(&InstructionsEntry),
+) -> Result<InstructionsReport> {
+    if kernels.is_empty() {
+        return Err(Error::invalid("kernels", "name at least one kernel"));
+    }
+    let valgrind = callgrind::valgrind_version()?;
+    let provenance = Provenance::collect();
+    let mut entries = Vec::new();
+    for &kernel in kernels {
+        let job = job.with_options(&RenderOptions { kernel, ..*job.options() })?;
+        let args = child_args(&job);
+        let (profile, stdout) = callgrind::count(program, &args)?;
+        let child: ChildRender = stdout
+            .lines()
+            .rev()
+            .find_map(|l| serde_json::from_str(l).ok())
+            .ok_or_else(|| Error::System(format!("the counted render printed no result: {stdout:?}")))?;
+        if child.kernel != job.kernel().name() || child.rays == 0 {
+            return Err(Error::System(format!(
+                "the counted render ran the {} kernel for {} rays, not the {} kernel",
+                child.kernel,
+                child.rays,
+                job.kernel().name()
+            )));
+        }
+        let rays = child.rays as f64;
+        let instructions = profile.render_loop();
+        if instructions == 0 {
+            return Err(Error::System(format!(
+                "the profile has no render loop ({} not found: a build without symbols?)",
+                callgrind::RENDER_LOOP
+            )));
+        }
+        let phases = profile.phases().map(|rows| {
+            rows.into_iter()
+                .map(|PhaseCount { phase, instructions }| PhaseRow {
+                    phase,
+                    instructions,
+                    per_ray: instructions as f64 / rays,
+                })
+                .collect()
+        });
+        let command = callgrind::command_line(program, &args, Path::new("callgrind.out"))
+            .iter()
+            .map(|a| a.to_string_lossy().into_owned())
+            .collect();
+        let entry = InstructionsEntry {
+            kernel: child.kernel,
+            lanes: job.kernel().lanes(),
+            rays: child.rays,
+            image_hash: child.image_hash,
+            instructions,
+            per_ray: instructions as f64 / rays,
+            process_instructions: profile.total,
+            process_per_ray: profile.total as f64 / rays,
+            phases,
+            command,
+        };
+        on_kernel(&entry);
+        entries.push(entry);
+    }
+    Ok(InstructionsReport {
+        schema: INSTRUCTIONS_SCHEMA,
+        scene: name.to_string(),
+        settings: *job.settings(),
+        threads: job.threads(),
+        valgrind,
+        kernels: entries,
+        provenance,
+    })
+}
+
+impl InstructionsReport {
+    /// The tables `rtow bench --instructions` prints: per kernel, then the phases.
+    pub fn table(&self) -> String {
+        let mut t = format!(
+            "{:<7} {:>12} {:>16} {:>9} {:>12}  {}\n",
+            "kernel", "rays", "instructions", "per ray", "process/ray", "image hash"
+        );
+        for e in &self.kernels {
+            t += &format!(
+                "{:<7} {:>12} {:>16} {:>9.2} {:>12.2}  {}\n",
+                e.kernel, e.rays, e.instructions, e.per_ray, e.process_per_ray, e.image_hash
+            );
+        }
+        t += "(instructions: the render loop, every tile through its kernel, counted by callgrind; process/ray: \
+              every instruction of the process, start-up, scene and BVH included, per ray)\n";
+        let with: Vec<&InstructionsEntry> = self.kernels.iter().filter(|e| e.phases.is_some()).collect();
+        if let Some(first) = with.first() {
+            t += &format!("\n{:<12}", "phase");
+            for e in &with {
+                t += &format!(" {:>16}", format!("{} /ray", e.kernel));
+            }
+            t += "\n";
+            for (i, row) in first.phases.as_deref().unwrap_or_default().iter().enumerate() {
+                t += &format!("{:<12}", row.phase);
+                for e in &with {
+                    let r = &e.phases.as_deref().unwrap_or_default()[i];
+                    t += &format!(" {:>16}", format!("{:.1} ({:.0}%)", r.per_ray, 100.0 * r.per_ray / e.per_ray));
+                }
+                t += "\n";
+            }
+            t += &format!("{:<12}", "render loop");
+            for e in &with {
+                t += &format!(" {:>16}", format!("{:.1}", e.per_ray));
+            }
+            t +=
+                "\n(a `phases` build: the phases are kept out of line, which adds calls; compare phases with phases)\n";
+        }
+        t
+    }
+
+    pub fn to_json(&self) -> String {
+        serde_json::to_string_pretty(self).expect("report serializes") + "\n"
+    }
+}
+
+/// What a saved instruction baseline must hold for each kernel.
+#[derive(Clone, Debug, Deserialize)]
+pub struct InstructionsBaselineEntry {
+    pub kernel: String,
+    pub rays: u64,
+    pub image_hash: String,
+    pub instructions: u64,
+}
+
+/// The build facts a count depends on.
+#[derive(Clone, Debug, Deserialize)]
+pub struct BaselineBuild {
+    pub isa: String,
+    pub features: Vec<String>,
+    pub rustc: String,
+}
+
+/// A saved `rtow bench --instructions --save` report, as a comparison reads it.
+#[derive(Clone, Debug, Deserialize)]
+pub struct InstructionsBaseline {
+    pub schema: String,
+    pub scene: String,
+    pub width: u32,
+    pub height: u32,
+    pub spp: u32,
+    pub max_depth: u32,
+    pub seed: u64,
+    pub sampler: String,
+    pub threads: usize,
+    pub kernels: Vec<InstructionsBaselineEntry>,
+    pub provenance: BaselineBuild,
+}
+
+impl InstructionsBaseline {
+    pub fn load(path: &Path) -> Result<InstructionsBaseline> {
+        let bytes = crate::limits::read_bounded(path, crate::limits::MAX_BASELINE_BYTES, "baseline")?;
+        InstructionsBaseline::from_bytes(&bytes, path)
+    }
+
+    /// Parses an instruction baseline read from `path` and refuses impossible counts.
+    pub fn from_bytes(bytes: &[u8], path: &Path) -> Result<InstructionsBaseline> {
+        let parse = |m: String| Error::Parse { path: path.to_path_buf(), message: m };
+        let schema: Option<String> = serde_json::from_slice::<serde_json::Value>(bytes)
+            .ok()
+            .and_then(|v| v.get("schema").and_then(|s| s.as_str()).map(str::to_string));
+        if schema.as_deref() != Some(INSTRUCTIONS_SCHEMA) {
+            return Err(parse(format!(
+                "not an instruction baseline (schema {}): save one with `rtow bench --instructions --save`",
+                schema.map_or("none".to_string(), |s| format!("'{}'", crate::output::clip(&s)))
+            )));
+        }
+        let b: InstructionsBaseline = serde_json::from_slice(bytes).map_err(|e| {
+            let text = e.to_string();
+            let text = text.rsplit_once(" at line ").map_or(text.as_str(), |(t, _)| t);
+            parse(format!("not an instruction baseline: {}", crate::output::clip_to(text, 160)))
+        })?;
+        for (i, k) in b.kernels.iter().enumerate() {
+            let name = crate::output::clip(&k.kernel);
+            if !["scalar", "simd8", "simd16"].contains(&k.kernel.as_str()) {
+                return Err(parse(format!("kernels[{i}]: unknown kernel '{name}'")));
+            }
+            if b.kernels[..i].iter().any(|o| o.kernel == k.kernel) {
+                return Err(parse(format!("kernel {name}: counted twice")));
+            }
+            if k.rays == 0 || k.instructions < k.rays {
+                return Err(parse(format!(
+                    "kernel {name}: {} instructions for {} rays is not a count",
+                    k.instructions, k.rays
+                )));
+            }
+            if k.image_hash.len() != 16 || !k.image_hash.bytes().all(|c| c.is_ascii_hexdigit()) {
+                return Err(parse(format!(
+                    "kernel {name}: '{}' is not an image hash",
+                    crate::output::clip(&k.image_hash)
+                )));
+            }
+        }
+        if b.kernels.is_empty() {
+            return Err(parse("the baseline has no kernel".into()));
+        }
+        Ok(b)
+    }
+
+    /// Checks, before anything is counted, that this baseline counted the
+    /// same scene, settings and thread count, on a build of the same
+    /// instruction set and features, and has one of `kernels`.
+    pub fn check(&self, scene: &str, s: &Settings, threads: usize, kernels: &[KernelChoice]) -> Result<()> {
+        let mine = Provenance::collect();
+        let differs = |what: &str, theirs: &str, ours: &str| {
+            Error::Input(format!("baseline {what} {} differs from this run's {ours}", crate::output::clip(theirs)))
+        };
+        if self.scene != scene {
+            return Err(differs("scene", &self.scene, scene));
+        }
+        let theirs = format!(
+            "{}x{} {} spp depth {} seed {} sampler {}",
+            self.width, self.height, self.spp, self.max_depth, self.seed, self.sampler
+        );
+        let ours = format!(
+            "{}x{} {} spp depth {} seed {} sampler {}",
+            s.width,
+            s.height,
+            s.spp,
+            s.max_depth,
+            s.seed,
+            s.sampler.name()
+        );
+        if theirs != ours {
+            return Err(differs("settings", &theirs, &ours));
+        }
+        if self.threads != threads {
+            return Err(differs("thread count", &self.threads.to_string(), &threads.to_string()));
+        }
+        if self.provenance.isa != mine.isa {
+            return Err(differs("instruction set", &self.provenance.isa, &mine.isa));
+        }
+        if self.provenance.features != mine.features {
+            return Err(differs("features", &self.provenance.features.join(","), &mine.features.join(",")));
+        }
+        let names: Vec<&str> = kernels.iter().map(|&k| Kernel::resolve(k).name()).collect();
+        if !self.kernels.iter().any(|b| names.contains(&b.kernel.as_str())) {
+            return Err(Error::Input(format!("the baseline has none of the kernels counted ({})", names.join(", "))));
+        }
+        Ok(())
+    }
+}
+
+/// One kernel against its instruction baseline.
+#[derive(Clone, Debug, PartialEq)]
+pub struct InstructionsComparison {
+    pub kernel: String,
+    pub baseline: u64,
+    pub instructions: u64,
+    pub baseline_per_ray: f64,
+    pub per_ray: f64,
+    pub image_same: bool,
+    /// Exit status 1: the image changed or the count grew (by one instruction or more).
+    pub regressed: bool,
+}
+
+/// Compares counts exactly.
+pub fn compare(report: &InstructionsReport, base: &InstructionsBaseline) -> Vec<InstructionsComparison> {
+    let mut out = Vec::new();
+    for e in &report.kernels {
+        let Some(b) = base.kernels.iter().find(|b| b.kernel == e.kernel) else { continue };
+        let image_same = b.image_hash == e.image_hash && b.rays == e.rays;
+        out.push(InstructionsComparison {
+            kernel: e.kernel.clone(),
+            baseline: b.instructions,
+            instructions: e.instructions,
+            baseline_per_ray: b.instructions as f64 / b.rays as f64,
+            per_ray: e.per_ray,
+            image_same,
+            regressed: !image_same || e.instructions > b.instructions,
+        });
+    }
+    out
+}

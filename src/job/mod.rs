@@ -1,0 +1,416 @@
+//! The bridge: a render job, resolved once.
+//!
+//! A [`Job`] reads both sides, the user's (a [`Scene`] with its render
+//! table, plus [`Overrides`] and [`RenderOptions`]) and the kernels'
+//! ([`Plan`], [`Prepared`]), so that neither side imports the other:
+//!
+//! ```text
+//! scene + overrides + options --Job::new--> settings (resolved), kernel, plan (validated, once)
+//!                              --prepared--> Prepared: SoA spheres, material tables, camera, BVH
+//! ```
+//!
+//! Everything downstream reads the job: the render driver, shards and
+//! resume, `--explain`, the statistics and the instruments. Nothing checks
+//! again: `Job::new` is the one place where the scene, the settings and the
+//! options are validated and the plan is decided. The scene is laid out for
+//! the kernels the first time a render asks for it ([`Job::prepared`]), so a
+//! caller can check its outputs between resolving and rendering.
+
+mod prepare;
+
+use crate::camera::PreparedCamera;
+use crate::choice::{AccelChoice, KernelChoice, Mode};
+use crate::error::{Error, Result};
+use crate::estimator::{Adaptive, Estimator, Roulette};
+use crate::film::part::{Fnv1a, Identity};
+use crate::kernel::Kernel;
+use crate::limits::{self, MAX_TILE};
+use crate::plan::{Plan, Prepared};
+use crate::sampling::Sampler;
+use crate::scene::{RenderTable, Scene, SceneSource};
+use crate::settings::Settings;
+use std::path::Path;
+use std::sync::OnceLock;
+use std::time::Instant;
+
+/// Tile edge in pixels by default (tiles are the unit of parallel work).
+pub const DEFAULT_TILE: u32 = 16;
+
+/// Values that replace the scene's render table (flags, or a library caller's choices).
+#[derive(Clone, Copy, Debug, Default, PartialEq)]
+pub struct Overrides {
+    pub width: Option<u32>,
+    pub height: Option<u32>,
+    pub spp: Option<u32>,
+    pub max_depth: Option<u32>,
+    pub seed: Option<u64>,
+    pub sampler: Option<Sampler>,
+    /// The book's final settings (1200x675, 500 spp, depth 50); values given explicitly still win.
+    pub book: bool,
+}
+
+impl Overrides {
+    /// The settings of a scene whose render table is `table`, with these
+    /// overrides on top: an override wins over `--book`, which wins over the
+    /// table, which wins over rtow's defaults.
+    pub fn resolve(&self, table: &RenderTable) -> Settings {
+        let d = Settings::default();
+        let mut s = Settings {
+            width: table.width.unwrap_or(d.width),
+            height: table.height.unwrap_or(d.height),
+            spp: table.samples_per_pixel.unwrap_or(d.spp),
+            max_depth: table.max_depth.unwrap_or(d.max_depth),
+            seed: table.seed.unwrap_or(d.seed),
+            sampler: table.sampler.unwrap_or(d.sampler),
+        };
+        if self.book {
+            (s.width, s.height, s.spp, s.max_depth) = Settings::BOOK;
+        }
+        s.width = self.width.unwrap_or(s.width);
+        s.height = self.height.unwrap_or(s.height);
+        s.spp = self.spp.unwrap_or(s.spp);
+        s.max_depth = self.max_depth.unwrap_or(s.max_depth);
+        s.seed = self.seed.unwrap_or(s.seed);
+        s.sampler = self.sampler.unwrap_or(s.sampler);
+        s
+    }
+}
+
+/// Exactly these settings, whatever the scene's table says.
+impl From<Settings> for Overrides {
+    fn from(s: Settings) -> Overrides {
+        Overrides {
+            width: Some(s.width),
+            height: Some(s.height),
+            spp: Some(s.spp),
+            max_depth: Some(s.max_depth),
+            seed: Some(s.seed),
+            sampler: Some(s.sampler),
+            book: false,
+        }
+    }
+}
+
+/// How to render. The kernel, threads, tile size and accelerator never change
+/// the image; Russian roulette and adaptive sampling change its noise (not
+/// its expected value) and are off by default.
+#[derive(Clone, Copy, Debug, PartialEq)]
+pub struct RenderOptions {
+    pub kernel: KernelChoice,
+    /// Worker threads; `None` = one per core.
+    pub threads: Option<usize>,
+    /// Tile edge in pixels (tiles are the unit of parallel work), at most [`MAX_TILE`].
+    pub tile: u32,
+    /// Closest-hit search: brute force, BVH, or chosen by the plan.
+    pub accel: AccelChoice,
+    pub roulette: Option<Roulette>,
+    /// Pixels stop taking samples once their relative error is low enough.
+    pub adaptive: Option<Adaptive>,
+}
+
+impl Default for RenderOptions {
+    fn default() -> Self {
+        RenderOptions {
+            kernel: KernelChoice::Simd,
+            threads: None,
+            tile: DEFAULT_TILE,
+            accel: AccelChoice::Auto,
+            roulette: None,
+            adaptive: None,
+        }
+    }
+}
+
+impl RenderOptions {
+    /// Every option in range; the error names it.
+    fn validate(&self) -> Result<()> {
+        limits::check_threads(self.threads)?;
+        if !(1..=MAX_TILE).contains(&self.tile) {
+            return Err(Error::invalid(
+                "tile",
+                format!(
+                    "must be between 1 and {MAX_TILE} pixels (a tile's paths must fit one wavefront workspace), got {}",
+                    self.tile
+                ),
+            ));
+        }
+        if let Some(a) = self.adaptive {
+            Adaptive::new(a.threshold, a.min_spp)?;
+        }
+        if let Some(r) = self.roulette {
+            Roulette::new(r.after_rays)?;
+        }
+        Ok(())
+    }
+
+    /// The options that act on `settings`, and a warning for each one asked
+    /// for that would not: adaptive sampling decides first after `min_spp`
+    /// samples, so with `spp <= min_spp` it never stops a pixel and is off
+    /// (the image is the one without it, bit for bit).
+    fn effective(&self, settings: &Settings) -> (RenderOptions, Vec<Error>) {
+        let mut run = *self;
+        let mut warnings = Vec::new();
+        if let Some(a) = self.adaptive {
+            if settings.spp <= a.min_spp {
+                run.adaptive = None;
+                warnings.push(Error::invalid(
+                    "adaptive.min_spp",
+                    format!(
+                        "adaptive sampling decides first after {} samples per pixel, but this render takes only {}: \
+                         it is off (the image is the one without it); ask for more than {} samples or decide earlier",
+                        a.min_spp, settings.spp, a.min_spp
+                    ),
+                ));
+            }
+        }
+        (run, warnings)
+    }
+}
+
+/// A render job: a scene with its settings, options, kernel and plan,
+/// resolved and validated once. Cheap to make (no geometry is built until
+/// the first render asks for it); read by every render of it.
+#[derive(Debug)]
+pub struct Job {
+    scene: Scene,
+    scene_hash: u64,
+    settings: Settings,
+    /// The options that run (see [`Job::warnings`]) and those asked for.
+    options: RenderOptions,
+    requested: RenderOptions,
+    warnings: Vec<Error>,
+    kernel: Kernel,
+    plan: Plan,
+    prepared: OnceLock<(Prepared, f64)>,
+}
+
+impl Job {
+    /// Resolves `scene` with `overrides` and `options`: checks the scene,
+    /// the settings and the options (the first error names the field), and
+    /// decides the plan.
+    pub fn new(scene: &Scene, overrides: &Overrides, options: &RenderOptions) -> Result<Job> {
+        Job::resolve(scene, None, overrides, options)
+    }
+
+    /// [`Job::new`] for a scene from a file or a preset: errors about the
+    /// scene's values name its file.
+    pub fn from_source(source: &SceneSource, overrides: &Overrides, options: &RenderOptions) -> Result<Job> {
+        Job::resolve(&source.scene, source.file.as_deref(), overrides, options)
+    }
+
+    /// The same scene and options with other overrides (the instruments vary
+    /// the sample count, the seed or the sampler).
+    pub fn with_overrides(&self, overrides: &Overrides) -> Result<Job> {
+        Job::new(&self.scene, overrides, &self.requested)
+    }
+
+    /// The same scene and settings with other options (another kernel, say).
+    pub fn with_options(&self, options: &RenderOptions) -> Result<Job> {
+        Job::new(&self.scene, &Overrides::from(self.settings), options)
+    }
+
+    fn resolve(scene: &Scene, origin: Option<&Path>, overrides: &Overrides, options: &RenderOptions) -> Result<Job> {
+        let in_file = |e: Error| match origin {
+            Some(path) => Error::InFile { path: path.to_path_buf(), error: Box::new(e) },
+            None => e,
+        };
+        scene.validate().map_err(in_file)?;
+        let view = prepare::view(&scene.camera);
+        if scene.mode != Mode::Gradient {
+            PreparedCamera::check(&view).map_err(in_file)?;
+        }
+        let settings = overrides.resolve(&scene.render);
+        settings.validate()?;
+        options.validate()?;
+        let requested = *options;
+        let (options, warnings) = options.effective(&settings);
+        let plan = prepare::plan(scene, &settings, options.accel);
+        let mut hash = Fnv1a::default();
+        // Writing into a hash cannot fail, and every scene value serializes.
+        serde_json::to_writer(&mut hash, scene).expect("a scene serializes");
+        Ok(Job {
+            scene: scene.clone(),
+            scene_hash: hash.0,
+            settings,
+            options,
+            requested,
+            warnings,
+            kernel: Kernel::resolve(options.kernel),
+            plan,
+            prepared: OnceLock::new(),
+        })
+    }
+
+    pub fn scene(&self) -> &Scene {
+        &self.scene
+    }
+
+    /// A hash of the scene's canonical JSON (what the film identity and the statistics name).
+    pub fn scene_hash(&self) -> u64 {
+        self.scene_hash
+    }
+
+    pub fn settings(&self) -> &Settings {
+        &self.settings
+    }
+
+    /// The options that run: those asked for, less any that cannot act
+    /// on these settings (each one named by [`Job::warnings`]).
+    pub fn options(&self) -> &RenderOptions {
+        &self.options
+    }
+
+    /// What was asked for but does not run, and why (an option that has no
+    /// effect on these settings): a setting's name and a message, as
+    /// [`Error::Invalid`], for the caller to show as a warning. The
+    /// statistics report what ran.
+    pub fn warnings(&self) -> &[Error] {
+        &self.warnings
+    }
+
+    /// The worker threads a render of this job runs on (`None` in the
+    /// options: one per core, or as `RAYON_NUM_THREADS` says).
+    pub fn threads(&self) -> usize {
+        self.options.threads.unwrap_or_else(rayon::current_num_threads)
+    }
+
+    /// The kernel that runs (`simd` resolved to this build's lane width).
+    pub fn kernel(&self) -> Kernel {
+        self.kernel
+    }
+
+    pub fn plan(&self) -> &Plan {
+        &self.plan
+    }
+
+    pub fn mode(&self) -> Mode {
+        self.scene.mode
+    }
+
+    /// The estimator's options as the kernels read them.
+    pub fn estimator(&self) -> Estimator {
+        Estimator { roulette: self.options.roulette, adaptive: self.options.adaptive }
+    }
+
+    /// The PNG gamma `rtow render` uses: 2 for path traced scenes, 1 for the debug chapters.
+    pub fn default_gamma(&self) -> f32 {
+        self.scene.mode.default_gamma()
+    }
+
+    /// What the plan decided, for people (`rtow render --explain`).
+    pub fn explain(&self) -> String {
+        self.plan.explain()
+    }
+
+    /// The scene laid out for the kernels (built on first use, then shared by
+    /// every render of this job).
+    pub fn prepared(&self) -> &Prepared {
+        &self.prepared_timed().0
+    }
+
+    /// Seconds it took to lay the scene out (0 until the first render).
+    pub fn prepare_seconds(&self) -> f64 {
+        self.prepared.get().map_or(0.0, |p| p.1)
+    }
+
+    fn prepared_timed(&self) -> &(Prepared, f64) {
+        self.prepared.get_or_init(|| {
+            let t = Instant::now();
+            let p = prepare::prepare(&self.scene, self.settings, self.plan.clone(), self.estimator());
+            (p, t.elapsed().as_secs_f64())
+        })
+    }
+
+    /// What makes this render's image: the scene and every setting that
+    /// changes it. The kernel, lane width, threads, tile size and accelerator
+    /// do not change the image and are not part of it; nor is the sample count
+    /// (kept apart, see [`Identity`]) except where it changes the samples
+    /// themselves (one sample per pixel goes through the pixel centres).
+    pub fn identity(&self) -> Identity {
+        let s = &self.settings;
+        let mut map = std::collections::BTreeMap::new();
+        let mut set = |k: &str, v: String| {
+            map.insert(k.to_string(), v);
+        };
+        // The mode is the scene's (already in its hash); merge takes the PNG gamma from it.
+        set("mode", self.scene.mode.name().to_string());
+        set("max_depth", s.max_depth.to_string());
+        set("seed", s.seed.to_string());
+        set("pixel_jitter", self.plan.jitter.to_string());
+        set("sampler", s.sampler.name().to_string());
+        set("russian_roulette", Roulette::describe(self.options.roulette));
+        set("adaptive", Adaptive::describe(self.options.adaptive));
+        Identity { scene_hash: self.scene_hash, width: s.width, height: s.height, settings: map }
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+    use crate::scene::preset;
+
+    #[test]
+    fn flags_win_over_the_book_which_wins_over_the_scene() {
+        let table = RenderTable { width: Some(100), samples_per_pixel: Some(7), ..Default::default() };
+        let s = Overrides::default().resolve(&table);
+        assert_eq!((s.width, s.height, s.spp, s.max_depth, s.seed), (100, 225, 7, 50, 0));
+        let s = Overrides { book: true, spp: Some(3), ..Default::default() }.resolve(&table);
+        assert_eq!((s.width, s.height, s.spp, s.max_depth), (1200, 675, 3, 50));
+    }
+
+    #[test]
+    fn the_scene_tables_sampler_is_resolved_unless_overridden() {
+        let mut scene = preset("ch07-diffuse").unwrap();
+        scene.render.sampler = Some(Sampler::Independent);
+        let job = Job::new(&scene, &Overrides::default(), &RenderOptions::default()).unwrap();
+        assert_eq!(job.settings().sampler, Sampler::Independent);
+        let o = Overrides { sampler: Some(Sampler::SOBOL), ..Default::default() };
+        assert_eq!(Job::new(&scene, &o, &RenderOptions::default()).unwrap().settings().sampler, Sampler::SOBOL);
+        scene.render.sampler = None;
+        assert_eq!(
+            Job::new(&scene, &Overrides::default(), &RenderOptions::default()).unwrap().settings().sampler,
+            Sampler::default()
+        );
+    }
+
+    #[test]
+    fn options_out_of_range_name_the_option() {
+        let scene = preset("ch04-sphere").unwrap();
+        let refuse = |o: RenderOptions| Job::new(&scene, &Overrides::default(), &o).unwrap_err().to_string();
+        assert!(refuse(RenderOptions { tile: 0, ..Default::default() }).starts_with("tile:"));
+        let rr = Some(Roulette { after_rays: 0 });
+        assert!(refuse(RenderOptions { roulette: rr, ..Default::default() }).starts_with("roulette.after_rays:"));
+        assert!(refuse(RenderOptions { threads: Some(0), ..Default::default() }).starts_with("threads:"));
+    }
+
+    #[test]
+    fn adaptive_sampling_that_cannot_act_is_off_and_says_so() {
+        let scene = preset("ch07-diffuse").unwrap();
+        let opts = RenderOptions { adaptive: Some(Adaptive::new(0.05, 16).unwrap()), ..Default::default() };
+        for (spp, on) in [(8, false), (16, false), (17, true)] {
+            let o = Overrides { spp: Some(spp), ..Default::default() };
+            let job = Job::new(&scene, &o, &opts).unwrap();
+            assert_eq!(job.options().adaptive.is_some(), on, "spp {spp}");
+            assert_eq!(job.warnings().len(), usize::from(!on), "spp {spp}");
+            if !on {
+                let w = job.warnings()[0].to_string();
+                assert!(w.starts_with("adaptive.min_spp:") && w.contains(&format!("takes only {spp}:")), "{w}");
+                assert_eq!(job.identity().settings["adaptive"], "off");
+            }
+            // Another sample count starts again from what was asked for.
+            let more = job.with_overrides(&Overrides { spp: Some(64), ..Default::default() }).unwrap();
+            assert!(more.options().adaptive.is_some() && more.warnings().is_empty());
+        }
+    }
+
+    #[test]
+    fn scene_errors_name_the_file_they_came_from() {
+        let mut scene = preset("ch04-sphere").unwrap();
+        scene.spheres[0].radius = 0.0;
+        let src = SceneSource { scene, name: "x".into(), file: Some("x.json".into()) };
+        let e = Job::from_source(&src, &Overrides::default(), &RenderOptions::default()).unwrap_err();
+        assert_eq!(e.to_string(), "x.json: spheres[0].radius: must not be 0");
+        assert_eq!(e.exit_code(), 2);
+        assert!(matches!(e.root(), Error::Invalid { field, .. } if field == "spheres[0].radius"));
+    }
+}

@@ -1,0 +1,55 @@
+//! A scene's render table: the settings a scene file asks for. Every field
+//! is optional; overrides (flags, or a library caller's) win over it and
+//! rtow's defaults fill what neither gives (`crate::job` resolves them).
+
+use super::de;
+use crate::error::{Error, Result};
+use crate::limits::MAX_PIXELS;
+use crate::sampling::Sampler;
+use serde::{Deserialize, Serialize};
+
+/// Render settings a scene may carry (its `render` table).
+#[derive(Serialize, Deserialize, Clone, Copy, Debug, PartialEq, Default)]
+#[serde(deny_unknown_fields)]
+pub struct RenderTable {
+    #[serde(default, skip_serializing_if = "Option::is_none", deserialize_with = "de::opt_u32")]
+    pub width: Option<u32>,
+    #[serde(default, skip_serializing_if = "Option::is_none", deserialize_with = "de::opt_u32")]
+    pub height: Option<u32>,
+    #[serde(default, skip_serializing_if = "Option::is_none", deserialize_with = "de::opt_u32")]
+    pub samples_per_pixel: Option<u32>,
+    #[serde(default, skip_serializing_if = "Option::is_none", deserialize_with = "de::opt_u32")]
+    pub max_depth: Option<u32>,
+    #[serde(default, skip_serializing_if = "Option::is_none", deserialize_with = "de::opt_u64")]
+    pub seed: Option<u64>,
+    /// The sampler (`independent`, `sobol`, ...); an override replaces it.
+    #[serde(default, skip_serializing_if = "Option::is_none")]
+    pub sampler: Option<Sampler>,
+}
+
+impl RenderTable {
+    /// The same limits as the resolved settings' check, naming the scene's
+    /// fields (an override may replace a value, but a file that asks for 0 is wrong).
+    pub fn validate(&self) -> Result<()> {
+        for (name, v) in [
+            ("render.width", self.width),
+            ("render.height", self.height),
+            ("render.samples_per_pixel", self.samples_per_pixel),
+            ("render.max_depth", self.max_depth),
+        ] {
+            if v == Some(0) {
+                return Err(Error::invalid(name, "must be at least 1"));
+            }
+        }
+        if let (Some(w), Some(h)) = (self.width, self.height) {
+            let px = w as u64 * h as u64;
+            if px > MAX_PIXELS {
+                return Err(Error::invalid(
+                    "render.width x render.height",
+                    format!("{w}x{h} = {px} pixels; at most {MAX_PIXELS} fit in memory"),
+                ));
+            }
+        }
+        Ok(())
+    }
+}

@@ -1,0 +1,212 @@
+//! Every value of a scene checked against the documented ranges
+//! ([`crate::limits`]), in f64 where the check is about representability;
+//! an error names the field. The kernels' own check (that the f32 camera is
+//! computable at every image size) is the job module's, which runs both once.
+
+use super::{Camera, Material, Mode, Scene, Sphere};
+use crate::error::{Error, Result};
+use crate::limits::{self, MAX_SPHERES};
+
+fn finite3(field: &str, v: [f32; 3]) -> Result<()> {
+    if v.iter().all(|x| x.is_finite()) {
+        Ok(())
+    } else {
+        Err(Error::invalid(field, format!("must be finite, got {v:?}")))
+    }
+}
+
+fn finite(field: &str, v: f32) -> Result<()> {
+    if v.is_finite() {
+        Ok(())
+    } else {
+        Err(Error::invalid(field, format!("must be finite, got {v}")))
+    }
+}
+
+/// A point of the world: finite and inside the range where the kernels'
+/// error bounds hold ([`crate::limits::MAX_COORD`]).
+fn point(field: &str, v: [f32; 3]) -> Result<()> {
+    finite3(field, v)?;
+    let m = limits::MAX_COORD;
+    if v.iter().any(|x| x.abs() > m) {
+        return Err(Error::invalid(
+            field,
+            format!(
+                "coordinates must be within [-{m:e}, {m:e}] (the range rtow's f32 kernels are verified in), got {v:?}"
+            ),
+        ));
+    }
+    Ok(())
+}
+
+fn colour(field: &str, v: [f32; 3]) -> Result<()> {
+    finite3(field, v)?;
+    if v.iter().any(|&x| x < 0.0) {
+        return Err(Error::invalid(field, format!("colour components must be >= 0, got {v:?}")));
+    }
+    Ok(())
+}
+
+impl Scene {
+    /// Checks every value a render depends on; the error names the field.
+    pub fn validate(&self) -> Result<()> {
+        self.camera.validate(self.mode)?;
+        self.render.validate()?;
+        colour("sky.horizon", self.sky.horizon)?;
+        colour("sky.zenith", self.sky.zenith)?;
+        if self.spheres.len() > MAX_SPHERES {
+            return Err(Error::invalid(
+                "spheres",
+                format!("at most {MAX_SPHERES} spheres, got {}", self.spheres.len()),
+            ));
+        }
+        for (i, s) in self.spheres.iter().enumerate() {
+            s.validate(&|name: &str| format!("spheres[{i}].{name}"))?;
+        }
+        Ok(())
+    }
+}
+
+impl Camera {
+    /// The camera's values; `mode` says whether rays are traced at all (the
+    /// gradient needs no view).
+    fn validate(&self, mode: Mode) -> Result<()> {
+        point("camera.look_from", self.look_from)?;
+        point("camera.look_at", self.look_at)?;
+        finite3("camera.vup", self.vup)?;
+        finite("camera.vfov_deg", self.vfov_deg)?;
+        if mode != Mode::Gradient {
+            self.validate_view()?;
+        }
+        if !(self.vfov_deg > 0.0 && self.vfov_deg < 180.0) {
+            return Err(Error::invalid("camera.vfov_deg", format!("must be in (0, 180), got {}", self.vfov_deg)));
+        }
+        self.validate_lens_fields()?;
+        if mode != Mode::Gradient {
+            self.validate_lens()?;
+        }
+        Ok(())
+    }
+
+    /// A view direction, and an up vector not parallel to it.
+    fn validate_view(&self) -> Result<()> {
+        if self.look_from == self.look_at {
+            return Err(Error::invalid("camera.look_at", "must differ from camera.look_from"));
+        }
+        let w: [f64; 3] = std::array::from_fn(|i| self.look_from[i] as f64 - self.look_at[i] as f64);
+        let up = glam::DVec3::from_array(self.vup.map(|x| x as f64));
+        let wv = glam::DVec3::from_array(w);
+        if up.length() == 0.0 {
+            return Err(Error::invalid("camera.vup", "must not be zero"));
+        }
+        let sin = up.cross(wv).length() / (up.length() * wv.length());
+        if !(sin > 1e-6) {
+            return Err(Error::invalid("camera.vup", "must not be parallel to the view direction"));
+        }
+        Ok(())
+    }
+
+    /// The lens fields one by one: at most one of aperture and defocus angle,
+    /// each in range, and a positive focus distance.
+    fn validate_lens_fields(&self) -> Result<()> {
+        if self.defocus_angle_deg.is_some() && self.aperture.is_some() {
+            return Err(Error::invalid("camera.aperture", "give either aperture or defocus_angle_deg, not both"));
+        }
+        if let Some(a) = self.defocus_angle_deg {
+            finite("camera.defocus_angle_deg", a)?;
+            if !(0.0..180.0).contains(&a) {
+                return Err(Error::invalid("camera.defocus_angle_deg", format!("must be in [0, 180), got {a}")));
+            }
+        }
+        if let Some(a) = self.aperture {
+            finite("camera.aperture", a)?;
+            if a < 0.0 {
+                return Err(Error::invalid("camera.aperture", format!("must be >= 0, got {a}")));
+            }
+        }
+        if let Some(f) = self.focus_dist {
+            finite("camera.focus_dist", f)?;
+            if f <= 0.0 {
+                return Err(Error::invalid("camera.focus_dist", format!("must be > 0, got {f}")));
+            }
+        }
+        Ok(())
+    }
+
+    /// The focus distance, field of view and lens radius together, in f64,
+    /// within the ranges the f32 camera can represent.
+    fn validate_lens(&self) -> Result<()> {
+        use crate::limits::{MAX_FOCUS, MAX_LENS_RADIUS, MIN_FOCUS, MIN_VFOV_DEG};
+        let focus = self.focus_distance();
+        let field = if self.focus_dist.is_some() { "camera.focus_dist" } else { "camera.look_at" };
+        if !(focus >= MIN_FOCUS as f64 && focus <= MAX_FOCUS as f64) {
+            return Err(Error::invalid(
+                field,
+                format!(
+                    "the focus distance{} must be in [{MIN_FOCUS:e}, {MAX_FOCUS:e}], got {focus:e}",
+                    if self.focus_dist.is_some() { "" } else { " |look_from - look_at|" }
+                ),
+            ));
+        }
+        if self.vfov_deg < MIN_VFOV_DEG {
+            return Err(Error::invalid(
+                "camera.vfov_deg",
+                format!("must be at least {MIN_VFOV_DEG:e} degrees for the f32 camera, got {}", self.vfov_deg),
+            ));
+        }
+        let lr = self.lens_radius();
+        if !(lr.is_finite() && lr <= MAX_LENS_RADIUS as f64) {
+            let field = if self.aperture.is_some() { "camera.aperture" } else { "camera.defocus_angle_deg" };
+            return Err(Error::invalid(
+                field,
+                format!("the lens radius must be at most {MAX_LENS_RADIUS:e}, got {lr:e}"),
+            ));
+        }
+        Ok(())
+    }
+}
+
+impl Sphere {
+    /// The sphere's values; `field` names one of them (`spheres[i].<name>`).
+    fn validate(&self, field: &dyn Fn(&str) -> String) -> Result<()> {
+        point(&field("center"), self.center)?;
+        finite(&field("radius"), self.radius)?;
+        if self.radius == 0.0 {
+            return Err(Error::invalid(field("radius"), "must not be 0"));
+        }
+        let (lo, hi) = (limits::MIN_RADIUS, limits::MAX_RADIUS);
+        if !(lo..=hi).contains(&self.radius.abs()) {
+            return Err(Error::invalid(
+                field("radius"),
+                format!(
+                    "|radius| must be in [{lo:e}, {hi:e}] (the range rtow's f32 kernels are verified in), got {}",
+                    self.radius
+                ),
+            ));
+        }
+        self.material.validate(&|name: &str| field(&format!("material.{name}")))
+    }
+}
+
+impl Material {
+    fn validate(&self, field: &dyn Fn(&str) -> String) -> Result<()> {
+        match *self {
+            Material::Lambertian { albedo } => colour(&field("albedo"), albedo),
+            Material::Metal { albedo, fuzz } => {
+                colour(&field("albedo"), albedo)?;
+                finite(&field("fuzz"), fuzz)?;
+                if !(0.0..=1.0).contains(&fuzz) {
+                    return Err(Error::invalid(field("fuzz"), format!("must be in [0, 1], got {fuzz}")));
+                }
+                Ok(())
+            }
+            Material::Dielectric { ior } => {
+                finite(&field("ior"), ior)?;
+                if ior <= 0.0 {
+                    return Err(Error::invalid(field("ior"), format!("must be > 0, got {ior}")));
+                }
+                Ok(())
+            }
+        }
+    }
+}

@@ -1,0 +1,246 @@
+//! The shape of the code, as docs/architecture.md draws it: the import graph
+//! of the top-level modules (read from the sources: every `crate::<module>`
+//! outside comments and test modules) has no cycle, every import goes down
+//! the layers (the user side and the kernel side never import each other),
+//! nothing inside the crate imports through `lib.rs`, and the picture in
+//! docs/architecture.md is the graph the code has.
+
+use std::collections::{BTreeMap, BTreeSet};
+use std::path::{Path, PathBuf};
+
+/// The layers, bottom up. A module may import modules of lower layers, and
+/// of its own layer where the layer allows it (the graph stays acyclic).
+const LAYERS: &[(&str, &[&str])] = &[
+    ("foundation", &["error", "choice", "real", "math", "limits", "output", "vec3", "sampling", "settings"]),
+    ("user side", &["scene"]),
+    ("kernel side", &["probe", "film", "material", "geometry", "camera", "estimator", "plan", "kernel"]),
+    ("bridge", &["job"]),
+    ("driver", &["render", "shard", "files", "provenance"]),
+    ("instruments", &["instruments"]),
+];
+
+/// The two sides of the bridge: neither imports the other (they sit in
+/// different layers, and the user side is below the kernel side only to
+/// order the picture).
+const USER_SIDE: &[&str] = &["scene"];
+
+fn layer_of(m: &str) -> Option<usize> {
+    LAYERS.iter().position(|(_, mods)| mods.contains(&m))
+}
+
+fn kernel_side(m: &str) -> bool {
+    layer_of(m) == Some(2)
+}
+
+/// The source files under `dir`, recursively.
+fn files(dir: &Path, out: &mut Vec<PathBuf>) {
+    for e in std::fs::read_dir(dir).unwrap() {
+        let p = e.unwrap().path();
+        if p.is_dir() {
+            files(&p, out);
+        } else if p.extension().is_some_and(|x| x == "rs") {
+            out.push(p);
+        }
+    }
+}
+
+/// The code of a file that takes part in the graph: without its test module
+/// (everything from `#[cfg(test)]` on, by the crate's convention) and without
+/// comments (doc links are not imports).
+fn code(text: &str) -> String {
+    let text = text.split("#[cfg(test)]").next().unwrap_or("");
+    text.lines()
+        .map(|l| match l.find("//") {
+            Some(i) if !l[..i].contains('"') => &l[..i],
+            _ => l,
+        })
+        .collect::<Vec<_>>()
+        .join("\n")
+}
+
+/// The identifiers that follow `crate::` in `code`.
+fn crate_paths(code: &str) -> Vec<String> {
+    let mut out = Vec::new();
+    let mut rest = code;
+    while let Some(i) = rest.find("crate::") {
+        let after = &rest[i + "crate::".len()..];
+        let ident: String = after.chars().take_while(|c| c.is_alphanumeric() || *c == '_').collect();
+        if !ident.is_empty() {
+            out.push(ident);
+        }
+        rest = after;
+    }
+    out
+}
+
+struct Graph {
+    /// Module -> the modules it imports.
+    edges: BTreeMap<String, BTreeSet<String>>,
+    /// Imports through the crate root or `super::` at the top level: (file, path).
+    through_root: Vec<(String, String)>,
+}
+
+fn graph() -> Graph {
+    let src = Path::new(env!("CARGO_MANIFEST_DIR")).join("src");
+    let mut all = Vec::new();
+    files(&src, &mut all);
+    let top = |p: &Path| -> String {
+        let rel = p.strip_prefix(&src).unwrap();
+        let first = rel.components().next().unwrap().as_os_str().to_string_lossy().into_owned();
+        first.trim_end_matches(".rs").to_string()
+    };
+    let modules: BTreeSet<String> = all.iter().map(|p| top(p)).collect();
+    let mut g = Graph { edges: BTreeMap::new(), through_root: Vec::new() };
+    for p in &all {
+        let m = top(p);
+        // The front (lib.rs re-exports) and the binary (main.rs, cli/) are above every layer.
+        if ["lib", "main", "cli"].contains(&m.as_str()) {
+            continue;
+        }
+        let text = code(&std::fs::read_to_string(p).unwrap());
+        let name = p.strip_prefix(&src).unwrap().display().to_string();
+        if p.parent() == Some(src.as_path()) && text.contains("super::") {
+            g.through_root.push((name.clone(), "super::".into()));
+        }
+        let entry = g.edges.entry(m.clone()).or_default();
+        for ident in crate_paths(&text) {
+            if !modules.contains(&ident) || ident == "lib" || ident == "main" {
+                g.through_root.push((name.clone(), format!("crate::{ident}")));
+            } else if ident != m {
+                entry.insert(ident);
+            }
+        }
+    }
+    g
+}
+
+#[test]
+fn every_module_has_a_layer() {
+    let g = graph();
+    let missing: Vec<&String> = g.edges.keys().filter(|m| layer_of(m).is_none()).collect();
+    assert!(
+        missing.is_empty(),
+        "modules without a layer in tests/architecture.rs (and docs/architecture.md): {missing:?}"
+    );
+}
+
+#[test]
+fn nothing_imports_through_the_crate_root() {
+    let g = graph();
+    assert!(g.through_root.is_empty(), "imports through lib.rs (use the defining module): {:?}", g.through_root);
+}
+
+#[test]
+fn imports_go_down_the_layers_and_the_two_sides_never_meet() {
+    let g = graph();
+    let mut bad = Vec::new();
+    for (from, tos) in &g.edges {
+        let Some(lf) = layer_of(from) else { continue };
+        for to in tos {
+            let lt = layer_of(to).unwrap_or(usize::MAX);
+            let sides = (USER_SIDE.contains(&from.as_str()) && kernel_side(to))
+                || (kernel_side(from) && USER_SIDE.contains(&to.as_str()));
+            if lt > lf || sides {
+                bad.push(format!("{from} ({}) -> {to} ({})", LAYERS[lf].0, LAYERS.get(lt).map_or("?", |l| l.0)));
+            }
+        }
+    }
+    assert!(bad.is_empty(), "imports that go up a layer or cross between the sides: {bad:#?}");
+}
+
+#[test]
+fn the_import_graph_has_no_cycle() {
+    let g = graph();
+    // Depth-first search with colours; a grey node reached again closes a cycle.
+    fn visit<'a>(
+        m: &'a str,
+        g: &'a BTreeMap<String, BTreeSet<String>>,
+        colour: &mut BTreeMap<&'a str, u8>,
+        path: &mut Vec<&'a str>,
+    ) -> Option<Vec<String>> {
+        match colour.get(m) {
+            Some(1) => {
+                let start = path.iter().position(|&x| x == m).unwrap();
+                let mut cycle: Vec<String> = path[start..].iter().map(|s| s.to_string()).collect();
+                cycle.push(m.to_string());
+                return Some(cycle);
+            }
+            Some(2) => return None,
+            _ => {}
+        }
+        colour.insert(m, 1);
+        path.push(m);
+        for to in g.get(m).into_iter().flatten() {
+            if let Some(c) = visit(to, g, colour, path) {
+                return Some(c);
+            }
+        }
+        path.pop();
+        colour.insert(m, 2);
+        None
+    }
+    let mut colour = BTreeMap::new();
+    for m in g.edges.keys() {
+        if let Some(cycle) = visit(m, &g.edges, &mut colour, &mut Vec::new()) {
+            panic!("import cycle: {}", cycle.join(" -> "));
+        }
+    }
+}
+
+/// The graph as docs/architecture.md draws it (mermaid), edges of the
+/// transitive reduction only (an edge implied by a longer path is left out,
+/// as in the picture), layers as subgraphs.
+fn mermaid(g: &Graph) -> String {
+    let reach = |from: &str, to: &str, skip: (&str, &str)| -> bool {
+        let mut stack = vec![from.to_string()];
+        let mut seen = BTreeSet::new();
+        while let Some(m) = stack.pop() {
+            for n in g.edges.get(&m).into_iter().flatten() {
+                if (m.as_str(), n.as_str()) == skip {
+                    continue;
+                }
+                if n == to {
+                    return true;
+                }
+                if seen.insert(n.clone()) {
+                    stack.push(n.clone());
+                }
+            }
+        }
+        false
+    };
+    let mut out = String::from("```mermaid\nflowchart BT\n");
+    for (name, mods) in LAYERS.iter().rev() {
+        out += &format!("  subgraph L_{}[\"{name}\"]\n", name.replace(' ', "_"));
+        for m in *mods {
+            out += &format!("    {m}\n");
+        }
+        out += "  end\n";
+    }
+    for (from, tos) in &g.edges {
+        for to in tos {
+            if !reach(from, to, (from, to)) {
+                out += &format!("  {from} --> {to}\n");
+            }
+        }
+    }
+    out + "```\n"
+}
+
+#[test]
+fn the_picture_in_the_docs_is_the_code() {
+    let g = graph();
+    let want = mermaid(&g);
+    let doc_path = Path::new(env!("CARGO_MANIFEST_DIR")).join("docs/architecture.md");
+    let doc = std::fs::read_to_string(&doc_path).unwrap();
+    let (begin, end) = ("<!-- import graph: begin -->\n", "<!-- import graph: end -->");
+    let have = doc
+        .split_once(begin)
+        .and_then(|(_, rest)| rest.split_once(end))
+        .map(|(g, _)| g.to_string())
+        .expect("docs/architecture.md has the import graph between its markers");
+    assert!(
+        have == want,
+        "docs/architecture.md's import graph is not the code's; replace the block between the markers with:\n{want}"
+    );
+}
