@@ -37,9 +37,32 @@ pub fn to_fixed(c: [f32; 3]) -> Option<[i64; 3]> {
     let v = c.map(|x| x as f64 * SCALE);
     // `!(a < b)` is true for NaN too.
     if v[0].abs() < SCALED_LIMIT && v[1].abs() < SCALED_LIMIT && v[2].abs() < SCALED_LIMIT {
-        Some(v.map(|x| x.round_ties_even() as i64))
+        Some(v.map(round_in_range))
     } else {
         None
+    }
+}
+
+/// `x.round_ties_even() as i64` for `|x| < 2^63` (what [`to_fixed`] checks
+/// first): on x86-64 one conversion that rounds to nearest, ties to even (the
+/// default rounding mode, which Rust code never changes), instead of a
+/// rounding, a conversion and the saturation checks of `as`; elsewhere the
+/// portable expression. Equal for every such `x` (the tests compare them on
+/// ties, edges and random values).
+#[inline(always)]
+fn round_in_range(x: f64) -> i64 {
+    debug_assert!(x.abs() < SCALED_LIMIT, "{x}");
+    #[cfg(all(target_arch = "x86_64", target_feature = "sse2"))]
+    {
+        use std::arch::x86_64::{_mm_cvtsd_si64, _mm_set_sd};
+        // SAFETY: the two intrinsics need SSE2, which this build enables (the
+        // cfg above; it is part of every x86-64 target). They read no memory.
+        // In range, cvtsd2si never gives its out-of-range value.
+        unsafe { _mm_cvtsd_si64(_mm_set_sd(x)) }
+    }
+    #[cfg(not(all(target_arch = "x86_64", target_feature = "sse2")))]
+    {
+        x.round_ties_even() as i64
     }
 }
 
@@ -74,6 +97,33 @@ mod tests {
         // 2^-34 is a quarter step: rounds to 0; 3 * 2^-34 rounds to one step; 2^-33 is a tie -> even (0).
         assert_eq!(to_fixed([2.0f32.powi(-34), 3.0 * 2.0f32.powi(-34), 2.0f32.powi(-33)]), Some([0, 1, 0]));
         assert_eq!(to_fixed([3.0 * 2.0f32.powi(-33), 0.0, 0.0]), Some([2, 0, 0]));
+    }
+
+    #[test]
+    fn the_fast_rounding_is_round_ties_even_over_the_whole_range() {
+        let mut xs: Vec<f64> = vec![0.0, -0.0, 0.5, 1.5, 2.5, -0.5, -1.5, -2.5, 1e-300, -1e-300];
+        // Ties and their neighbours at every binade, and the range's edges.
+        for e in 0..62 {
+            let b = (1u64 << e) as f64;
+            for x in [b, b + 0.5, b - 0.5, (b + 0.5).next_up(), (b + 0.5).next_down(), b * 1.75] {
+                xs.extend([x, -x]);
+            }
+        }
+        xs.extend([SCALED_LIMIT.next_down(), -SCALED_LIMIT.next_down()]);
+        // Random values over the range, in f32 samples scaled as `to_fixed` scales them.
+        let mut r = 0x9E37_79B9_7F4A_7C15u64;
+        for _ in 0..200_000 {
+            r ^= r << 13;
+            r ^= r >> 7;
+            r ^= r << 17;
+            let f = f32::from_bits(r as u32);
+            if f.is_finite() && (f.abs() as f64) < SAMPLE_LIMIT {
+                xs.push(f as f64 * SCALE);
+            }
+        }
+        for x in xs {
+            assert_eq!(round_in_range(x), x.round_ties_even() as i64, "{x:e}");
+        }
     }
 
     #[test]
