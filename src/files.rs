@@ -17,7 +17,6 @@ use crate::render::{render, render_counted, Progress, Rendered, Stats};
 use crate::sampling::Sampler;
 use crate::scene::SceneSource;
 use crate::shard::{self, FilmRequest};
-use rayon::prelude::*;
 use serde::Serialize;
 use std::path::{Path, PathBuf};
 use std::time::Instant;
@@ -324,15 +323,10 @@ pub fn merge_to_files(parts: &[PathBuf], files: &RenderFiles) -> Result<MergeSta
         outputs.input(p, "partial film");
     }
     let (out_id, float_id, stats_id) = files.add_to(&mut outputs)?;
-    // Read (and check) every part; the first failure in the order given is reported.
-    let read: Vec<Result<Part>> = parts.par_iter().map(|p| Part::read(p)).collect();
-    let mut read_parts = Vec::with_capacity(read.len());
-    for (p, r) in parts.iter().zip(read) {
-        read_parts.push((p.clone(), r?));
-    }
+    // Read (and check) every header, then stream the parts into one film.
+    let shard::Merged { part: merged, split: split_kind } = shard::merge_files(parts)?;
     let read_seconds = t0.elapsed().as_secs_f64();
     let t1 = Instant::now();
-    let merged = part::merge(&read_parts)?;
     let image = merged.film.image();
     let merge_seconds = t1.elapsed().as_secs_f64();
     let t2 = Instant::now();
@@ -349,7 +343,7 @@ pub fn merge_to_files(parts: &[PathBuf], files: &RenderFiles) -> Result<MergeSta
     let s = RenderSettings::of(h).map_err(|m| Error::Input(format!("{}: {m}", parts[0].display())))?;
     let mut stats = MergeStats {
         parts: parts.len(),
-        split: read_parts[0].1.header.split.kind,
+        split: split_kind,
         width: h.width,
         height: h.height,
         spp: h.spp,

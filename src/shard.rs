@@ -9,6 +9,7 @@
 use crate::choice::Mode;
 use crate::error::{Error, Result};
 use crate::film::part::{self, PartCounters};
+use crate::film::Film;
 use crate::job::Job;
 use crate::render::{render_portion, Portion, Progress, Rendered};
 use std::path::{Path, PathBuf};
@@ -113,4 +114,65 @@ pub fn render_part(
     counters.add(&PartCounters { rays: st.rays, samples: st.samples, rejected_samples: st.rejected_samples });
     let part = Part::new(&job.identity(), settings.spp, req.split, film, counters);
     Ok((rendered, part))
+}
+
+/// Merges the partial films at `paths` (every shard of one render) into the
+/// whole render's film, streaming: every header is read and checked first
+/// (a few hundred bytes per part), then the set (same render, same split,
+/// no duplicate, none missing, as [`merge`]), then the parts are read one at
+/// a time in bounded pieces and added into one accumulator. Memory: one
+/// image's accumulators and a 64 KiB buffer, whatever the number of parts.
+/// Every refusal names the file (exit status 2).
+pub fn merge_files(paths: &[PathBuf]) -> Result<Merged> {
+    let mut headers = Vec::with_capacity(paths.len());
+    for p in paths {
+        let reader = Part::open(p)?;
+        // Each part is read twice (its header now, its data later).
+        if !std::fs::metadata(p).is_ok_and(|m| m.is_file()) {
+            return Err(Error::Input(format!(
+                "{}: not a regular file; merge reads each part twice (its header first), so give a file, \
+                 not a pipe",
+                p.display()
+            )));
+        }
+        headers.push(reader.header().clone());
+    }
+    let set: Vec<(&Path, &Header)> = paths.iter().map(PathBuf::as_path).zip(&headers).collect();
+    if let Err((blamed, e)) = part::check_set(&set) {
+        // A header that differs because its file is corrupted is reported as corrupted.
+        if let Some(i) = blamed {
+            if part::checksum_ok(&paths[i]) == Some(false) {
+                return Err(Error::Input(format!(
+                    "{}: corrupted: its checksum does not match its contents",
+                    paths[i].display()
+                )));
+            }
+        }
+        return Err(e);
+    }
+    let h0 = &headers[0];
+    let moments = headers.iter().all(|h| h.moments);
+    let mut film = Film::new(h0.width, h0.height, 0..h0.height, moments);
+    for (p, h) in paths.iter().zip(&headers) {
+        let reader = Part::open(p)?;
+        if reader.header() != h {
+            return Err(Error::Input(format!("{}: changed while the parts were merged", p.display())));
+        }
+        let offset = h.rows[0] as usize * h.width as usize;
+        let mut overflow = false;
+        reader.read_pixels(|i, px| overflow |= film.add_pixel(offset + i, px).is_none())?;
+        if overflow {
+            return Err(Error::Input(format!("{}: overlaps the other parts (a pixel's count overflows)", p.display())));
+        }
+    }
+    let header = part::merged_header(&headers.iter().collect::<Vec<_>>(), &film);
+    Ok(Merged { part: Part { header, film }, split: h0.split.kind })
+}
+
+/// What [`merge_files`] produced.
+pub struct Merged {
+    /// The whole render's film.
+    pub part: Part,
+    /// How the parts were split.
+    pub split: SplitKind,
 }
