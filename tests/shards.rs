@@ -409,3 +409,112 @@ fn merge_memory_does_not_grow_with_the_number_of_parts() {
     assert!(peak[&100] < peak[&2] + 8 * 1024, "merge memory grows with the parts: {peak:?} KiB");
     assert!(peak[&100] < 64 * 1024, "merge of 100 parts of 192x108 peaks at {} KiB", peak[&100]);
 }
+
+// Issue 17: a verified merge.
+
+/// `film` with its header edited by `edit`, its data edited by `data`
+/// (given the data's offset and the bytes per pixel), and its checksum
+/// recomputed: a film a bug or a hand could write.
+fn rewritten(film: &[u8], edit: impl Fn(&mut serde_json::Value), data: impl Fn(&mut [u8], usize, usize)) -> Vec<u8> {
+    let hlen = u32::from_le_bytes(film[12..16].try_into().unwrap()) as usize;
+    let h: serde_json::Value = serde_json::from_slice(&film[16..16 + hlen]).unwrap();
+    let scene = h["scene_bytes"].as_u64().unwrap() as usize;
+    let pixel = 4 + 3 * h["sum_bytes"].as_u64().unwrap() as usize + if h["moments"] == true { 24 } else { 0 };
+    let mut rest = film[16 + hlen..film.len() - 4].to_vec();
+    data(&mut rest, scene, pixel);
+    let mut out = edited_header(film, edit);
+    out.extend_from_slice(&rest);
+    let crc = crc32fast::hash(&out);
+    out.extend_from_slice(&crc.to_le_bytes());
+    out
+}
+
+#[test]
+fn merge_and_resume_verify_the_films_by_rendering_them_again() {
+    let dir = tempfile::tempdir().unwrap();
+    let d = dir.path();
+    let small = ["--width", "8", "--height", "6", "--depth", "8", "-q"];
+    let run = |extra: &[&str]| rtow(d, &[&["render", "final"][..], &small, extra].concat());
+    for k in 1..=4 {
+        ok(&run(&["--spp", "8", "--shard", &format!("{k}/4"), "-o", &format!("p{k}.rtfilm")]));
+    }
+    ok(&run(&["--spp", "4", "-o", "four.rtfilm"]));
+    let read = |f: &str| std::fs::read(d.join(f)).unwrap();
+    let write = |f: &str, b: &[u8]| std::fs::write(d.join(f), b).unwrap();
+    let all = |first: &str, second: &str| {
+        ["merge", "p1.rtfilm", first, second, "p4.rtfilm", "-o", "out.png", "--verify", "100"].map(String::from)
+    };
+    let merge = |first: &str, second: &str, blamed: &str| {
+        let a = all(first, second);
+        refused(d, &a.iter().map(String::as_str).collect::<Vec<_>>(), blamed)
+    };
+    // Parts 2 and 3 swap their claims (shard and sample range, each of 2
+    // samples): the headers agree with each other and with the data's sample
+    // counts; only rendering their pixels again tells.
+    let claim = |from: u32, to: u32| {
+        rewritten(
+            &read(&format!("p{from}.rtfilm")),
+            |h| {
+                h["split"]["shard"] = to.into();
+                h["samples"] = serde_json::json!([2 * (to - 1), 2 * to]);
+            },
+            |_, _, _| {},
+        )
+    };
+    write("as3.rtfilm", &claim(2, 3));
+    write("as2.rtfilm", &claim(3, 2));
+    let e = merge("as2.rtfilm", "as3.rtfilm", "as2.rtfilm");
+    assert!(e.contains("pixel (") && e.contains("not what its scene renders over samples 2..4"), "{e}");
+    // Without verification the swap goes through, silently (the image differs).
+    let a = all("as2.rtfilm", "as3.rtfilm");
+    let mut a: Vec<&str> = a.iter().map(String::as_str).collect();
+    (a[6], a[8]) = ("swapped.png", "0");
+    ok(&rtow(d, &a));
+    // A claim of another number of samples disagrees with the data's counts.
+    write(
+        "more.rtfilm",
+        &rewritten(
+            &read("p2.rtfilm"),
+            |h| {
+                h["spp"] = 16.into();
+                h["samples"] = serde_json::json!([4, 8]);
+            },
+            |_, _, _| {},
+        ),
+    );
+    assert!(merge("more.rtfilm", "p3.rtfilm", "more.rtfilm").contains("samples counted"));
+    // One sum of pixel 10, (2, 1), changed in its lowest byte.
+    let touch = |f: &str| rewritten(&read(f), |_| {}, |data, scene, pixel| data[scene + 10 * pixel + 4] ^= 0x40);
+    write("touched.rtfilm", &touch("p3.rtfilm"));
+    let e = merge("p2.rtfilm", "touched.rtfilm", "touched.rtfilm");
+    assert!(e.contains("pixel (2, 1)") && e.contains("--verify-seed"), "{e}");
+    write("four-touched.rtfilm", &touch("four.rtfilm"));
+    let e = refused(
+        d,
+        &[
+            &["render", "final"][..],
+            &small,
+            &["--spp", "8", "--resume", "four-touched.rtfilm", "--verify", "48", "-o", "out.png"],
+        ]
+        .concat(),
+        "four-touched.rtfilm",
+    );
+    assert!(e.contains("pixel (2, 1)"), "{e}");
+    ok(&run(&["--spp", "8", "--resume", "four.rtfilm", "--verify", "48", "-o", "resumed.png"]));
+    // The film of an rtow that embedded no scene (format version 1).
+    let mut v1 = read("p2.rtfilm");
+    v1[8..12].copy_from_slice(&1u32.to_le_bytes());
+    write("v1.rtfilm", &v1);
+    assert!(merge("v1.rtfilm", "p3.rtfilm", "v1.rtfilm").contains("format version 1 is older"));
+    // The seed is reported, and the same seed checks the same pixels.
+    let a = all("p2.rtfilm", "p3.rtfilm");
+    let mut a: Vec<&str> = a.iter().map(String::as_str).collect();
+    (a[6], a[8]) = ("verified.png", "5");
+    a.extend(["--verify-seed", "77", "--stats-json", "m.json"]);
+    let r = rtow(d, &a);
+    ok(&r);
+    assert!(r.stdout.contains("verified 20 pixels (--verify 5 --verify-seed 77)"), "{}", r.stdout);
+    let v: serde_json::Value = serde_json::from_str(&std::fs::read_to_string(d.join("m.json")).unwrap()).unwrap();
+    assert_eq!(v["verified"]["seed"], 77);
+    assert_eq!(v["verified"]["pixels"], 20);
+}

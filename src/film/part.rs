@@ -2,16 +2,17 @@
 //! render, in a file that `rtow merge` and `rtow render --resume` read back, and
 //! that refuses to be combined with anything it does not fit.
 //!
-//! # Format, version 1
+//! # Format, version 2
 //!
 //! All integers little-endian.
 //!
 //! | bytes | content |
 //! |---|---|
 //! | 8 | magic `RTOWFILM` |
-//! | 4 | format version (`u32`, 1) |
-//! | 4 | header length `H` in bytes (`u32`) |
+//! | 4 | format version (`u32`, 2) |
+//! | 4 | header length `H` in bytes (`u32`, at most [`MAX_HEADER_BYTES`]) |
 //! | `H` | header: one JSON object ([`Header`]) |
+//! | `S` | the scene: its canonical JSON (the bytes its `scene_hash` hashes), `scene_bytes` long |
 //! | `D` | data: for every pixel of the film's rows, row-major: the accepted samples (`u32`), the three fixed-point channel sums ([`super::accum`]) as two's complement integers of `sum_bytes` bytes each, then, if `moments`, the three f64 sums of squares |
 //! | 4 | CRC-32 (IEEE) of everything before it |
 //!
@@ -23,8 +24,18 @@
 //! fixed-point layout, and the kernel-independent counters (rays, samples,
 //! rejected samples).
 //!
+//! A part is self-contained: with its scene and settings, `rtow merge` can
+//! render any of its pixels again and compare them with its data (the
+//! verified merge, `shard::merge_files`).
+//!
 //! Readers refuse a file whose version is newer than theirs before looking
 //! further, so a later version may change anything after the first 16 bytes.
+//! Version 1 (no embedded scene) is refused: it cannot be verified.
+//!
+//! Every header field is checked against the limits every render is held to
+//! before anything is allocated, and the file's length against the length
+//! the header implies before the scene and the data are read
+//! ([`PartReader`]), in bounded pieces.
 
 use super::{accum, Film};
 use crate::error::{Error, Result};
@@ -38,13 +49,18 @@ use std::path::{Path, PathBuf};
 /// The first 8 bytes of every partial film.
 pub const MAGIC: &[u8; 8] = b"RTOWFILM";
 /// The format version this rtow writes and reads.
-pub const VERSION: u32 = 1;
+pub const VERSION: u32 = 2;
 /// Largest partial film read (bytes): `MAX_PIXELS` pixels with the widest
 /// sums and the sums of squares, and a header.
-pub const MAX_FILM_BYTES: u64 = crate::limits::MAX_PIXELS * (4 + 3 * 16 + 3 * 8) + (1 << 20);
+pub const MAX_FILM_BYTES: u64 =
+    crate::limits::MAX_PIXELS * (4 + 3 * 16 + 3 * 8) + MAX_SCENE_BYTES + (MAX_HEADER_BYTES as u64) + 20;
 /// Largest header read (bytes of JSON): the header names a few settings, far
 /// less than this; a longer one is refused before it is read.
 pub const MAX_HEADER_BYTES: u32 = 1 << 16;
+/// Largest embedded scene (bytes of canonical JSON): a sphere of any
+/// scene takes well under 256 bytes, and a scene has at most
+/// [`crate::limits::MAX_SPHERES`].
+pub const MAX_SCENE_BYTES: u64 = crate::limits::MAX_SPHERES as u64 * 256 + (1 << 20);
 /// The file extension of partial films.
 pub const EXTENSION: &str = "rtfilm";
 
@@ -278,6 +294,8 @@ pub struct Header {
     pub sum_bytes: u32,
     /// Whether the per-pixel sums of squares follow the sums.
     pub moments: bool,
+    /// Length of the embedded scene (its canonical JSON).
+    pub scene_bytes: u64,
     pub counters: PartCounters,
 }
 
@@ -286,6 +304,8 @@ pub struct Header {
 pub struct Part {
     pub header: Header,
     pub film: Film,
+    /// The scene's canonical JSON, whose hash is the header's `scene_hash`.
+    pub scene: Vec<u8>,
 }
 
 fn hex(v: u64) -> String {
@@ -308,8 +328,9 @@ const TRAILER: usize = 4;
 
 impl Part {
     /// A part of the image `id` with `spp` samples per pixel: `film` holds the
-    /// rows and `split` says which samples.
-    pub fn new(id: &Identity, spp: u32, split: Split, film: Film, counters: PartCounters) -> Part {
+    /// rows and `split` says which samples; `scene` is the scene's canonical
+    /// JSON (the bytes hashed into `id.scene_hash`).
+    pub fn new(id: &Identity, scene: Vec<u8>, spp: u32, split: Split, film: Film, counters: PartCounters) -> Part {
         let samples = split.samples(spp);
         let header = Header {
             rtow: env!("CARGO_PKG_VERSION").into(),
@@ -325,9 +346,10 @@ impl Part {
             fraction_bits: accum::FRACTION_BITS,
             sum_bytes: sum_bytes(&film),
             moments: film.has_moments(),
+            scene_bytes: scene.len() as u64,
             counters,
         };
-        Part { header, film }
+        Part { header, film, scene }
     }
 
     fn pixel_bytes(h: &Header) -> u64 {
@@ -339,13 +361,16 @@ impl Part {
         let mut h = self.header.clone();
         h.sum_bytes = sum_bytes(&self.film);
         h.moments = self.film.has_moments();
+        h.scene_bytes = self.scene.len() as u64;
         let json = serde_json::to_vec(&h).expect("a header serializes");
         let px = self.film.count.len();
-        let mut out = Vec::with_capacity(PREFIX + json.len() + px * Self::pixel_bytes(&h) as usize + TRAILER);
+        let mut out =
+            Vec::with_capacity(PREFIX + json.len() + self.scene.len() + px * Self::pixel_bytes(&h) as usize + TRAILER);
         out.extend_from_slice(MAGIC);
         out.extend_from_slice(&VERSION.to_le_bytes());
         out.extend_from_slice(&(json.len() as u32).to_le_bytes());
         out.extend_from_slice(&json);
+        out.extend_from_slice(&self.scene);
         let nb = h.sum_bytes as usize;
         for i in 0..px {
             out.extend_from_slice(&self.film.count[i].to_le_bytes());
@@ -400,8 +425,8 @@ impl Part {
     fn read_from<R: Read>(r: PartReader<R>) -> Result<Part> {
         let h = r.header().clone();
         let mut film = Film::new(h.width, h.height, h.rows[0]..h.rows[1], h.moments);
-        let header = r.read_pixels(|i, p| film.set_pixel(i, p))?;
-        Ok(Part { header, film })
+        let (header, scene) = r.read_pixels(|i, p| film.set_pixel(i, p))?;
+        Ok(Part { header, film, scene })
     }
 
     /// Parses and checks the bytes of a partial film read from `path`.
@@ -518,6 +543,12 @@ impl<R: Read> PartReader<R> {
         if version == 0 {
             return Err(early("corrupted: format version 0 does not exist".into()));
         }
+        if version < VERSION {
+            return Err(early(format!(
+                "format version {version} is older than this rtow reads ({VERSION}): it carries no scene, so its \
+                 data cannot be verified; merge or resume it with the rtow that wrote it, or render it again"
+            )));
+        }
         let hlen = u32::from_le_bytes(pre[12..16].try_into().expect("4 bytes"));
         let header_end = PREFIX as u64 + hlen as u64;
         if let Some(len) = len {
@@ -545,7 +576,7 @@ impl<R: Read> PartReader<R> {
         let h: Header = serde_json::from_slice(&text)
             .map_err(|_| bad(Stage::Header, "corrupted: the header is not valid JSON".into()))?;
         Part::check_header(&h).map_err(|m| bad(Stage::Header, format!("inconsistent header: {m}")))?;
-        let expected = header_end + Part::pixel_count(&h) * Part::pixel_bytes(&h) + TRAILER as u64;
+        let expected = header_end + h.scene_bytes + Part::pixel_count(&h) * Part::pixel_bytes(&h) + TRAILER as u64;
         if let Some(len) = len {
             if len < expected {
                 return Err(early(format!("truncated: {len} bytes, the header says {expected}")));
@@ -565,8 +596,9 @@ impl<R: Read> PartReader<R> {
     /// Reads the data in bounded pieces, giving every pixel (with its index
     /// in the film's rows, row-major) to `sink`, then the checksum; then
     /// checks that the data holds what the header claims. On a refusal,
-    /// `sink` may have seen some of the pixels. Returns the header.
-    pub fn read_pixels(mut self, mut sink: impl FnMut(usize, &Pixel)) -> Result<Header> {
+    /// `sink` may have seen some of the pixels. Returns the header and the
+    /// embedded scene (checked against the header's `scene_hash`).
+    pub fn read_pixels(mut self, mut sink: impl FnMut(usize, &Pixel)) -> Result<(Header, Vec<u8>)> {
         let path = self.path.display().to_string();
         let bad = |m: String| Error::Input(format!("{path}: {m}"));
         let h = &self.header;
@@ -582,6 +614,13 @@ impl<R: Read> PartReader<R> {
             std::io::ErrorKind::UnexpectedEof => bad("truncated while it was read (did the file change?)".into()),
             _ => bad(format!("cannot read: {e}")),
         };
+        // The scene (its length checked against the limit with the header).
+        let mut scene = vec![0u8; h.scene_bytes as usize];
+        self.src.read_exact(&mut scene).map_err(short)?;
+        self.crc.update(&scene);
+        if hex(fnv1a(&scene)) != h.scene_hash {
+            problem = Some(format!("corrupted: the embedded scene does not have the scene hash {}", h.scene_hash));
+        }
         while i < px {
             let k = per_chunk.min(px - i);
             let b = &mut buf[..k * pb];
@@ -625,7 +664,7 @@ impl<R: Read> PartReader<R> {
                 c.samples, c.rejected_samples
             )));
         }
-        Ok(self.header)
+        Ok((self.header, scene))
     }
 }
 
@@ -688,6 +727,9 @@ impl Part {
                 h.fraction_bits,
                 accum::FRACTION_BITS
             ));
+        }
+        if h.scene_bytes > MAX_SCENE_BYTES {
+            return Err(format!("a scene of {} bytes, more than the {MAX_SCENE_BYTES} any scene takes", h.scene_bytes));
         }
         if !(1..=16).contains(&h.sum_bytes) {
             return Err(format!("sum_bytes {} is not between 1 and 16", h.sum_bytes));
@@ -877,7 +919,7 @@ pub fn merge(parts: &[(PathBuf, Part)]) -> Result<Part> {
         })?;
     }
     let header = merged_header(&headers.iter().map(|(_, h)| *h).collect::<Vec<_>>(), &film);
-    Ok(Part { header, film })
+    Ok(Part { header, film, scene: parts[0].1.scene.clone() })
 }
 
 #[cfg(test)]
@@ -888,11 +930,13 @@ mod tests {
     const W: u32 = 6;
     const H: u32 = 5;
     const SPP: u32 = 11;
+    /// A stand-in for a scene's canonical JSON.
+    const SCENE: &[u8] = br#"{"spheres":[]}"#;
 
     fn identity(seed: u64) -> Identity {
         let settings = [("seed", seed.to_string()), ("max_depth", "50".to_string())];
         Identity {
-            scene_hash: 0x1234,
+            scene_hash: fnv1a(SCENE),
             width: W,
             height: H,
             settings: settings.into_iter().map(|(k, v)| (k.to_string(), v)).collect(),
@@ -926,7 +970,7 @@ mod tests {
             counters.rejected_samples += t.rejected;
             film.put_tile(&t);
         }
-        Part::new(&identity(0), SPP, split, film, counters)
+        Part::new(&identity(0), SCENE.to_vec(), SPP, split, film, counters)
     }
 
     fn shards(kind: SplitKind, n: u32) -> Vec<(PathBuf, Part)> {
@@ -1007,7 +1051,7 @@ mod tests {
         let whole = render(Split::WHOLE, true);
         let mut film = Film::new(W, H, 0..H, true);
         let counters = continue_film(&mut film, 0..4);
-        let done = Part::new(&identity(0), 4, Split::WHOLE, film, counters);
+        let done = Part::new(&identity(0), SCENE.to_vec(), 4, Split::WHOLE, film, counters);
         let mut resumed = reread(&done, "done-4.rtfilm").unwrap();
         continue_film(&mut resumed.film, 4..SPP);
         // Sums, counts, and the sums of squares (added in sample order) too.
@@ -1111,9 +1155,13 @@ mod tests {
         assert!(m.contains("not an rtow partial film"), "{m}");
         // A future version is refused as such, whatever follows.
         let mut future = bytes.clone();
-        future[8..12].copy_from_slice(&2u32.to_le_bytes());
+        future[8..12].copy_from_slice(&(VERSION + 1).to_le_bytes());
         let m = refusal(read(&future[..20]), name);
-        assert!(m.contains("format version 2 is newer"), "{m}");
+        assert!(m.contains(&format!("format version {} is newer", VERSION + 1)), "{m}");
+        // An older version (no embedded scene) is refused as such.
+        let mut old = bytes.clone();
+        old[8..12].copy_from_slice(&1u32.to_le_bytes());
+        assert!(refusal(read(&old), name).contains("format version 1 is older"));
         let mut zero = bytes.clone();
         zero[8..12].copy_from_slice(&0u32.to_le_bytes());
         refusal(read(&zero), name);
