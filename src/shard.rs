@@ -301,13 +301,14 @@ fn verification_job(p: &Path, h: &Header, scene: &[u8]) -> Result<Job> {
             p.display()
         ))
     };
-    let job = Job::from_scene_json(scene, p, &overrides, &options).map_err(|e| cannot(e.to_string()))?;
+    let job = Job::from_scene_json(scene, p, &overrides, &options)
+        .map_err(|e| cannot(part::quoted_to(&e.to_string(), 300)))?;
     if format!("{:016x}", job.identity().key()) != h.key {
         return Err(cannot(format!(
             "its image key {} is not the one this rtow ({}) gives its scene and settings (it was written by rtow {})",
             h.key,
             env!("CARGO_PKG_VERSION"),
-            crate::output::clip(&h.rtow)
+            part::quoted(&h.rtow)
         )));
     }
     if job.mode() == Mode::Gradient {
@@ -327,7 +328,7 @@ fn check_pixels(job: &Job, p: &Path, h: &Header, chosen: &[usize], stored: &[Pix
             "{}: {} sums of squares, but it was rendered with adaptive = {}",
             p.display(),
             if h.moments { "has" } else { "has no" },
-            h.settings.get("adaptive").map_or("(unset)".into(), |a| crate::output::clip(a))
+            h.settings.get("adaptive").map_or("(unset)".into(), |a| part::quoted(a))
         )));
     }
     let w = h.width as usize;
@@ -406,7 +407,7 @@ pub struct RenderSettings {
 impl RenderSettings {
     pub fn of(h: &Header) -> std::result::Result<RenderSettings, String> {
         let get = |k: &str| h.settings.get(k).map(String::as_str).ok_or(format!("the header has no setting '{k}'"));
-        let bad = |k: &str, v: &str| format!("the header's {k} '{}' is not one rtow writes", crate::output::clip(v));
+        let bad = |k: &str, v: &str| format!("the header's {k} '{}' is not one rtow writes", part::quoted(v));
         let (d, s, sm, rr, ad) =
             (get("max_depth")?, get("seed")?, get("sampler")?, get("russian_roulette")?, get("adaptive")?);
         Ok(RenderSettings {

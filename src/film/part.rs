@@ -783,19 +783,32 @@ impl Part {
     }
 }
 
+/// A header's text value for a message: at most 40 characters, control
+/// characters shown as `?` (a message is one bounded line).
+pub fn quoted(v: &str) -> String {
+    quoted_to(v, 40)
+}
+
+/// [`quoted`], at most `n` characters.
+pub fn quoted_to(v: &str, n: usize) -> String {
+    crate::output::clip_to(v, n).chars().map(|ch| if ch.is_control() { '?' } else { ch }).collect()
+}
+
 /// Refuses (naming `p`, ending the message with `consequence`) a part whose
 /// image is not `h0`'s (from `p0`): another scene, size, rtow version or
 /// setting. The sample count is not compared.
 pub fn same_image(p: &Path, h: &Header, p0: &Path, h0: &Header, consequence: &str) -> Result<()> {
     let a = p0.display();
+    let c = quoted;
     let refuse = |what: String| Error::Input(format!("{}: {what}; {consequence}", p.display()));
     if h.rtow != h0.rtow {
-        return Err(refuse(format!("written by rtow {}, {a} by rtow {}", h.rtow, h0.rtow)));
+        return Err(refuse(format!("written by rtow {}, {a} by rtow {}", c(&h.rtow), c(&h0.rtow))));
     }
     if h.scene_hash != h0.scene_hash {
         return Err(refuse(format!(
             "renders a different scene than {a} (scene hash {} against {})",
-            h.scene_hash, h0.scene_hash
+            c(&h.scene_hash),
+            c(&h0.scene_hash)
         )));
     }
     if (h.width, h.height) != (h0.width, h0.height) {
@@ -804,12 +817,18 @@ pub fn same_image(p: &Path, h: &Header, p0: &Path, h0: &Header, consequence: &st
     for name in h.settings.keys().chain(h0.settings.keys()) {
         let (v, v0) = (h.settings.get(name), h0.settings.get(name));
         if v != v0 {
-            let show = |v: Option<&String>| v.cloned().unwrap_or_else(|| "(unset)".into());
-            return Err(refuse(format!("rendered with {name} = {}, {a} with {name} = {}", show(v), show(v0))));
+            let show = |v: Option<&String>| v.map_or_else(|| "(unset)".into(), |v| c(v));
+            return Err(refuse(format!(
+                "rendered with {} = {}, {a} with {} = {}",
+                c(name),
+                show(v),
+                c(name),
+                show(v0)
+            )));
         }
     }
     if h.key != h0.key {
-        return Err(refuse(format!("its image key {} differs from {a}'s {}", h.key, h0.key)));
+        return Err(refuse(format!("its image key {} differs from {a}'s {}", c(&h.key), c(&h0.key))));
     }
     Ok(())
 }
