@@ -333,6 +333,7 @@ pub struct MergeStats {
 pub fn merge_to_files(parts: &[PathBuf], files: &RenderFiles, verify: shard::Verify) -> Result<MergeStats> {
     let t0 = Instant::now();
     files.check_types()?;
+    verify.check()?;
     // The outputs are one transaction; no output may be one of the parts.
     let mut outputs = Outputs::new();
     for p in parts {

@@ -135,6 +135,7 @@ pub fn render_part(
 /// `verify.seed`, are rendered again over the part's samples and compared
 /// bit for bit with the part's data.
 pub fn merge_files(paths: &[PathBuf], verify: Verify) -> Result<Merged> {
+    verify.check()?;
     let mut headers = Vec::with_capacity(paths.len());
     for p in paths {
         let reader = Part::open(p)?;
@@ -223,6 +224,20 @@ impl Verify {
     pub const DEFAULT_PIXELS: u32 = 64;
     /// No verification.
     pub const OFF: Verify = Verify { pixels: 0, seed: 0 };
+    /// Most pixels per part: the pixels checked are held in memory (about
+    /// 300 bytes each); a part checked whole is better rendered again.
+    pub const MAX_PIXELS: u32 = 1 << 16;
+
+    /// Refuses more pixels per part than [`Verify::MAX_PIXELS`].
+    pub fn check(&self) -> Result<()> {
+        if self.pixels > Self::MAX_PIXELS {
+            return Err(Error::invalid(
+                "verify",
+                format!("{} pixels per part is too many; at most {}", self.pixels, Self::MAX_PIXELS),
+            ));
+        }
+        Ok(())
+    }
 
     /// `pixels` per part, from a seed drawn at random (from the standard
     /// library's per-process random keys).
@@ -306,7 +321,7 @@ fn verification_job(p: &Path, h: &Header, scene: &[u8]) -> Result<Job> {
     if format!("{:016x}", job.identity().key()) != h.key {
         return Err(cannot(format!(
             "its image key {} is not the one this rtow ({}) gives its scene and settings (it was written by rtow {})",
-            h.key,
+            part::quoted(&h.key),
             env!("CARGO_PKG_VERSION"),
             part::quoted(&h.rtow)
         )));
@@ -361,6 +376,7 @@ fn check_pixels(job: &Job, p: &Path, h: &Header, chosen: &[usize], stored: &[Pix
 /// whole render of `job`'s image) by recomputation, as a merge checks its
 /// parts ([`Verify`]).
 pub fn verify_film(job: &Job, path: &Path, film: &Part, verify: Verify) -> Result<Verified> {
+    verify.check()?;
     let h = &film.header;
     let chosen = verify.choose(h);
     let t = Instant::now();

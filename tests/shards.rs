@@ -506,6 +506,13 @@ fn merge_and_resume_verify_the_films_by_rendering_them_again() {
     v1[8..12].copy_from_slice(&1u32.to_le_bytes());
     write("v1.rtfilm", &v1);
     assert!(merge("v1.rtfilm", "p3.rtfilm", "v1.rtfilm").contains("format version 1 is older"));
+    // The pixels checked are held in memory: their number is bounded.
+    let e = refused(
+        d,
+        &["merge", "p1.rtfilm", "p2.rtfilm", "p3.rtfilm", "p4.rtfilm", "-o", "out.png", "--verify", "100000"],
+        "verify",
+    );
+    assert!(e.contains("at most 65536"), "{e}");
     // The seed is reported, and the same seed checks the same pixels.
     let a = all("p2.rtfilm", "p3.rtfilm");
     let mut a: Vec<&str> = a.iter().map(String::as_str).collect();

@@ -619,7 +619,8 @@ impl<R: Read> PartReader<R> {
         self.src.read_exact(&mut scene).map_err(short)?;
         self.crc.update(&scene);
         if hex(fnv1a(&scene)) != h.scene_hash {
-            problem = Some(format!("corrupted: the embedded scene does not have the scene hash {}", h.scene_hash));
+            problem =
+                Some(format!("corrupted: the embedded scene does not have the scene hash {}", quoted(&h.scene_hash)));
         }
         while i < px {
             let k = per_chunk.min(px - i);
@@ -1202,6 +1203,9 @@ mod tests {
         assert!(edit(&|q| q.header.split.kind = SplitKind::None).contains("does not exist"));
         assert!(edit(&|q| q.header.fraction_bits = 24).contains("fractional bits"));
         assert!(edit(&|q| q.header.counters.samples += 1).contains("samples counted"));
+        // Header values are quoted on one line (found by the fuzzer).
+        let m = edit(&|q| q.header.scene_hash = "x\ny".into());
+        assert!(m.contains("scene hash x?y") && m.lines().count() == 1, "{m}");
         // More pixels than any render has: refused before anything is allocated.
         let m = edit(&|q| (q.header.width, q.header.height) = (1 << 14, 1 << 13));
         assert!(m.contains("134217728 pixels, more than the 67108864"), "{m}");
