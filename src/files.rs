@@ -124,11 +124,14 @@ pub fn render_to_files(req: &RenderRequest, progress: Option<&(dyn Fn(Progress) 
         }
     }
     // The outputs are one transaction: checked now, written only when all
-    // of them are ready. (The resume film was read whole above, so the
-    // output may replace it: a render continued in place.)
+    // of them are ready. The resume film was read whole above, so the
+    // output (and only the output) may replace it: a render continued in place.
     let mut outputs = Outputs::new();
     if let Some(f) = &req.source.file {
         outputs.input(f, "scene file");
+    }
+    if let Some(p) = &req.resume {
+        outputs.input_replaceable_by(p, "film being resumed", files.names.output);
     }
     let (out_id, float_id, stats_id) = files.add_to(&mut outputs)?;
     let gamma = files.gamma.unwrap_or(req.job.default_gamma());

@@ -16,12 +16,25 @@
 //!    get their previous contents back (kept as hard links until the commit
 //!    ends), so a run replaces all of its outputs or none.
 //!
-//! Temporary files are removed when the run fails (dropping an uncommitted
-//! [`Outputs`]) and on SIGINT or SIGTERM ([`install_signal_cleanup`]: the
-//! process then exits with status 130 or 143). A signal that arrives during
-//! a commit waits for it to finish, so the outputs are either all old or all
-//! new. SIGKILL cannot be caught: it may leave `.rtow-*.tmp` files (never a
-//! half-written output).
+//! **One run per output at a time.** [`Outputs::add`] takes a lock file
+//! `<output>.lock` beside each output (created exclusively, as git's
+//! `index.lock`; it holds the process id and host name) and the commit
+//! removes it. A second run that would write the same file while the first
+//! holds it is refused (exit status 1) before any work, so two runs never mix
+//! their outputs. A lock left by a process of this host that no longer runs
+//! (killed with SIGKILL) is taken over; one from another host must be removed
+//! by hand, as the message says.
+//!
+//! Temporary and lock files are removed when the run fails (dropping an
+//! uncommitted [`Outputs`]) and on SIGINT, SIGTERM or SIGHUP
+//! ([`install_signal_cleanup`]: the process says so in one line on stderr and
+//! exits with status 128 + the signal: 130, 143, 129). A signal that arrives
+//! during a commit waits for it to finish, so the outputs are either all old
+//! or all new. SIGXFSZ (a file-size limit, as batch systems set them) is
+//! ignored, so an output over the limit is the ordinary write error "File too
+//! large" with the same cleanup, not a silent death. SIGKILL cannot be
+//! caught: it may leave `.rtow-*.tmp` and `.lock` files (never a half-written
+//! output).
 //!
 //! **Symlinks.** An output path that is a symbolic link is followed: the file
 //! it points to is replaced atomically (in the link target's folder) and the
@@ -35,26 +48,46 @@
 use crate::error::{Error, Result};
 use std::io::Write;
 use std::path::{Path, PathBuf};
+use std::sync::atomic::{AtomicBool, Ordering};
 use std::sync::{Mutex, MutexGuard};
 
-/// Temporary files of staged, uncommitted outputs: what a signal removes.
+/// Temporary files of staged, uncommitted outputs and the lock files of
+/// uncommitted runs: what a signal removes.
 static PENDING: Mutex<Vec<PathBuf>> = Mutex::new(Vec::new());
+
+/// Whether a transaction of this process has committed (what the one line
+/// on an interruption says).
+static COMMITTED: AtomicBool = AtomicBool::new(false);
 
 fn pending() -> MutexGuard<'static, Vec<PathBuf>> {
     PENDING.lock().unwrap_or_else(|e| e.into_inner())
 }
 
-/// Installs a SIGINT / SIGTERM handler (once per process) that removes every
-/// staged temporary file and exits with status 128 + the signal (130, 143).
-/// A signal during a commit waits for the commit to finish. Call it at the
-/// start of a program that writes outputs (the `rtow` binary does).
+/// What an interrupted run says on stderr, in one line.
+pub fn interrupted_message(signal: &str, committed: bool) -> String {
+    if committed {
+        format!("rtow: interrupted by {signal} after its outputs were written")
+    } else {
+        format!("rtow: interrupted by {signal}: no output was written, every output file left as it was")
+    }
+}
+
+/// Installs a SIGINT / SIGTERM / SIGHUP handler (once per process) that
+/// removes every staged temporary file and lock file, says so in one line on
+/// stderr and exits with status 128 + the signal (130, 143, 129); a signal
+/// during a commit waits for the commit to finish. SIGXFSZ is ignored, so
+/// that a file-size limit is an ordinary write error. Call it at the start
+/// of a program that writes outputs (the `rtow` binary does).
 pub fn install_signal_cleanup() {
     static ONCE: std::sync::Once = std::sync::Once::new();
     ONCE.call_once(|| {
         #[cfg(unix)]
         {
-            use signal_hook::consts::{SIGINT, SIGTERM};
-            let Ok(mut signals) = signal_hook::iterator::Signals::new([SIGINT, SIGTERM]) else { return };
+            use signal_hook::consts::{SIGHUP, SIGINT, SIGTERM, SIGXFSZ};
+            // A handler that does nothing: the write that crossed the limit
+            // then fails with EFBIG ("File too large") and the run cleans up.
+            let _ = signal_hook::flag::register(SIGXFSZ, std::sync::Arc::new(AtomicBool::new(false)));
+            let Ok(mut signals) = signal_hook::iterator::Signals::new([SIGINT, SIGTERM, SIGHUP]) else { return };
             std::thread::spawn(move || {
                 if let Some(sig) = signals.forever().next() {
                     // Held until exit: no commit can start or be half done.
@@ -62,11 +95,82 @@ pub fn install_signal_cleanup() {
                     for p in list.iter() {
                         let _ = std::fs::remove_file(p);
                     }
+                    let name = match sig {
+                        SIGINT => "SIGINT",
+                        SIGTERM => "SIGTERM",
+                        _ => "SIGHUP",
+                    };
+                    // A closed terminal (SIGHUP) may make stderr fail: never panic on it.
+                    let _ =
+                        writeln!(std::io::stderr(), "{}", interrupted_message(name, COMMITTED.load(Ordering::SeqCst)));
                     std::process::exit(128 + sig);
                 }
             });
         }
     });
+}
+
+/// The lock file of output `target`: `<target>.lock`.
+fn lock_path(target: &Path) -> PathBuf {
+    let mut name = target.file_name().unwrap_or_default().to_os_string();
+    name.push(".lock");
+    target.with_file_name(name)
+}
+
+fn host_name() -> String {
+    std::fs::read_to_string("/proc/sys/kernel/hostname").map(|s| s.trim().to_string()).unwrap_or_default()
+}
+
+/// Whether the lock file `lock` was left by a process of this host that no
+/// longer runs (a run killed by SIGKILL).
+fn stale(lock: &Path) -> bool {
+    let Ok(text) = std::fs::read_to_string(lock) else { return false };
+    let mut words = text.split_whitespace();
+    let (Some(pid), Some(host)) = (words.next().and_then(|w| w.parse::<u32>().ok()), words.next()) else {
+        return false;
+    };
+    let here = host_name();
+    !here.is_empty() && host == here && Path::new("/proc/self").exists() && !Path::new(&format!("/proc/{pid}")).exists()
+}
+
+/// Takes the lock of output `target` (`shown` as the user gave it).
+fn take_lock(shown: &Path, target: &Path) -> Result<PathBuf> {
+    let lock = lock_path(target);
+    let mut retried = false;
+    loop {
+        let mut list = pending();
+        match std::fs::OpenOptions::new().write(true).create_new(true).open(&lock) {
+            Ok(mut f) => {
+                list.push(lock.clone());
+                let _ = writeln!(f, "{} {}", std::process::id(), host_name());
+                return Ok(lock);
+            }
+            Err(e) if e.kind() == std::io::ErrorKind::AlreadyExists => {
+                drop(list);
+                if !retried && stale(&lock) {
+                    let _ = std::fs::remove_file(&lock);
+                    retried = true;
+                    continue;
+                }
+                let who = std::fs::read_to_string(&lock).unwrap_or_default();
+                let who = clip(who.trim());
+                return Err(output_error(
+                    shown,
+                    format!(
+                        "another run is writing it (lock file {}{}); if no run is, remove the lock file",
+                        lock.display(),
+                        if who.is_empty() { String::new() } else { format!(", process and host: {who}") }
+                    ),
+                ));
+            }
+            Err(e) => return Err(output_error(shown, format!("cannot create its lock file {}: {e}", lock.display()))),
+        }
+    }
+}
+
+fn release_lock(lock: &Path) {
+    let _ = std::fs::remove_file(lock);
+    pending().retain(|q| q != lock);
 }
 
 fn output_error(path: &Path, message: impl std::fmt::Display) -> Error {
@@ -179,13 +283,17 @@ struct Staged {
     flag: String,
     /// The staged temporary file.
     temp: Option<PathBuf>,
+    /// This run's lock file of the output (see the module documentation).
+    lock: PathBuf,
 }
 
 /// A run's outputs: checked, staged and committed together (see the module
 /// documentation). Dropping it uncommitted removes what was staged.
 #[derive(Default)]
 pub struct Outputs {
-    inputs: Vec<(PathBuf, String)>,
+    /// The run's inputs: what they are, and the one output flag that may
+    /// replace the input (a film resumed in place), if any.
+    inputs: Vec<(PathBuf, String, Option<String>)>,
     outputs: Vec<Staged>,
 }
 
@@ -201,15 +309,21 @@ impl Outputs {
     /// Declares an input of the run (a scene file, a baseline): no output may
     /// be the same file. Call before [`Outputs::add`].
     pub fn input(&mut self, path: &Path, what: &str) {
-        self.inputs.push((path.to_path_buf(), what.to_string()));
+        self.inputs.push((path.to_path_buf(), what.to_string(), None));
+    }
+
+    /// Declares an input that the output named `flag` (and only it) may
+    /// replace: a film resumed in place (read whole before the run writes).
+    pub fn input_replaceable_by(&mut self, path: &Path, what: &str, flag: &str) {
+        self.inputs.push((path.to_path_buf(), what.to_string(), Some(flag.to_string())));
     }
 
     /// Checks `path` as an output of the run (see the module documentation);
     /// `flag` names it in messages (`-o`, `--float`).
     pub fn add(&mut self, path: &Path, flag: &str) -> Result<OutputId> {
         let target = resolve(path)?;
-        for (input, what) in &self.inputs {
-            if same_file(&target, input) {
+        for (input, what, replaceable_by) in &self.inputs {
+            if replaceable_by.as_deref() != Some(flag) && same_file(&target, input) {
                 return Err(Error::invalid(
                     flag,
                     format!("{} is the {what} {}: it would be overwritten", path.display(), input.display()),
@@ -245,7 +359,8 @@ impl Outputs {
             std::fs::OpenOptions::new().write(true).open(&target).map_err(|e| output_error(path, e))?;
         }
         temp_in(dir).map_err(|e| output_error(path, e))?;
-        self.outputs.push(Staged { shown: path.to_path_buf(), target, flag: flag.to_string(), temp: None });
+        let lock = take_lock(path, &target)?;
+        self.outputs.push(Staged { shown: path.to_path_buf(), target, flag: flag.to_string(), temp: None, lock });
         Ok(OutputId(self.outputs.len() - 1))
     }
 
@@ -319,7 +434,13 @@ impl Outputs {
                 let _ = std::fs::remove_file(&t);
                 list.retain(|p| p != &t);
             }
+            let _ = std::fs::remove_file(&o.lock);
+            list.retain(|p| p != &o.lock);
         }
+        if failure.is_none() {
+            COMMITTED.store(true, Ordering::SeqCst);
+        }
+        self.outputs.clear();
         drop(list);
         match failure {
             Some(e) => Err(e),
@@ -348,6 +469,7 @@ impl Drop for Outputs {
             if let Some(t) = o.temp.take() {
                 remove_temp(&t);
             }
+            release_lock(&o.lock);
         }
     }
 }

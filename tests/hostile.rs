@@ -156,7 +156,7 @@ fn class2_a_write_protected_output_is_refused() {
 #[cfg(unix)]
 #[test]
 fn class2_a_signal_between_staging_and_commit_leaves_the_old_outputs_and_no_temporaries() {
-    for (sig, code) in [("INT", 130), ("TERM", 143)] {
+    for (sig, code) in [("INT", 130), ("TERM", 143), ("HUP", 129)] {
         let dir = tempfile::tempdir().unwrap();
         let d = dir.path();
         for f in ["a.png", "a.pfm", "a.json"] {
@@ -164,12 +164,12 @@ fn class2_a_signal_between_staging_and_commit_leaves_the_old_outputs_and_no_temp
         }
         let mut args = vec!["render", "ch04-sphere", "-o", "a.png", "--float", "a.pfm", "--stats-json", "a.json"];
         args.extend_from_slice(&SMALL);
-        let mut child = Command::new(BIN)
+        let child = Command::new(BIN)
             .args(&args)
             .env("RTOW_TEST_PAUSE_BEFORE_COMMIT_MS", "20000")
             .current_dir(d)
             .stdout(Stdio::null())
-            .stderr(Stdio::null())
+            .stderr(Stdio::piped())
             .spawn()
             .unwrap();
         // Wait until all three outputs are staged.
@@ -180,8 +180,12 @@ fn class2_a_signal_between_staging_and_commit_leaves_the_old_outputs_and_no_temp
         }
         let kill = Command::new("kill").args([&format!("-{sig}"), &child.id().to_string()]).status().unwrap();
         assert!(kill.success());
-        let status = child.wait().unwrap();
-        assert_eq!(status.code(), Some(code), "SIG{sig}: {status:?}");
+        let out = child.wait_with_output().unwrap();
+        assert_eq!(out.status.code(), Some(code), "SIG{sig}: {:?}", out.status);
+        // An interrupted run says so, in one line.
+        let said = String::from_utf8_lossy(&out.stderr);
+        assert_eq!(said.lines().count(), 1, "SIG{sig}: {said:?}");
+        assert!(said.contains(&format!("interrupted by SIG{sig}: no output was written")), "SIG{sig}: {said:?}");
         assert_eq!(listing(d), ["a.json", "a.pfm", "a.png"], "SIG{sig}: temporaries left");
         for f in ["a.png", "a.pfm", "a.json"] {
             assert_eq!(std::fs::read(d.join(f)).unwrap(), SENTINEL, "SIG{sig}: {f} replaced");

@@ -3,7 +3,8 @@
 use super::args::{kernel_parser, RunArgs, SizeArgs};
 use super::say;
 use clap::Args;
-use rtow::instruments::converge::{self, ConvergeConfig, Event, Reference, Variant};
+use rtow::instruments::converge::{self, ConvergeConfig, Event, Reference, ReportFiles, Variant};
+use rtow::output::check_extension;
 use rtow::{Error, Job, KernelChoice, Result, Sampler, SceneSource, ADAPTIVE_MIN_SPP};
 use std::path::PathBuf;
 
@@ -94,9 +95,17 @@ pub fn run(a: ConvergeArgs) -> Result<()> {
         at_spp: a.at_spp,
     };
     cfg.validate()?;
-    if a.out.exists() && !a.out.is_dir() {
-        return Err(Error::Output { path: a.out.clone(), message: "--out must be a folder".into() });
+    // Every file the run writes is checked now, before any rendering, and
+    // written together at the end.
+    let mut inputs: Vec<(&std::path::Path, &str)> = Vec::new();
+    if let Some(f) = &source.file {
+        inputs.push((f, "scene file"));
     }
+    if let Some(r) = &a.reference {
+        check_extension(r, &["pfm", "exr"], "reference")?;
+        inputs.push((r, "reference"));
+    }
+    let files = ReportFiles::check(&a.out, name, a.reference.is_none(), &inputs)?;
     say!("{name}: {}x{}, depth {}, seed {}", s.width, s.height, s.max_depth, s.seed);
     let px = s.width as f64 * s.height as f64;
     let mut header = false;
@@ -104,7 +113,7 @@ pub fn run(a: ConvergeArgs) -> Result<()> {
     for l in report.comparison_lines().iter().chain(&report.reach_lines()) {
         say!("{l}");
     }
-    for p in report.write(&a.out)? {
+    for p in report.write(files)? {
         say!("wrote {}", p.display());
     }
     let mismatches = report.kernel_mismatches();

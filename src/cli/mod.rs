@@ -197,7 +197,8 @@ pub fn main() -> ExitCode {
         Ok(true) => ExitCode::SUCCESS,
         Ok(false) => ExitCode::from(1),
         Err(e) => {
-            tell!("error: {}", message(&e));
+            // One line, bounded, whatever the input it quotes.
+            tell!("error: {}", rtow::output::clip_to(&message(&e).replace('\n', " "), 2000));
             ExitCode::from(e.exit_code() as u8)
         }
     }

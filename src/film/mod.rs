@@ -255,6 +255,9 @@ pub struct Image {
     pub data: Vec<[f32; 3]>,
 }
 
+/// Why an image that is not PFM or EXR is refused as linear light.
+const NOT_LINEAR: &str = "not a linear float image: give a .pfm or .exr (rtow render --float writes one)";
+
 impl Image {
     pub fn new(width: u32, height: u32) -> Self {
         Image { width, height, data: vec![[0.0; 3]; (width * height) as usize] }
@@ -398,6 +401,13 @@ impl Image {
             let mut reader = image::ImageReader::new(Cursor::new(&bytes[..]))
                 .with_guessed_format()
                 .map_err(|e| bad(e.to_string()))?;
+            // Only a linear float image: an 8-bit, gamma-encoded PNG or JPEG
+            // read as linear light would give meaningless errors.
+            match reader.format() {
+                Some(image::ImageFormat::OpenExr) => {}
+                Some(f) => return Err(bad(format!("is a {f:?} image, {NOT_LINEAR}"))),
+                None => return Err(bad("is neither a PFM nor an EXR image".into())),
+            }
             // The decoder's memory is bounded like the file: at most MAX_PIXELS RGBA f32 pixels.
             let mut limits = image::Limits::default();
             limits.max_alloc = Some(crate::limits::MAX_PIXELS * 16 + (64 << 20));

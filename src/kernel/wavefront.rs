@@ -151,6 +151,10 @@ pub struct Workspace {
     result: Arr<[f32; 3]>,
     /// The tile's pixels (row-major local indices) that still take samples.
     active: Vec<u32>,
+    /// Per active pixel, for the camera rays of a round: its coordinates and
+    /// what its paths' sampler state words share ([`PathSampler::pixel_words`]).
+    pixel_xy: Vec<[f32; 2]>,
+    pixel_words: Vec<[u32; 4]>,
     /// Probes only: the image index of each active pixel, and the batch's first sample.
     pixel: Vec<u32>,
     batch_start: u32,
@@ -166,6 +170,8 @@ impl Default for Workspace {
             queue: Some(std::array::from_fn(|_| arr(0))),
             result: arr([0.0; 3]),
             active: Vec::with_capacity(MAX_PATHS),
+            pixel_xy: Vec::with_capacity(MAX_PATHS),
+            pixel_words: Vec::with_capacity(MAX_PATHS),
             pixel: Vec::with_capacity(MAX_PATHS),
             batch_start: 0,
         }
@@ -230,6 +236,15 @@ fn render_round<W: Wide, P: Probe, S: PathSampler>(
 ) -> u64 {
     let na = ws.active.len();
     let batch = (MAX_PATHS / na).max(1) as u32;
+    // What the camera rays of every sample of a pixel share, once per round.
+    let st = &prep.settings;
+    ws.pixel_xy.clear();
+    ws.pixel_words.clear();
+    for &l in &ws.active {
+        let (x, y) = tile.pixel_of(l as usize);
+        ws.pixel_xy.push([x as f32, y as f32]);
+        ws.pixel_words.push(sampler.pixel_words(st.seed, y as u64 * st.width as u64 + x as u64));
+    }
     if P::PATHS {
         let width = prep.settings.width;
         ws.pixel.clear();
@@ -245,7 +260,7 @@ fn render_round<W: Wide, P: Probe, S: PathSampler>(
         let n = (b1 - b0) as usize * na;
         ws.result[..n].fill([0.0; 3]);
         ws.batch_start = b0;
-        generate::<W, P, S>(prep, sampler, ws, tile, b0, b1, probe);
+        generate::<W, P, S>(prep, sampler, ws, b0, b1, probe);
         for depth in 0..prep.settings.max_depth {
             if ws.cur.len == 0 {
                 break;
@@ -269,27 +284,30 @@ fn generate<W: Wide, P: Probe, S: PathSampler>(
     prep: &Prepared,
     sampler: S,
     ws: &mut Workspace,
-    tile: &TileFilm,
     s0: u32,
     s1: u32,
     probe: &mut P,
 ) {
-    let st = &prep.settings;
     let na = ws.active.len();
     let n = (s1 - s0) as usize * na;
     let p = &mut ws.cur;
     // Pixel coordinates ride in the throughput arrays until the rays exist.
-    for slot in 0..n {
-        let (x, y) = tile.pixel_of(ws.active[slot % na] as usize);
-        let sample = s0 + (slot / na) as u32;
-        let state = sampler.words(st.seed, y as u64 * st.width as u64 + x as u64, sample);
-        for (w, word) in state.into_iter().enumerate().take(S::WORDS) {
-            p.rng[w][slot & MASK] = word;
+    // Path `slot` is sample `s0 + slot / na` of active pixel `slot % na`:
+    // counted out, without a division.
+    let mut slot = 0;
+    for sample in s0..s1 {
+        for (&[x, y], &pw) in ws.pixel_xy.iter().zip(&ws.pixel_words) {
+            let state = sampler.words_at(pw, sample);
+            for (w, word) in state.into_iter().enumerate().take(S::WORDS) {
+                p.rng[w][slot & MASK] = word;
+            }
+            p.thr[0][slot & MASK] = x;
+            p.thr[1][slot & MASK] = y;
+            p.slot[slot & MASK] = slot as u32;
+            slot += 1;
         }
-        p.thr[0][slot & MASK] = x as f32;
-        p.thr[1][slot & MASK] = y as f32;
-        p.slot[slot & MASK] = slot as u32;
     }
+    debug_assert_eq!(slot, n);
     p.len = n;
     for i in (0..n).step_by(W::LANES) {
         let p = &mut ws.cur;

@@ -148,7 +148,17 @@ pub trait PathSampler: Copy + Send + Sync {
     /// The scalar stream of path (`pixel`, `sample`) of a render with `seed`.
     fn scalar(&self, seed: u64, pixel: u64, sample: u32) -> Self::Scalar;
     /// The same path's state words (the first `WORDS` are used).
-    fn words(&self, seed: u64, pixel: u64, sample: u32) -> [u32; 4];
+    #[inline]
+    fn words(&self, seed: u64, pixel: u64, sample: u32) -> [u32; 4] {
+        self.words_at(self.pixel_words(seed, pixel), sample)
+    }
+    /// What the state words of every path of `pixel` share, computed once
+    /// per pixel (the Sobol pixel key; the seed and pixel otherwise).
+    fn pixel_words(&self, seed: u64, pixel: u64) -> [u32; 4];
+    /// The state words of sample `sample` of the pixel whose
+    /// [`PathSampler::pixel_words`] are `pixel_words`: exactly
+    /// [`PathSampler::words`].
+    fn words_at(&self, pixel_words: [u32; 4], sample: u32) -> [u32; 4];
     /// Lanes of streams from their state words.
     fn lanes<W: Wide>(&self, words: [W::U; 4]) -> Self::Lanes<W>;
     /// The state words of lanes of streams (after their draws).
@@ -189,8 +199,13 @@ impl PathSampler for Independent {
         ScalarStream::for_path(seed, pixel, sample as u64)
     }
     #[inline]
-    fn words(&self, seed: u64, pixel: u64, sample: u32) -> [u32; 4] {
-        path_state(seed, pixel, sample as u64)
+    fn pixel_words(&self, seed: u64, pixel: u64) -> [u32; 4] {
+        [seed as u32, (seed >> 32) as u32, pixel as u32, (pixel >> 32) as u32]
+    }
+    #[inline]
+    fn words_at(&self, w: [u32; 4], sample: u32) -> [u32; 4] {
+        let join = |lo: u32, hi: u32| lo as u64 | (hi as u64) << 32;
+        path_state(join(w[0], w[1]), join(w[2], w[3]), sample as u64)
     }
     #[inline(always)]
     fn lanes<W: Wide>(&self, words: [W::U; 4]) -> XoshiroLanes<W::U> {
@@ -219,8 +234,12 @@ impl PathSampler for Sobol {
         SobolStream::for_path(seed, pixel, sample, self.dims)
     }
     #[inline]
-    fn words(&self, seed: u64, pixel: u64, sample: u32) -> [u32; 4] {
-        [sobol::pixel_key(seed, pixel), sample, 0, 0]
+    fn pixel_words(&self, seed: u64, pixel: u64) -> [u32; 4] {
+        [sobol::pixel_key(seed, pixel), 0, 0, 0]
+    }
+    #[inline]
+    fn words_at(&self, w: [u32; 4], sample: u32) -> [u32; 4] {
+        [w[0], sample, 0, 0]
     }
     #[inline(always)]
     fn lanes<W: Wide>(&self, w: [W::U; 4]) -> SobolStream<W::U> {
@@ -411,6 +430,21 @@ mod tests {
     fn lanes(keys: [(u64, u64, u64); 8]) -> Xoshiro128PlusX8 {
         let st: Vec<[u32; 4]> = keys.iter().map(|&(a, b, c)| path_state(a, b, c)).collect();
         Xoshiro128PlusX8 { s: std::array::from_fn(|w| u32x8::new(std::array::from_fn(|k| st[k][w]))) }
+    }
+
+    #[test]
+    fn a_pixels_shared_words_give_every_paths_state() {
+        // The wavefront computes `pixel_words` once per pixel and round; the
+        // scalar kernel's streams start from the path's whole key.
+        for (seed, pixel) in [(0u64, 0u64), (7, 89_999), (u64::MAX, 1 << 40), (1 << 33, u32::MAX as u64 + 5)] {
+            for sample in [0u32, 1, 31, 499, u32::MAX] {
+                let pw = Independent.pixel_words(seed, pixel);
+                assert_eq!(Independent.words_at(pw, sample), path_state(seed, pixel, sample as u64));
+                let sobol = Sobol { dims: 4 };
+                let pw = sobol.pixel_words(seed, pixel);
+                assert_eq!(sobol.words_at(pw, sample), [sobol::pixel_key(seed, pixel), sample, 0, 0]);
+            }
+        }
     }
 
     #[test]

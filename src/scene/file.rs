@@ -76,7 +76,9 @@ pub fn scene_from_bytes(bytes: &[u8], format: Format, origin: &Path) -> Result<S
 /// checked by [`Scene::validate`] (which resolving a render job runs).
 pub fn scene_from_str(text: &str, format: Format, origin: &Path) -> Result<Scene> {
     let text = text.strip_prefix('\u{feff}').unwrap_or(text);
-    let parse_err = |message: String| Error::Parse { path: origin.to_path_buf(), message };
+    // A message quotes at most a bounded part of the input (a 20 MB string
+    // in a scene file must not become a 20 MB error line).
+    let parse_err = |message: String| Error::Parse { path: origin.to_path_buf(), message: bound_message(&message) };
     let scene: Scene = match format {
         Format::Json => {
             let mut de = serde_json::Deserializer::from_str(text);
@@ -105,15 +107,59 @@ pub fn scene_from_str(text: &str, format: Format, origin: &Path) -> Result<Scene
 }
 
 fn toml_err(text: &str, e: &toml::de::Error, prefix: &str, mk: &dyn Fn(String) -> Error) -> Error {
-    let msg = e.message().trim().replace('\n', "; ");
+    let mut msg = e.message().trim().replace('\n', "; ");
     match e.span() {
         Some(span) => {
             let (l, c) = line_col(text, span.start);
+            // toml says only "duplicate key": name the key and its table.
+            if msg.starts_with("duplicate key") {
+                if let Some(key) = text.get(span.clone()) {
+                    msg = format!("duplicate key `{}`", dotted(table_before(text, span.start), key.trim()));
+                }
+            }
             mk(format!("{prefix}{msg} (line {l}, column {c})"))
         }
         None => mk(format!("{prefix}{msg}")),
     }
 }
+
+/// The `[table]` header in force at byte `at` of a TOML text (empty at the top).
+fn table_before(text: &str, at: usize) -> &str {
+    let before = text.get(..at).unwrap_or_default();
+    before
+        .lines()
+        .rev()
+        .map(str::trim)
+        .find(|l| l.starts_with('['))
+        .map(|l| l.trim_start_matches('[').split(']').next().unwrap_or_default().trim())
+        .unwrap_or_default()
+}
+
+fn dotted(table: &str, key: &str) -> String {
+    let key = crate::output::clip(key);
+    if table.is_empty() {
+        key
+    } else {
+        format!("{}.{key}", crate::output::clip(table))
+    }
+}
+
+/// A message of at most [`MESSAGE_CHARS`] characters: a longer one (it
+/// quotes a long input) keeps its start and its end, with the cut said.
+pub fn bound_message(message: &str) -> String {
+    const HEAD: usize = 200;
+    const TAIL: usize = 60;
+    let n = message.chars().count();
+    if n <= MESSAGE_CHARS {
+        return message.to_string();
+    }
+    let head: String = message.chars().take(HEAD).collect();
+    let tail: String = message.chars().skip(n - TAIL).collect();
+    format!("{head}... ({} characters cut) ...{tail}", n - HEAD - TAIL)
+}
+
+/// The longest message about a scene file, in characters.
+pub const MESSAGE_CHARS: usize = 320;
 
 /// serde_json appends " at line L column C"; we print position our own way.
 fn strip_position(s: &str) -> String {

@@ -7,11 +7,20 @@ use super::{Camera, Material, Mode, Scene, Sphere};
 use crate::error::{Error, Result};
 use crate::limits::{self, MAX_SPHERES};
 
-fn finite3(field: &str, v: [f32; 3]) -> Result<()> {
-    if v.iter().all(|x| x.is_finite()) {
-        Ok(())
+/// What a non-finite value is: a number that overflowed f32 reads as an
+/// infinity (JSON has no infinity literal, so there it always is one).
+fn not_finite(v: f32) -> &'static str {
+    if v.is_nan() {
+        "must be a number, got nan"
     } else {
-        Err(Error::invalid(field, format!("must be finite, got {v:?}")))
+        "is too large for f32 (its magnitude must be below 3.4e38), or infinite"
+    }
+}
+
+fn finite3(field: &str, v: [f32; 3]) -> Result<()> {
+    match v.iter().position(|x| !x.is_finite()) {
+        None => Ok(()),
+        Some(i) => Err(Error::invalid(format!("{field}[{i}]"), not_finite(v[i]))),
     }
 }
 
@@ -19,7 +28,7 @@ fn finite(field: &str, v: f32) -> Result<()> {
     if v.is_finite() {
         Ok(())
     } else {
-        Err(Error::invalid(field, format!("must be finite, got {v}")))
+        Err(Error::invalid(field, not_finite(v)))
     }
 }
 

@@ -23,6 +23,7 @@ mod variant;
 
 pub use curve::{compare, Cost, Curve, CurveComparison};
 pub use metrics::{error_metrics, ConvergeRow, Metrics, RELMSE_EPSILON, SIGNED_EPSILON};
+pub use report::ReportFiles;
 pub use variant::{Variant, DEFAULT_ADAPTIVE_THRESHOLD};
 
 use crate::choice::KernelChoice;

@@ -4,6 +4,7 @@ use super::curve::{compare, Cost, Curve, CurveComparison};
 use super::ConvergeReport;
 use crate::choice::KernelChoice;
 use crate::error::{Error, Result};
+use crate::output::{OutputId, Outputs};
 use std::fmt::Write as _;
 use std::path::{Path, PathBuf};
 
@@ -194,9 +195,6 @@ impl ConvergeReport {
         }
         s
     }
-    /// Writes `<scene>.csv`, `<scene>.md` and (with the `plot` feature) `<scene>.svg` into `dir` (created
-    /// if missing), and `<scene>-reference.exr` if the run rendered its
-    /// reference; returns their paths.
     /// The run's description beside its tables: what was measured, the
     /// files, and the provenance (docs/figures.md).
     pub fn json(&self, files: &[String]) -> String {
@@ -217,32 +215,128 @@ impl ConvergeReport {
         serde_json::to_string_pretty(&v).expect("serializes") + "\n"
     }
 
-    pub fn write(&self, dir: &Path) -> Result<Vec<PathBuf>> {
-        std::fs::create_dir_all(dir)
-            .map_err(|e| Error::Output { path: dir.to_path_buf(), message: format!("--out: {e}") })?;
-        let stem: String = self
-            .scene
-            .chars()
-            .map(|c| if c.is_ascii_alphanumeric() || c == '-' || c == '_' { c } else { '_' })
-            .collect();
+    /// Writes the report into the files checked by [`ReportFiles::check`]:
+    /// `<scene>.csv`, `<scene>.md`, (with the `plot` feature) `<scene>.svg`,
+    /// `<scene>.json` and, if the run rendered its reference,
+    /// `<scene>-reference.exr`; all of them or none. Returns their paths.
+    pub fn write(&self, mut files: ReportFiles) -> Result<Vec<PathBuf>> {
         #[cfg(feature = "plot")]
-        let svg = Some(("svg", self.svg()?));
+        let svg = Some(self.svg()?);
         #[cfg(not(feature = "plot"))]
-        let svg = None;
-        let mut paths = Vec::new();
-        let files: Vec<(&str, String)> =
-            [("csv", self.csv()), ("md", self.markdown())].into_iter().chain(svg).collect();
-        let names: Vec<String> = files.iter().map(|(ext, _)| format!("{stem}.{ext}")).collect();
-        for (ext, text) in files.into_iter().chain([("json", self.json(&names))]) {
-            let p = dir.join(format!("{stem}.{ext}"));
-            crate::output::write_atomic(&p, text.as_bytes())?;
-            paths.push(p);
+        let svg: Option<String> = None;
+        let names: Vec<String> = files
+            .slots
+            .iter()
+            .filter(|s| matches!(s.kind, Kind::Csv | Kind::Markdown | Kind::Svg))
+            .map(|s| file_name(&s.path))
+            .collect();
+        for i in 0..files.slots.len() {
+            let (kind, id) = (files.slots[i].kind, files.slots[i].id);
+            let bytes = match kind {
+                Kind::Csv => self.csv().into_bytes(),
+                Kind::Markdown => self.markdown().into_bytes(),
+                Kind::Svg => svg.clone().unwrap_or_default().into_bytes(),
+                Kind::Json => self.json(&names).into_bytes(),
+                Kind::Reference => match &self.rendered_reference {
+                    Some(img) => img.file_bytes(&files.slots[i].path, 1.0, "reference")?,
+                    None => return Err(Error::Input("the run rendered no reference to write (internal error)".into())),
+                },
+            };
+            files.outputs.stage(id, &bytes)?;
         }
-        if let Some(img) = &self.rendered_reference {
-            let p = dir.join(format!("{stem}-reference.exr"));
-            img.save(&p, 1.0)?;
-            paths.push(p);
-        }
+        let paths = files.slots.iter().map(|s| s.path.clone()).collect();
+        let outputs = std::mem::take(&mut files.outputs);
+        outputs.commit()?;
+        files.created_dir = None;
         Ok(paths)
+    }
+}
+
+fn file_name(p: &Path) -> String {
+    p.file_name().map(|n| n.to_string_lossy().into_owned()).unwrap_or_default()
+}
+
+#[derive(Clone, Copy, PartialEq, Eq)]
+enum Kind {
+    Csv,
+    Markdown,
+    Svg,
+    Json,
+    Reference,
+}
+
+struct Slot {
+    kind: Kind,
+    path: PathBuf,
+    id: OutputId,
+}
+
+/// The files of a `converge` run, checked before any rendering (see
+/// [`crate::output`]): none may be an input of the run, each must be
+/// writable, and no other run may be writing them. The folder is created if
+/// it is missing (its parent must exist), and removed again if the run ends
+/// without writing.
+pub struct ReportFiles {
+    outputs: Outputs,
+    slots: Vec<Slot>,
+    created_dir: Option<PathBuf>,
+}
+
+impl ReportFiles {
+    /// Checks the files that a run on scene `scene` writes into `dir`
+    /// (`with_reference`: the run renders its reference, and writes it);
+    /// `inputs` are the run's input files with what they are.
+    pub fn check(dir: &Path, scene: &str, with_reference: bool, inputs: &[(&Path, &str)]) -> Result<ReportFiles> {
+        let out_err = |m: String| Error::Output { path: dir.to_path_buf(), message: m };
+        let mut created_dir = None;
+        if !dir.exists() {
+            let parent = match dir.parent() {
+                Some(p) if !p.as_os_str().is_empty() => p,
+                _ => Path::new("."),
+            };
+            if !parent.exists() {
+                return Err(out_err(format!("--out: folder {} does not exist", parent.display())));
+            }
+            if !parent.is_dir() {
+                return Err(out_err(format!("--out: {} is not a folder", parent.display())));
+            }
+            std::fs::create_dir(dir).map_err(|e| out_err(format!("--out: {e}")))?;
+            created_dir = Some(dir.to_path_buf());
+        } else if !dir.is_dir() {
+            return Err(out_err("--out must be a folder".into()));
+        }
+        let mut files = ReportFiles { outputs: Outputs::new(), slots: Vec::new(), created_dir };
+        for (path, what) in inputs {
+            files.outputs.input(path, what);
+        }
+        let stem: String =
+            scene.chars().map(|c| if c.is_ascii_alphanumeric() || c == '-' || c == '_' { c } else { '_' }).collect();
+        let mut kinds = vec![(Kind::Csv, "csv"), (Kind::Markdown, "md")];
+        if cfg!(feature = "plot") {
+            kinds.push((Kind::Svg, "svg"));
+        }
+        kinds.push((Kind::Json, "json"));
+        for (kind, ext) in kinds {
+            let path = dir.join(format!("{stem}.{ext}"));
+            let id = files.outputs.add(&path, "--out")?;
+            files.slots.push(Slot { kind, path, id });
+        }
+        if with_reference {
+            let path = dir.join(format!("{stem}-reference.exr"));
+            let id = files.outputs.add(&path, "--out")?;
+            files.slots.push(Slot { kind: Kind::Reference, path, id });
+        }
+        Ok(files)
+    }
+}
+
+impl Drop for ReportFiles {
+    fn drop(&mut self) {
+        // Staged files and locks go first (dropping the outputs), then the
+        // folder this run made, if it is still empty.
+        drop(std::mem::take(&mut self.outputs));
+        if let Some(d) = self.created_dir.take() {
+            let _ = std::fs::remove_dir(d);
+        }
     }
 }
