@@ -7,7 +7,7 @@
 
 use crate::error::{Error, Result};
 use crate::estimator::{Adaptive, Roulette};
-use crate::film::part::{self, is_part_path, Header, Part, Split, SplitKind};
+use crate::film::part::{self, is_part_path, Part, Split, SplitKind};
 use crate::job::Job;
 use crate::output::{check_extension, OutputId, Outputs};
 use crate::plan::Plan;
@@ -17,7 +17,6 @@ use crate::render::{render, render_counted, Progress, Rendered, Stats};
 use crate::sampling::Sampler;
 use crate::scene::SceneSource;
 use crate::shard::{self, FilmRequest};
-use rayon::prelude::*;
 use serde::Serialize;
 use std::path::{Path, PathBuf};
 use std::time::Instant;
@@ -91,6 +90,8 @@ pub struct RenderRequest<'a> {
     pub split: Split,
     /// A partial film of the first samples of this very render, to continue.
     pub resume: Option<PathBuf>,
+    /// How the film to resume is checked by recomputation ([`shard::Verify`]).
+    pub verify: shard::Verify,
     pub files: RenderFiles,
 }
 
@@ -115,8 +116,12 @@ pub fn render_to_files(req: &RenderRequest, progress: Option<&(dyn Fn(Progress) 
     };
     let film = FilmRequest { split: req.split, resume };
     let partial = files.writes_film() || film.resume.is_some();
+    let mut verified = None;
     if partial {
         shard::check(req.job, &film)?;
+        if let Some((p, f)) = &film.resume {
+            verified = Some(shard::verify_film(req.job, p, f, req.verify)?);
+        }
     }
     // The outputs are one transaction: checked now, written only when all
     // of them are ready. The resume film was read whole above, so the
@@ -152,7 +157,9 @@ pub fn render_to_files(req: &RenderRequest, progress: Option<&(dyn Fn(Progress) 
         outputs.stage(id, &r.image.file_bytes(f, 1.0, files.names.float)?)?;
     }
     if let Some(id) = stats_id {
-        outputs.stage(id, json(&StatsFile::of_render(&r.stats, req.split)).as_bytes())?;
+        let mut file = StatsFile::of_render(&r.stats, req.split);
+        file.verified = verified;
+        outputs.stage(id, json(&file).as_bytes())?;
     }
     outputs.commit()?;
     Ok(r.stats)
@@ -199,6 +206,9 @@ pub struct StatsFile {
     pub split: Split,
     /// A merge's parts and the split of its seconds; `null` for a render.
     pub merge: Option<MergeTimes>,
+    /// What was checked by recomputation (a merge's parts, a resumed film);
+    /// `null` when nothing was.
+    pub verified: Option<shard::Verified>,
     pub provenance: Provenance,
 }
 
@@ -243,6 +253,7 @@ impl StatsFile {
             plan: Some(st.plan.clone()),
             split,
             merge: None,
+            verified: None,
             provenance: Provenance::collect(),
         }
     }
@@ -280,6 +291,7 @@ impl StatsFile {
                 merge_seconds: st.merge_seconds,
                 write_seconds: st.write_seconds,
             }),
+            verified: Some(st.verified),
             provenance: Provenance::collect(),
         }
     }
@@ -313,29 +325,28 @@ pub struct MergeStats {
     pub write_seconds: f64,
     pub seconds: f64,
     pub image_hash: String,
+    /// What the verification checked (its seconds are part of `read_seconds`).
+    pub verified: shard::Verified,
 }
 
 /// Merges the partial films `parts` (every shard of one render) and writes
 /// `files`: the image (bit for bit the one-process render's) or the whole
 /// render's film (to resume later), the linear image, the statistics.
-pub fn merge_to_files(parts: &[PathBuf], files: &RenderFiles) -> Result<MergeStats> {
+/// Every part is checked by recomputation as `verify` says ([`shard::Verify`]).
+pub fn merge_to_files(parts: &[PathBuf], files: &RenderFiles, verify: shard::Verify) -> Result<MergeStats> {
     let t0 = Instant::now();
     files.check_types()?;
+    verify.check()?;
     // The outputs are one transaction; no output may be one of the parts.
     let mut outputs = Outputs::new();
     for p in parts {
         outputs.input(p, "partial film");
     }
     let (out_id, float_id, stats_id) = files.add_to(&mut outputs)?;
-    // Read (and check) every part; the first failure in the order given is reported.
-    let read: Vec<Result<Part>> = parts.par_iter().map(|p| Part::read(p)).collect();
-    let mut read_parts = Vec::with_capacity(read.len());
-    for (p, r) in parts.iter().zip(read) {
-        read_parts.push((p.clone(), r?));
-    }
+    // Read (and check) every header, then stream the parts into one film.
+    let shard::Merged { part: merged, split: split_kind, verified } = shard::merge_files(parts, verify)?;
     let read_seconds = t0.elapsed().as_secs_f64();
     let t1 = Instant::now();
-    let merged = part::merge(&read_parts)?;
     let image = merged.film.image();
     let merge_seconds = t1.elapsed().as_secs_f64();
     let t2 = Instant::now();
@@ -349,10 +360,10 @@ pub fn merge_to_files(parts: &[PathBuf], files: &RenderFiles) -> Result<MergeSta
         outputs.stage(id, &image.file_bytes(f, 1.0, files.names.float)?)?;
     }
     let h = &merged.header;
-    let s = RenderSettings::of(h).map_err(|m| Error::Input(format!("{}: {m}", parts[0].display())))?;
+    let s = shard::RenderSettings::of(h).map_err(|m| Error::Input(format!("{}: {m}", parts[0].display())))?;
     let mut stats = MergeStats {
         parts: parts.len(),
-        split: read_parts[0].1.header.split.kind,
+        split: split_kind,
         width: h.width,
         height: h.height,
         spp: h.spp,
@@ -370,6 +381,7 @@ pub fn merge_to_files(parts: &[PathBuf], files: &RenderFiles) -> Result<MergeSta
         write_seconds: 0.0,
         seconds: 0.0,
         image_hash: format!("{:016x}", image.hash()),
+        verified,
     };
     stats.write_seconds = t2.elapsed().as_secs_f64();
     stats.seconds = t0.elapsed().as_secs_f64();
@@ -378,31 +390,6 @@ pub fn merge_to_files(parts: &[PathBuf], files: &RenderFiles) -> Result<MergeSta
     }
     outputs.commit()?;
     Ok(stats)
-}
-
-/// The settings a partial film's header carries, as the statistics name them.
-struct RenderSettings {
-    max_depth: u32,
-    seed: u64,
-    sampler: Sampler,
-    roulette: Option<Roulette>,
-    adaptive: Option<Adaptive>,
-}
-
-impl RenderSettings {
-    fn of(h: &Header) -> std::result::Result<RenderSettings, String> {
-        let get = |k: &str| h.settings.get(k).map(String::as_str).ok_or(format!("the header has no setting '{k}'"));
-        let bad = |k: &str, v: &str| format!("the header's {k} '{}' is not one rtow writes", crate::output::clip(v));
-        let (d, s, sm, rr, ad) =
-            (get("max_depth")?, get("seed")?, get("sampler")?, get("russian_roulette")?, get("adaptive")?);
-        Ok(RenderSettings {
-            max_depth: d.parse().map_err(|_| bad("max_depth", d))?,
-            seed: s.parse().map_err(|_| bad("seed", s))?,
-            sampler: sm.parse().map_err(|_| bad("sampler", sm))?,
-            roulette: Roulette::from_description(rr).ok_or_else(|| bad("russian_roulette", rr))?,
-            adaptive: Adaptive::from_description(ad).ok_or_else(|| bad("adaptive", ad))?,
-        })
-    }
 }
 
 /// The default name of a render's output: `<scene name>.png`.

@@ -119,6 +119,36 @@ pub(crate) fn render_portion(
     render_inner(job, portion, true, progress, &|| ()).map(|(r, _, f)| (r, f))
 }
 
+/// Renders the pixels `pixels` (x, y), each alone and from empty
+/// accumulators, over the sample indices `samples`, with the scalar reference
+/// kernel (every kernel renders the same bits): what a partial film of
+/// those samples holds for them. The verified merge compares a part's data
+/// with it. Runs on the current rayon pool; a scene that traces no samples
+/// (the gradient) gives empty accumulators.
+pub fn render_pixels(job: &Job, pixels: &[(u32, u32)], samples: Range<u32>) -> Vec<TileFilm> {
+    let prep = job.prepared();
+    let moments = prep.estimator.adaptive.is_some();
+    let mut tiles: Vec<TileFilm> = pixels
+        .iter()
+        .map(|&(x, y)| {
+            let t = TileFilm::new(x, y, 1, 1);
+            if moments {
+                t.with_moments()
+            } else {
+                t
+            }
+        })
+        .collect();
+    if prep.plan.mode != Mode::Gradient {
+        with_path_sampler!(prep.settings.sampler, sampler => {
+            tiles.par_iter_mut().for_each(|t| {
+                scalar::render_tile(prep, sampler, t, samples.clone(), &mut ());
+            })
+        });
+    }
+    tiles
+}
+
 /// Renders with the exact work counters on (`Stats::work`).
 pub fn render_counted(job: &Job, progress: Option<&(dyn Fn(Progress) + Sync)>) -> Result<Rendered> {
     let (mut r, probes) = render_probed(job, progress, &WorkCounters::default)?;

@@ -6,12 +6,17 @@
 //! film's sums are exact integers ([`crate::film::accum`]), so any split adds
 //! up to the same bits. The partial film format is [`crate::film::part`].
 
-use crate::choice::Mode;
+use crate::choice::{KernelChoice, Mode};
 use crate::error::{Error, Result};
-use crate::film::part::{self, PartCounters};
-use crate::job::Job;
-use crate::render::{render_portion, Portion, Progress, Rendered};
+use crate::estimator::{Adaptive, Roulette};
+use crate::film::part::{self, PartCounters, Pixel};
+use crate::film::Film;
+use crate::job::{Job, Overrides, RenderOptions};
+use crate::render::{render_pixels, render_portion, Portion, Progress, Rendered};
+use crate::sampling::Sampler;
+use serde::Serialize;
 use std::path::{Path, PathBuf};
+use std::time::Instant;
 
 pub use crate::film::part::{is_part_path, merge, Header, Identity, Part, Split, SplitKind};
 
@@ -61,6 +66,7 @@ pub fn check(job: &Job, req: &FilmRequest) -> Result<()> {
     let h = &film.header;
     let mine = Part::new(
         &job.identity(),
+        Vec::new(),
         settings.spp,
         Split::WHOLE,
         crate::film::Film::new(0, 0, 0..0, false),
@@ -111,6 +117,321 @@ pub fn render_part(
     let film = film.ok_or_else(|| Error::Input("this scene traces no samples: it has no film".into()))?;
     let st = &rendered.stats;
     counters.add(&PartCounters { rays: st.rays, samples: st.samples, rejected_samples: st.rejected_samples });
-    let part = Part::new(&job.identity(), settings.spp, req.split, film, counters);
+    let part = Part::new(&job.identity(), job.scene_json(), settings.spp, req.split, film, counters);
     Ok((rendered, part))
+}
+
+/// Merges the partial films at `paths` (every shard of one render) into the
+/// whole render's film, streaming: every header is read and checked first
+/// (a few hundred bytes per part), then the set (same render, same split,
+/// no duplicate, none missing, as [`merge`]), then the parts are read one at
+/// a time in bounded pieces and added into one accumulator. Memory: one
+/// image's accumulators and a 64 KiB buffer, whatever the number of parts.
+/// Every refusal names the file (exit status 2).
+///
+/// With `verify.pixels > 0`, each part's data is checked by recomputation
+/// (see [`Verify`]): the first part's embedded scene and the header's
+/// settings make a job, and `verify.pixels` pixels of every part, drawn from
+/// `verify.seed`, are rendered again over the part's samples and compared
+/// bit for bit with the part's data.
+pub fn merge_files(paths: &[PathBuf], verify: Verify) -> Result<Merged> {
+    verify.check()?;
+    let mut headers = Vec::with_capacity(paths.len());
+    for p in paths {
+        let reader = Part::open(p)?;
+        // Each part is read twice (its header now, its data later).
+        if !std::fs::metadata(p).is_ok_and(|m| m.is_file()) {
+            return Err(Error::Input(format!(
+                "{}: not a regular file; merge reads each part twice (its header first), so give a file, \
+                 not a pipe",
+                p.display()
+            )));
+        }
+        headers.push(reader.header().clone());
+    }
+    let set: Vec<(&Path, &Header)> = paths.iter().map(PathBuf::as_path).zip(&headers).collect();
+    if let Err((blamed, e)) = part::check_set(&set) {
+        // A header that differs because its file is corrupted is reported as corrupted.
+        if let Some(i) = blamed {
+            if part::checksum_ok(&paths[i]) == Some(false) {
+                return Err(Error::Input(format!(
+                    "{}: corrupted: its checksum does not match its contents",
+                    paths[i].display()
+                )));
+            }
+        }
+        return Err(e);
+    }
+    let h0 = &headers[0];
+    let moments = headers.iter().all(|h| h.moments);
+    let mut film = Film::new(h0.width, h0.height, 0..h0.height, moments);
+    let mut report = Verified { pixels_per_part: verify.pixels, seed: verify.seed, pixels: 0, seconds: 0.0 };
+    let mut job: Option<Job> = None;
+    let mut scene0 = Vec::new();
+    for (k, (p, h)) in paths.iter().zip(&headers).enumerate() {
+        let reader = Part::open(p)?;
+        if reader.header() != h {
+            return Err(Error::Input(format!("{}: changed while the parts were merged", p.display())));
+        }
+        let offset = h.rows[0] as usize * h.width as usize;
+        let chosen = verify.choose(h);
+        let mut stored = Vec::with_capacity(chosen.len());
+        let mut overflow = false;
+        let (_, scene) = reader.read_pixels(|i, px| {
+            overflow |= film.add_pixel(offset + i, px).is_none();
+            if chosen.get(stored.len()) == Some(&i) {
+                stored.push(*px);
+            }
+        })?;
+        if overflow {
+            return Err(Error::Input(format!("{}: overlaps the other parts (a pixel's count overflows)", p.display())));
+        }
+        if !chosen.is_empty() {
+            let t = Instant::now();
+            if job.is_none() {
+                job = Some(verification_job(p, h, &scene)?);
+            }
+            let job = job.as_ref().expect("made above");
+            check_pixels(job, p, h, &chosen, &stored, verify)?;
+            report.pixels += chosen.len() as u64;
+            report.seconds += t.elapsed().as_secs_f64();
+        }
+        if k == 0 {
+            scene0 = scene;
+        }
+    }
+    let header = part::merged_header(&headers.iter().collect::<Vec<_>>(), &film);
+    Ok(Merged { part: Part { header, film, scene: scene0 }, split: h0.split.kind, verified: report })
+}
+
+/// How a merge (or a resume) checks the data of a partial film by
+/// recomputation. Every sample is a pure function of (seed, pixel, sample),
+/// so a part's data for a pixel is known without trusting the part: render
+/// the pixel again over the part's samples (from its embedded scene and
+/// settings) and compare the sample count, the exact sums and (with
+/// adaptive sampling) the sums of squares, bit for bit. `pixels` pixels of
+/// each part are checked (all of them if the part has fewer; 0: none), drawn
+/// at random from `seed` (reported, so a run can be repeated).
+#[derive(Clone, Copy, Debug, PartialEq, Eq, Serialize)]
+pub struct Verify {
+    pub pixels: u32,
+    pub seed: u64,
+}
+
+impl Verify {
+    /// Pixels per part checked by default: a few milliseconds of rendering
+    /// per part at the book's settings (docs/shards.md measures the cost).
+    pub const DEFAULT_PIXELS: u32 = 64;
+    /// No verification.
+    pub const OFF: Verify = Verify { pixels: 0, seed: 0 };
+    /// Most pixels per part: the pixels checked are held in memory (about
+    /// 300 bytes each); a part checked whole is better rendered again.
+    pub const MAX_PIXELS: u32 = 1 << 16;
+
+    /// Refuses more pixels per part than [`Verify::MAX_PIXELS`].
+    pub fn check(&self) -> Result<()> {
+        if self.pixels > Self::MAX_PIXELS {
+            return Err(Error::invalid(
+                "verify",
+                format!("{} pixels per part is too many; at most {}", self.pixels, Self::MAX_PIXELS),
+            ));
+        }
+        Ok(())
+    }
+
+    /// `pixels` per part, from a seed drawn at random (from the standard
+    /// library's per-process random keys).
+    pub fn with_random_seed(pixels: u32) -> Verify {
+        use std::hash::{BuildHasher, Hasher};
+        let mut h = std::collections::hash_map::RandomState::new().build_hasher();
+        h.write_u128(std::time::SystemTime::now().duration_since(std::time::UNIX_EPOCH).map_or(0, |d| d.as_nanos()));
+        Verify { pixels, seed: h.finish() }
+    }
+
+    /// The pixels of a part with header `h` to check: indices into its rows
+    /// (row-major), sorted, distinct; drawn from the seed and the shard.
+    pub fn choose(&self, h: &Header) -> Vec<usize> {
+        let n = h.width as u64 * (h.rows[1] - h.rows[0]) as u64;
+        let k = self.pixels as u64;
+        if k >= n {
+            return (0..n as usize).collect();
+        }
+        // SplitMix64 from the seed and the shard; Floyd's sampling of k of n.
+        let mut state = self.seed ^ (h.split.shard as u64).wrapping_mul(0xd1b5_4a32_d192_ed03);
+        let mut next = || {
+            state = state.wrapping_add(0x9e37_79b9_7f4a_7c15);
+            let mut z = state;
+            z = (z ^ (z >> 30)).wrapping_mul(0xbf58_476d_1ce4_e5b9);
+            z = (z ^ (z >> 27)).wrapping_mul(0x94d0_49bb_1331_11eb);
+            z ^ (z >> 31)
+        };
+        let mut set = std::collections::BTreeSet::new();
+        for j in n - k..n {
+            let t = next() % (j + 1);
+            if !set.insert(t) {
+                set.insert(j);
+            }
+        }
+        set.into_iter().map(|i| i as usize).collect()
+    }
+}
+
+/// What a verification checked.
+#[derive(Clone, Copy, Debug, Serialize)]
+pub struct Verified {
+    /// Pixels asked for per part (`--verify`).
+    pub pixels_per_part: u32,
+    /// The seed they were drawn from (`--verify-seed`).
+    pub seed: u64,
+    /// Pixels rendered again and compared, over all parts.
+    pub pixels: u64,
+    /// Seconds spent on it (the embedded scene laid out, the pixels rendered).
+    pub seconds: f64,
+}
+
+/// The job that renders the pixels of a part `p` (header `h`) again: its
+/// embedded scene with the header's settings, on the scalar reference
+/// kernel. It must have the part's image key: a part of another rtow
+/// version (which may render differently) cannot be verified.
+fn verification_job(p: &Path, h: &Header, scene: &[u8]) -> Result<Job> {
+    let s = RenderSettings::of(h).map_err(|m| Error::Input(format!("{}: {m}", p.display())))?;
+    let overrides = Overrides {
+        width: Some(h.width),
+        height: Some(h.height),
+        spp: Some(h.spp),
+        max_depth: Some(s.max_depth),
+        seed: Some(s.seed),
+        sampler: Some(s.sampler),
+        book: false,
+    };
+    let options = RenderOptions {
+        kernel: KernelChoice::Scalar,
+        roulette: s.roulette,
+        adaptive: s.adaptive,
+        ..Default::default()
+    };
+    let cannot = |why: String| {
+        Error::Input(format!(
+            "{}: cannot render it again to verify it: {why}; merge with --verify 0 to trust it",
+            p.display()
+        ))
+    };
+    let job = Job::from_scene_json(scene, p, &overrides, &options)
+        .map_err(|e| cannot(part::quoted_to(&e.to_string(), 300)))?;
+    if format!("{:016x}", job.identity().key()) != h.key {
+        return Err(cannot(format!(
+            "its image key {} is not the one this rtow ({}) gives its scene and settings (it was written by rtow {})",
+            part::quoted(&h.key),
+            env!("CARGO_PKG_VERSION"),
+            part::quoted(&h.rtow)
+        )));
+    }
+    if job.mode() == Mode::Gradient {
+        return Err(cannot("its scene traces no samples".into()));
+    }
+    Ok(job)
+}
+
+/// Renders the pixels `chosen` of the part `p` (header `h`) again with `job`
+/// over the part's samples and compares them with `stored`, the part's data
+/// for them; refuses the part (exit status 2), naming the first pixel that
+/// differs.
+fn check_pixels(job: &Job, p: &Path, h: &Header, chosen: &[usize], stored: &[Pixel], v: Verify) -> Result<()> {
+    let adaptive = job.options().adaptive.is_some();
+    if h.moments != adaptive {
+        return Err(Error::Input(format!(
+            "{}: {} sums of squares, but it was rendered with adaptive = {}",
+            p.display(),
+            if h.moments { "has" } else { "has no" },
+            h.settings.get("adaptive").map_or("(unset)".into(), |a| part::quoted(a))
+        )));
+    }
+    let w = h.width as usize;
+    let coords: Vec<(u32, u32)> = chosen.iter().map(|&i| ((i % w) as u32, h.rows[0] + (i / w) as u32)).collect();
+    let fresh = render_pixels(job, &coords, h.samples[0]..h.samples[1]);
+    for ((t, s), (x, y)) in fresh.iter().zip(stored).zip(&coords) {
+        let sq = |v: [f64; 3]| v.map(f64::to_bits);
+        let same = t.count[0] == s.count && t.sum[0] == s.sum && (!adaptive || sq(t.sum_sq[0]) == sq(s.sum_sq));
+        if !same {
+            let mean = |sum: [i128; 3], n: u32| crate::film::accum::mean(sum, n);
+            return Err(Error::Input(format!(
+                "{}: pixel ({x}, {y}) is not what its scene renders over samples {}..{}: the part holds {} samples \
+                 of mean {:?}, rendering it again gives {} of mean {:?} (verified with --verify-seed {}); the part \
+                 was rendered differently or its data was changed",
+                p.display(),
+                h.samples[0],
+                h.samples[1],
+                s.count,
+                mean(s.sum, s.count),
+                t.count[0],
+                mean(t.sum[0], t.count[0]),
+                v.seed
+            )));
+        }
+    }
+    Ok(())
+}
+
+/// Checks a film to resume (`path`, already checked by [`check`] to be a
+/// whole render of `job`'s image) by recomputation, as a merge checks its
+/// parts ([`Verify`]).
+pub fn verify_film(job: &Job, path: &Path, film: &Part, verify: Verify) -> Result<Verified> {
+    verify.check()?;
+    let h = &film.header;
+    let chosen = verify.choose(h);
+    let t = Instant::now();
+    if !chosen.is_empty() {
+        let w = h.width as usize;
+        let stored: Vec<Pixel> = chosen
+            .iter()
+            .map(|&i| Pixel {
+                count: film.film.count[i],
+                sum: film.film.sum[i],
+                sum_sq: film.film.sum_sq.get(i).copied().unwrap_or_default(),
+            })
+            .collect();
+        debug_assert!(chosen.iter().all(|&i| i < w * (h.rows[1] - h.rows[0]) as usize));
+        check_pixels(job, path, h, &chosen, &stored, verify)?;
+    }
+    Ok(Verified {
+        pixels_per_part: verify.pixels,
+        seed: verify.seed,
+        pixels: chosen.len() as u64,
+        seconds: t.elapsed().as_secs_f64(),
+    })
+}
+
+/// What [`merge_files`] produced.
+pub struct Merged {
+    /// The whole render's film.
+    pub part: Part,
+    /// How the parts were split.
+    pub split: SplitKind,
+    /// What the verification checked.
+    pub verified: Verified,
+}
+
+/// The settings a partial film's header carries, as the statistics name them.
+pub struct RenderSettings {
+    pub max_depth: u32,
+    pub seed: u64,
+    pub sampler: Sampler,
+    pub roulette: Option<Roulette>,
+    pub adaptive: Option<Adaptive>,
+}
+
+impl RenderSettings {
+    pub fn of(h: &Header) -> std::result::Result<RenderSettings, String> {
+        let get = |k: &str| h.settings.get(k).map(String::as_str).ok_or(format!("the header has no setting '{k}'"));
+        let bad = |k: &str, v: &str| format!("the header's {k} '{}' is not one rtow writes", part::quoted(v));
+        let (d, s, sm, rr, ad) =
+            (get("max_depth")?, get("seed")?, get("sampler")?, get("russian_roulette")?, get("adaptive")?);
+        Ok(RenderSettings {
+            max_depth: d.parse().map_err(|_| bad("max_depth", d))?,
+            seed: s.parse().map_err(|_| bad("seed", s))?,
+            sampler: sm.parse().map_err(|_| bad("sampler", sm))?,
+            roulette: Roulette::from_description(rr).ok_or_else(|| bad("russian_roulette", rr))?,
+            adaptive: Adaptive::from_description(ad).ok_or_else(|| bad("adaptive", ad))?,
+        })
+    }
 }

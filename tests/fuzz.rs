@@ -16,6 +16,13 @@
 //! sanity checks and the comparison must refuse (exit status 2, one line) or
 //! compare without a panic and with finite figures.
 //!
+//! Partial films (`.rtfilm`) too: real shards and a whole film of a small
+//! render get bit flips, cuts, inserted bytes, header fields set to extreme
+//! values, changed data and versions (half the time with the checksum
+//! recomputed, so the checks behind it are reached), and go through a
+//! verified `merge` or a `--resume`: refused (exit status 2, one bounded
+//! line) or merged, never a panic or an abort, each in under 10 seconds.
+//!
 //! `cargo test` runs it for 3 seconds; `.ci/run` for 60
 //! (`RTOW_FUZZ_SECS=60 cargo test --release --test fuzz`); a long run:
 //! `RTOW_FUZZ_SECS=3600 RTOW_FUZZ_SEED=7 cargo test --release --test fuzz -- --nocapture`.
@@ -436,5 +443,224 @@ fn fuzz_the_baselines() {
         execs += 1;
     }
     println!("fuzz baselines: seed {seed}, {execs} executions in {:.1} s: {tally:?}", start.elapsed().as_secs_f64());
+    assert!(tally.get("refused").is_some_and(|&n| n > 0), "no mutation was refused: {tally:?}");
+}
+
+/// Real partial films of one small render: two shards by samples, two by
+/// rows, and a whole render of half the samples (to resume); the job that
+/// resumes it.
+struct Films {
+    dir: tempfile::TempDir,
+    parts: Vec<(&'static str, Vec<u8>)>,
+    source: scene::SceneSource,
+    resume_job: Job,
+}
+
+fn film_corpus() -> Films {
+    use rtow::shard::{self, FilmRequest, Split, SplitKind};
+    let scene = scene::preset("final").unwrap();
+    let o =
+        |spp| Overrides { width: Some(8), height: Some(6), spp: Some(spp), max_depth: Some(6), ..Default::default() };
+    let opts = RenderOptions { threads: Some(1), ..Default::default() };
+    let job = Job::new(&scene, &o(4), &opts).unwrap();
+    let film = |split| shard::render_part(&job, &FilmRequest { split, resume: None }, None).unwrap().1.to_bytes();
+    let parts = vec![
+        ("s1.rtfilm", film(Split { kind: SplitKind::Samples, shard: 1, of: 2 })),
+        ("s2.rtfilm", film(Split { kind: SplitKind::Samples, shard: 2, of: 2 })),
+        ("r1.rtfilm", film(Split { kind: SplitKind::Rows, shard: 1, of: 2 })),
+        ("r2.rtfilm", film(Split { kind: SplitKind::Rows, shard: 2, of: 2 })),
+        ("whole.rtfilm", film(Split::WHOLE)),
+    ];
+    let dir = tempfile::tempdir().unwrap();
+    for (name, bytes) in &parts {
+        std::fs::write(dir.path().join(name), bytes).unwrap();
+    }
+    let resume_job = Job::new(&scene, &o(8), &opts).unwrap();
+    Films { dir, parts, source: scene::SceneSource::built(scene, "final"), resume_job }
+}
+
+/// Header fields edited to values that have broken readers before.
+const FILM_FIELDS: &[&str] = &[
+    "width",
+    "height",
+    "spp",
+    "samples",
+    "rows",
+    "split",
+    "sum_bytes",
+    "scene_bytes",
+    "fraction_bits",
+    "moments",
+    "counters",
+    "settings",
+    "scene_hash",
+    "key",
+];
+
+const FILM_VALUES: &[&str] = &[
+    "0",
+    "1",
+    "2",
+    "3",
+    "7",
+    "-1",
+    "65535",
+    "4294967295",
+    "4294967296",
+    "18446744073709551615",
+    "1e300",
+    "true",
+    "null",
+    "\"\"",
+    "\"x\\ny\"",
+    "[0, 0]",
+    "[0, 4294967295]",
+    "[4294967295, 0]",
+    "{\"kind\": \"samples\", \"shard\": 2, \"of\": 2}",
+    "{\"kind\": \"rows\", \"shard\": 1, \"of\": 4294967295}",
+    "{\"rays\": 0, \"samples\": 0, \"rejected_samples\": 0}",
+    "{\"seed\": \"0\"}",
+];
+
+/// A film with its header replaced by `text` (and its length fixed).
+fn with_header(film: &[u8], text: &[u8]) -> Vec<u8> {
+    let hlen = u32::from_le_bytes(film[12..16].try_into().unwrap()) as usize;
+    let mut out = film[..12].to_vec();
+    out.extend_from_slice(&(text.len() as u32).to_le_bytes());
+    out.extend_from_slice(text);
+    out.extend_from_slice(film.get(16 + hlen..).unwrap_or_default());
+    out
+}
+
+/// One random mutation of a film: a bit flip, a cut, bytes inserted, a
+/// header field or a byte of the data changed; half the time the checksum is
+/// recomputed (a film a bug writes), so that the checks behind it are reached.
+fn mutate_film(rng: &mut Rng, film: &mut Vec<u8>, corpus: &[(Vec<u8>, Format)]) {
+    let n = film.len();
+    let hlen = film.get(12..16).map_or(0, |b| u32::from_le_bytes(b.try_into().unwrap()) as usize);
+    match rng.below(7) {
+        0 if n > 0 => {
+            let i = rng.below(n);
+            film[i] ^= 1 << rng.below(8);
+        }
+        1 => film.truncate(rng.below(n + 1)),
+        2 => {
+            let i = rng.below(n + 1);
+            let len = rng.below(64);
+            film.splice(i..i, (0..len).map(|_| rng.next() as u8));
+        }
+        3 | 4 if n >= 16 + hlen => {
+            // A header field set to an extreme value, or the header's text mutated like a scene's.
+            let text = film[16..16 + hlen].to_vec();
+            let new = match serde_json::from_slice::<serde_json::Value>(&text) {
+                Ok(mut h) if rng.below(2) == 0 => {
+                    let text: &&str = rng.pick(FILM_VALUES);
+                    let v: serde_json::Value = serde_json::from_str(text).unwrap();
+                    h[*rng.pick(FILM_FIELDS)] = v;
+                    serde_json::to_vec(&h).unwrap()
+                }
+                _ => {
+                    let mut t = text;
+                    mutate(rng, &mut t, corpus);
+                    t
+                }
+            };
+            *film = with_header(film, &new);
+        }
+        5 if n > 16 + hlen + 4 => {
+            // A byte of the scene or the data.
+            let i = 16 + hlen + rng.below(n - 16 - hlen - 4);
+            film[i] = rng.next() as u8;
+        }
+        _ => {
+            // The version.
+            if n >= 12 {
+                film[8..12].copy_from_slice(&(rng.below(4) as u32).to_le_bytes());
+            }
+        }
+    }
+    if rng.below(2) == 0 && film.len() >= 4 {
+        let body = film.len() - 4;
+        let crc = crc32fast::hash(&film[..body]);
+        film[body..].copy_from_slice(&crc.to_le_bytes());
+    }
+}
+
+/// One mutated film merged with the other shard of its split, or resumed;
+/// `Err` describes a broken promise.
+fn check_film(films: &Films, which: usize, bytes: &[u8]) -> Result<&'static str, String> {
+    use rtow::files::{self, RenderFiles, RenderRequest};
+    use rtow::shard::{Split, Verify};
+    let d = films.dir.path();
+    std::fs::write(d.join("fuzz.rtfilm"), bytes).unwrap();
+    let refusal = |e: rtow::Error| {
+        let msg = e.to_string();
+        if e.exit_code() != 2 || msg.is_empty() || msg.lines().count() != 1 || msg.len() > 1000 {
+            return Err(format!("bad refusal (exit {}): {msg:?}", e.exit_code()));
+        }
+        Ok("refused")
+    };
+    let t = Instant::now();
+    let out = RenderFiles { output: d.join("out.png"), ..Default::default() };
+    let verify = Verify { pixels: 8, seed: 1 };
+    let result = if films.parts[which].0 == "whole.rtfilm" {
+        let req = RenderRequest {
+            source: &films.source,
+            job: &films.resume_job,
+            split: Split::WHOLE,
+            resume: Some(d.join("fuzz.rtfilm")),
+            verify,
+            files: out,
+        };
+        files::render_to_files(&req, None).map(|_| "resumed")
+    } else {
+        // The other shard of the same split.
+        let other = films.parts[which ^ 1].0;
+        files::merge_to_files(&[d.join("fuzz.rtfilm"), d.join(other)], &out, verify).map(|_| "merged")
+    };
+    if t.elapsed() > Duration::from_secs(10) {
+        return Err(format!("took {:?}", t.elapsed()));
+    }
+    match result {
+        Ok(kind) => Ok(kind),
+        Err(e) => refusal(e),
+    }
+}
+
+#[test]
+fn fuzz_the_films() {
+    let secs: u64 = std::env::var("RTOW_FUZZ_SECS").ok().and_then(|v| v.parse().ok()).unwrap_or(3);
+    let seed: u64 = std::env::var("RTOW_FUZZ_SEED").ok().and_then(|v| v.parse().ok()).unwrap_or_else(|| {
+        std::time::SystemTime::now().duration_since(std::time::UNIX_EPOCH).map_or(1, |d| d.as_nanos() as u64)
+    });
+    let films = film_corpus();
+    for (i, (name, bytes)) in films.parts.iter().enumerate() {
+        let ok = if *name == "whole.rtfilm" { "resumed" } else { "merged" };
+        assert_eq!(check_film(&films, i, bytes), Ok(ok), "{name}");
+    }
+    let corpus: Vec<(Vec<u8>, Format)> = films.parts.iter().map(|(_, b)| (b.clone(), Format::Json)).collect();
+    let mut rng = Rng(seed | 1);
+    let start = Instant::now();
+    let mut tally: std::collections::BTreeMap<&str, u64> = Default::default();
+    let mut execs = 0u64;
+    while start.elapsed() < Duration::from_secs(secs) {
+        let which = rng.below(films.parts.len());
+        let mut data = films.parts[which].1.clone();
+        for _ in 0..1 + rng.below(3) {
+            mutate_film(&mut rng, &mut data, &corpus);
+        }
+        let failure = tally_outcome(&mut tally, || check_film(&films, which, &data));
+        if let Some(why) = failure {
+            let path = Path::new(env!("CARGO_TARGET_TMPDIR")).join("fuzz-failure.rtfilm");
+            let _ = std::fs::write(&path, &data);
+            panic!(
+                "fuzz seed {seed}, film execution {execs} ({}): {why}\ninput written to {}",
+                films.parts[which].0,
+                path.display()
+            );
+        }
+        execs += 1;
+    }
+    println!("fuzz films: seed {seed}, {execs} executions in {:.1} s: {tally:?}", start.elapsed().as_secs_f64());
     assert!(tally.get("refused").is_some_and(|&n| n > 0), "no mutation was refused: {tally:?}");
 }

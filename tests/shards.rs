@@ -11,6 +11,7 @@ use rtow::film::part;
 use rtow::scene::{preset, Scene};
 use rtow::shard::{self, FilmRequest, Part, Split, SplitKind};
 use rtow::{render, Adaptive, KernelChoice, RenderOptions, Settings};
+use std::collections::BTreeMap;
 use std::path::{Path, PathBuf};
 
 fn kernels() -> Vec<KernelChoice> {
@@ -280,4 +281,247 @@ fn rtow_merge_refuses_what_would_not_be_the_image() {
     let e = refused(d, &["render", "ch01-gradient", "--width", "8", "--height", "8", "-o", "out.rtfilm"], "no film");
     assert!(e.contains("gradient"), "{e}");
     assert!(!d.join("out.rtfilm").exists());
+}
+
+// Issue 17: bounded by design, and a merge that streams.
+
+/// Runs `rtow` with `args` in `dir` under an address-space limit of `kib`
+/// KiB, so that a run that would need more memory fails its allocation
+/// (exit 134) instead of swapping the machine.
+fn rtow_limited(dir: &Path, kib: u64, args: &str) -> Run {
+    let script = format!("ulimit -v {kib} && exec \"{}\" {args}", common::BIN);
+    std::process::Command::new("sh").arg("-c").arg(script).current_dir(dir).output().expect("sh runs").into()
+}
+
+/// A film's preamble and header, with the header edited by `edit`.
+fn edited_header(film: &[u8], edit: impl Fn(&mut serde_json::Value)) -> Vec<u8> {
+    let hlen = u32::from_le_bytes(film[12..16].try_into().unwrap()) as usize;
+    let mut h: serde_json::Value = serde_json::from_slice(&film[16..16 + hlen]).unwrap();
+    edit(&mut h);
+    let text = serde_json::to_vec(&h).unwrap();
+    let mut out = film[..12].to_vec();
+    out.extend_from_slice(&(text.len() as u32).to_le_bytes());
+    out.extend_from_slice(&text);
+    out
+}
+
+#[test]
+fn a_part_is_refused_after_reading_at_most_its_header() {
+    let dir = tempfile::tempdir().unwrap();
+    let d = dir.path();
+    ok(&rtow(d, &["render", "final", "-q", "--width", "8", "--height", "6", "--spp", "2", "-o", "w.rtfilm"]));
+    let good = std::fs::read(d.join("w.rtfilm")).unwrap();
+    let sparse = |name: &str, head: &[u8], len: u64| {
+        let f = std::fs::File::create(d.join(name)).unwrap();
+        std::io::Write::write_all(&mut &f, head).unwrap();
+        f.set_len(len).unwrap();
+    };
+    // 1 GiB of zeros; a real header followed by 1 GiB; a header that claims
+    // 2^27 pixels, in a 4 GiB file (under the largest film read). Each file is
+    // sparse: nothing is written to the disk.
+    sparse("zeros.rtfilm", b"", 1 << 30);
+    sparse("long.rtfilm", &edited_header(&good, |_| {}), 1 << 30);
+    let huge = edited_header(&good, |h| {
+        let (w, hh) = (1u64 << 14, 1u64 << 13);
+        h["width"] = w.into();
+        h["height"] = hh.into();
+        h["rows"] = serde_json::json!([0, hh]);
+        h["counters"]["samples"] = (w * hh * 2).into();
+    });
+    sparse("huge.rtfilm", &huge, 4 << 30);
+    // 256 MiB of address space: reading any of them whole would abort (exit 134).
+    for (file, needle) in [
+        ("zeros.rtfilm", "not an rtow partial film"),
+        ("long.rtfilm", "the header says"),
+        ("huge.rtfilm", "134217728 pixels, more than the 67108864"),
+    ] {
+        for cmd in [
+            format!("merge {file} -o out.png"),
+            format!("render final --width 8 --height 6 --spp 4 --resume {file} -o out.png"),
+        ] {
+            let r = rtow_limited(d, 256 << 10, &cmd);
+            assert_eq!(r.code, 2, "{cmd}: {}", r.stderr);
+            assert_eq!(r.stderr.lines().count(), 1, "{cmd}: {}", r.stderr);
+            assert!(r.stderr.contains(file) && r.stderr.contains(needle), "{cmd}: {}", r.stderr);
+        }
+    }
+}
+
+/// Runs `rtow` with `args` in `dir`; its exit status and peak resident memory (KiB).
+// The child is reaped by wait4 (which also reports its rusage), not by `Child::wait`.
+#[allow(clippy::zombie_processes)]
+fn rtow_peak_rss(dir: &Path, args: &[String]) -> (i32, u64) {
+    let child = std::process::Command::new(common::BIN)
+        .args(args)
+        .current_dir(dir)
+        .stdout(std::process::Stdio::null())
+        .stderr(std::process::Stdio::null())
+        .spawn()
+        .expect("rtow starts");
+    let pid = child.id() as libc::pid_t;
+    let mut status = 0;
+    // SAFETY: a zeroed rusage is a valid value, and wait4 writes only into
+    // the two locals it is given, for a child of this process.
+    let mut usage: libc::rusage = unsafe { std::mem::zeroed() };
+    let waited = unsafe { libc::wait4(pid, &mut status, 0, &mut usage) };
+    assert_eq!(waited, pid, "wait4 failed");
+    let code = if libc::WIFEXITED(status) { libc::WEXITSTATUS(status) } else { 128 + libc::WTERMSIG(status) };
+    (code, usage.ru_maxrss as u64)
+}
+
+#[test]
+fn merge_memory_does_not_grow_with_the_number_of_parts() {
+    let dir = tempfile::tempdir().unwrap();
+    let d = dir.path();
+    // 192x108 with 100 samples per pixel, in 100 parts (and in 2): each part
+    // holds the whole image (1.1 MB of accumulators), so a merge that held
+    // every part would need over 100 MB.
+    let scene = preset("ch07-diffuse").unwrap();
+    let s = common::settings(192, 108, 100, 3, 1);
+    let o = opts(KernelChoice::Simd, 2, 16);
+    let j = job(&scene, s, o);
+    let mut names = BTreeMap::new();
+    for n in [2u32, 100] {
+        let v: Vec<String> = (1..=n)
+            .map(|k| {
+                let split = Split { kind: SplitKind::Samples, shard: k, of: n };
+                let (_, p) = shard::render_part(&j, &FilmRequest { split, resume: None }, None).unwrap();
+                let name = format!("n{n}-{k}.rtfilm");
+                p.write(&d.join(&name)).unwrap();
+                name
+            })
+            .collect();
+        names.insert(n, v);
+    }
+    let one = render(&j, None).unwrap();
+    let mut peak = BTreeMap::new();
+    for (n, parts) in &names {
+        let mut args = vec!["merge".to_string()];
+        args.extend(parts.iter().cloned());
+        args.extend(["-o", "out.png", "--stats-json", "out.json"].map(String::from));
+        let (code, kib) = rtow_peak_rss(d, &args);
+        assert_eq!(code, 0, "merge of {n} parts");
+        assert_eq!(hash_in(&d.join("out.json")), format!("{:016x}", one.image.hash()), "{n} parts");
+        peak.insert(*n, kib);
+    }
+    println!("peak RSS of merge: {peak:?} KiB");
+    // One accumulator (1.1 MB) and one part at a time, whatever the number of parts.
+    assert!(peak[&100] < peak[&2] + 8 * 1024, "merge memory grows with the parts: {peak:?} KiB");
+    assert!(peak[&100] < 64 * 1024, "merge of 100 parts of 192x108 peaks at {} KiB", peak[&100]);
+}
+
+// Issue 17: a verified merge.
+
+/// `film` with its header edited by `edit`, its data edited by `data`
+/// (given the data's offset and the bytes per pixel), and its checksum
+/// recomputed: a film a bug or a hand could write.
+fn rewritten(film: &[u8], edit: impl Fn(&mut serde_json::Value), data: impl Fn(&mut [u8], usize, usize)) -> Vec<u8> {
+    let hlen = u32::from_le_bytes(film[12..16].try_into().unwrap()) as usize;
+    let h: serde_json::Value = serde_json::from_slice(&film[16..16 + hlen]).unwrap();
+    let scene = h["scene_bytes"].as_u64().unwrap() as usize;
+    let pixel = 4 + 3 * h["sum_bytes"].as_u64().unwrap() as usize + if h["moments"] == true { 24 } else { 0 };
+    let mut rest = film[16 + hlen..film.len() - 4].to_vec();
+    data(&mut rest, scene, pixel);
+    let mut out = edited_header(film, edit);
+    out.extend_from_slice(&rest);
+    let crc = crc32fast::hash(&out);
+    out.extend_from_slice(&crc.to_le_bytes());
+    out
+}
+
+#[test]
+fn merge_and_resume_verify_the_films_by_rendering_them_again() {
+    let dir = tempfile::tempdir().unwrap();
+    let d = dir.path();
+    let small = ["--width", "8", "--height", "6", "--depth", "8", "-q"];
+    let run = |extra: &[&str]| rtow(d, &[&["render", "final"][..], &small, extra].concat());
+    for k in 1..=4 {
+        ok(&run(&["--spp", "8", "--shard", &format!("{k}/4"), "-o", &format!("p{k}.rtfilm")]));
+    }
+    ok(&run(&["--spp", "4", "-o", "four.rtfilm"]));
+    let read = |f: &str| std::fs::read(d.join(f)).unwrap();
+    let write = |f: &str, b: &[u8]| std::fs::write(d.join(f), b).unwrap();
+    let all = |first: &str, second: &str| {
+        ["merge", "p1.rtfilm", first, second, "p4.rtfilm", "-o", "out.png", "--verify", "100"].map(String::from)
+    };
+    let merge = |first: &str, second: &str, blamed: &str| {
+        let a = all(first, second);
+        refused(d, &a.iter().map(String::as_str).collect::<Vec<_>>(), blamed)
+    };
+    // Parts 2 and 3 swap their claims (shard and sample range, each of 2
+    // samples): the headers agree with each other and with the data's sample
+    // counts; only rendering their pixels again tells.
+    let claim = |from: u32, to: u32| {
+        rewritten(
+            &read(&format!("p{from}.rtfilm")),
+            |h| {
+                h["split"]["shard"] = to.into();
+                h["samples"] = serde_json::json!([2 * (to - 1), 2 * to]);
+            },
+            |_, _, _| {},
+        )
+    };
+    write("as3.rtfilm", &claim(2, 3));
+    write("as2.rtfilm", &claim(3, 2));
+    let e = merge("as2.rtfilm", "as3.rtfilm", "as2.rtfilm");
+    assert!(e.contains("pixel (") && e.contains("not what its scene renders over samples 2..4"), "{e}");
+    // Without verification the swap goes through, silently (the image differs).
+    let a = all("as2.rtfilm", "as3.rtfilm");
+    let mut a: Vec<&str> = a.iter().map(String::as_str).collect();
+    (a[6], a[8]) = ("swapped.png", "0");
+    ok(&rtow(d, &a));
+    // A claim of another number of samples disagrees with the data's counts.
+    write(
+        "more.rtfilm",
+        &rewritten(
+            &read("p2.rtfilm"),
+            |h| {
+                h["spp"] = 16.into();
+                h["samples"] = serde_json::json!([4, 8]);
+            },
+            |_, _, _| {},
+        ),
+    );
+    assert!(merge("more.rtfilm", "p3.rtfilm", "more.rtfilm").contains("samples counted"));
+    // One sum of pixel 10, (2, 1), changed in its lowest byte.
+    let touch = |f: &str| rewritten(&read(f), |_| {}, |data, scene, pixel| data[scene + 10 * pixel + 4] ^= 0x40);
+    write("touched.rtfilm", &touch("p3.rtfilm"));
+    let e = merge("p2.rtfilm", "touched.rtfilm", "touched.rtfilm");
+    assert!(e.contains("pixel (2, 1)") && e.contains("--verify-seed"), "{e}");
+    write("four-touched.rtfilm", &touch("four.rtfilm"));
+    let e = refused(
+        d,
+        &[
+            &["render", "final"][..],
+            &small,
+            &["--spp", "8", "--resume", "four-touched.rtfilm", "--verify", "48", "-o", "out.png"],
+        ]
+        .concat(),
+        "four-touched.rtfilm",
+    );
+    assert!(e.contains("pixel (2, 1)"), "{e}");
+    ok(&run(&["--spp", "8", "--resume", "four.rtfilm", "--verify", "48", "-o", "resumed.png"]));
+    // The film of an rtow that embedded no scene (format version 1).
+    let mut v1 = read("p2.rtfilm");
+    v1[8..12].copy_from_slice(&1u32.to_le_bytes());
+    write("v1.rtfilm", &v1);
+    assert!(merge("v1.rtfilm", "p3.rtfilm", "v1.rtfilm").contains("format version 1 is older"));
+    // The pixels checked are held in memory: their number is bounded.
+    let e = refused(
+        d,
+        &["merge", "p1.rtfilm", "p2.rtfilm", "p3.rtfilm", "p4.rtfilm", "-o", "out.png", "--verify", "100000"],
+        "verify",
+    );
+    assert!(e.contains("at most 65536"), "{e}");
+    // The seed is reported, and the same seed checks the same pixels.
+    let a = all("p2.rtfilm", "p3.rtfilm");
+    let mut a: Vec<&str> = a.iter().map(String::as_str).collect();
+    (a[6], a[8]) = ("verified.png", "5");
+    a.extend(["--verify-seed", "77", "--stats-json", "m.json"]);
+    let r = rtow(d, &a);
+    ok(&r);
+    assert!(r.stdout.contains("verified 20 pixels (--verify 5 --verify-seed 77)"), "{}", r.stdout);
+    let v: serde_json::Value = serde_json::from_str(&std::fs::read_to_string(d.join("m.json")).unwrap()).unwrap();
+    assert_eq!(v["verified"]["seed"], 77);
+    assert_eq!(v["verified"]["pixels"], 20);
 }

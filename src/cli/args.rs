@@ -219,3 +219,35 @@ pub fn flag_of(field: &str) -> Option<&'static str> {
         _ => return None,
     })
 }
+
+/// How `merge` and `render --resume` check partial films by recomputation.
+#[derive(Args)]
+pub struct VerifyArgs {
+    /// Pixels of each partial film rendered again and compared bit for bit
+    /// with its data (a film that differs is refused); 0 trusts the films.
+    #[arg(long, value_name = "N", default_value_t = rtow::shard::Verify::DEFAULT_PIXELS)]
+    verify: u32,
+    /// The seed the checked pixels are drawn from [default: random, reported].
+    #[arg(long, value_name = "S")]
+    verify_seed: Option<u64>,
+}
+
+impl VerifyArgs {
+    pub fn verify(&self) -> rtow::shard::Verify {
+        match self.verify_seed {
+            Some(seed) => rtow::shard::Verify { pixels: self.verify, seed },
+            None => rtow::shard::Verify::with_random_seed(self.verify),
+        }
+    }
+}
+
+/// E.g. "verified 1024 pixels (--verify 64 --verify-seed 7) in 0.012 s".
+pub fn verified(v: &rtow::shard::Verified) -> String {
+    if v.pixels_per_part == 0 {
+        return "not verified (--verify 0)".into();
+    }
+    format!(
+        "verified {} pixels (--verify {} --verify-seed {}) in {:.3} s",
+        v.pixels, v.pixels_per_part, v.seed, v.seconds
+    )
+}

@@ -1,7 +1,7 @@
 //! `rtow merge`: partial films (the shards of one render) into the image, bit
 //! for bit the one a single process renders with the same scene and settings.
 
-use super::args::OutputArgs;
+use super::args::{OutputArgs, VerifyArgs};
 use super::say;
 use clap::Args;
 use rtow::files;
@@ -19,17 +19,19 @@ pub struct MergeArgs {
     output: PathBuf,
     #[command(flatten)]
     files: OutputArgs,
+    #[command(flatten)]
+    verify: VerifyArgs,
     /// No summary line.
     #[arg(short, long)]
     quiet: bool,
 }
 
 pub fn run(a: MergeArgs) -> Result<()> {
-    let st = files::merge_to_files(&a.parts, &a.files.files(a.output.clone()))?;
+    let st = files::merge_to_files(&a.parts, &a.files.files(a.output.clone()), a.verify.verify())?;
     if !a.quiet {
         say!(
             "merged {} part(s) ({}x{}, {} spp, split by {}) -> {}: {} rays, {} samples, image hash {}, in {:.3} s \
-             (read {:.3} s, merge {:.3} s, write {:.3} s)",
+             (read {:.3} s, merge {:.3} s, write {:.3} s); {}",
             st.parts,
             st.width,
             st.height,
@@ -42,7 +44,8 @@ pub fn run(a: MergeArgs) -> Result<()> {
             st.seconds,
             st.read_seconds,
             st.merge_seconds,
-            st.write_seconds
+            st.write_seconds,
+            super::args::verified(&st.verified)
         );
         if st.rejected_samples > 0 {
             say!("{} samples were rejected (NaN, Inf or out of range) in the parts", st.rejected_samples);

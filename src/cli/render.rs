@@ -2,7 +2,7 @@
 //! or to a partial film (`.rtfilm`): a shard of the render (`--shard K/N`), or
 //! a whole render to be resumed (`--resume`) or merged later.
 
-use super::args::{choice, kernel_parser, EstimatorArgs, ImageArgs, OutputArgs, RunArgs};
+use super::args::{choice, kernel_parser, EstimatorArgs, ImageArgs, OutputArgs, RunArgs, VerifyArgs};
 use super::{say, tell};
 use clap::Args;
 use indicatif::{ProgressBar, ProgressStyle};
@@ -35,6 +35,9 @@ pub struct RenderArgs {
     /// pixel (same scene and settings): gives exactly the image of --spp.
     #[arg(long, value_name = "FILE")]
     resume: Option<PathBuf>,
+    // How the film to resume is checked (--verify N --verify-seed S).
+    #[command(flatten)]
+    verify: VerifyArgs,
     #[command(flatten)]
     image: ImageArgs,
     /// Kernel: the scalar reference, or the SIMD wavefront at the widest lane count
@@ -103,6 +106,7 @@ pub fn run(a: RenderArgs) -> Result<()> {
         job: &job,
         split,
         resume: a.resume.clone(),
+        verify: a.verify.verify(),
         files: a.files.files(output.clone()),
     };
     if a.explain {
@@ -119,7 +123,12 @@ pub fn run(a: RenderArgs) -> Result<()> {
 fn summary(name: &str, st: &Stats, req: &RenderRequest, output: &std::path::Path) -> String {
     let piece = match (&req.split, &req.resume) {
         (s, _) if s.kind != SplitKind::None => format!(" ({})", s.describe()),
-        (_, Some(p)) => format!(" (resumed from {})", p.display()),
+        (_, Some(p)) => format!(
+            " (resumed from {}, verified with --verify {} --verify-seed {})",
+            p.display(),
+            req.verify.pixels,
+            req.verify.seed
+        ),
         _ => String::new(),
     };
     let rejected = if st.rejected_samples > 0 {

@@ -205,6 +205,31 @@ impl Film {
         Some(())
     }
 
+    /// Sets pixel `i` of the band (row-major from its first row) to `p`
+    /// (the sums of squares only if the film keeps them).
+    pub fn set_pixel(&mut self, i: usize, p: &part::Pixel) {
+        self.count[i] = p.count;
+        self.sum[i] = p.sum;
+        if let Some(d) = self.sum_sq.get_mut(i) {
+            *d = p.sum_sq;
+        }
+    }
+
+    /// Adds `p` to pixel `i` of the band: exact for the sums and counts
+    /// whatever the order. `None` if the count would exceed `u32::MAX`.
+    pub fn add_pixel(&mut self, i: usize, p: &part::Pixel) -> Option<()> {
+        self.count[i] = self.count[i].checked_add(p.count)?;
+        for (d, s) in self.sum[i].iter_mut().zip(&p.sum) {
+            *d += s;
+        }
+        if let Some(d) = self.sum_sq.get_mut(i) {
+            for (d, s) in d.iter_mut().zip(&p.sum_sq) {
+                *d += s;
+            }
+        }
+        Some(())
+    }
+
     /// The mean of every pixel of the band into `image` (same width and height).
     pub fn write_into(&self, image: &mut Image) {
         assert!(image.width == self.width && image.height == self.height);

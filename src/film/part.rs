@@ -2,16 +2,17 @@
 //! render, in a file that `rtow merge` and `rtow render --resume` read back, and
 //! that refuses to be combined with anything it does not fit.
 //!
-//! # Format, version 1
+//! # Format, version 2
 //!
 //! All integers little-endian.
 //!
 //! | bytes | content |
 //! |---|---|
 //! | 8 | magic `RTOWFILM` |
-//! | 4 | format version (`u32`, 1) |
-//! | 4 | header length `H` in bytes (`u32`) |
+//! | 4 | format version (`u32`, 2) |
+//! | 4 | header length `H` in bytes (`u32`, at most [`MAX_HEADER_BYTES`]) |
 //! | `H` | header: one JSON object ([`Header`]) |
+//! | `S` | the scene: its canonical JSON (the bytes its `scene_hash` hashes), `scene_bytes` long |
 //! | `D` | data: for every pixel of the film's rows, row-major: the accepted samples (`u32`), the three fixed-point channel sums ([`super::accum`]) as two's complement integers of `sum_bytes` bytes each, then, if `moments`, the three f64 sums of squares |
 //! | 4 | CRC-32 (IEEE) of everything before it |
 //!
@@ -23,23 +24,43 @@
 //! fixed-point layout, and the kernel-independent counters (rays, samples,
 //! rejected samples).
 //!
+//! A part is self-contained: with its scene and settings, `rtow merge` can
+//! render any of its pixels again and compare them with its data (the
+//! verified merge, `shard::merge_files`).
+//!
 //! Readers refuse a file whose version is newer than theirs before looking
 //! further, so a later version may change anything after the first 16 bytes.
+//! Version 1 (no embedded scene) is refused: it cannot be verified.
+//!
+//! Every header field is checked against the limits every render is held to
+//! before anything is allocated, and the file's length against the length
+//! the header implies before the scene and the data are read
+//! ([`PartReader`]), in bounded pieces.
 
 use super::{accum, Film};
 use crate::error::{Error, Result};
+use crate::limits::MAX_PIXELS;
 use serde::{Deserialize, Serialize};
 use std::collections::BTreeMap;
+use std::io::Read;
 use std::ops::Range;
 use std::path::{Path, PathBuf};
 
 /// The first 8 bytes of every partial film.
 pub const MAGIC: &[u8; 8] = b"RTOWFILM";
 /// The format version this rtow writes and reads.
-pub const VERSION: u32 = 1;
+pub const VERSION: u32 = 2;
 /// Largest partial film read (bytes): `MAX_PIXELS` pixels with the widest
 /// sums and the sums of squares, and a header.
-pub const MAX_FILM_BYTES: u64 = crate::limits::MAX_PIXELS * (4 + 3 * 16 + 3 * 8) + (1 << 20);
+pub const MAX_FILM_BYTES: u64 =
+    crate::limits::MAX_PIXELS * (4 + 3 * 16 + 3 * 8) + MAX_SCENE_BYTES + (MAX_HEADER_BYTES as u64) + 20;
+/// Largest header read (bytes of JSON): the header names a few settings, far
+/// less than this; a longer one is refused before it is read.
+pub const MAX_HEADER_BYTES: u32 = 1 << 16;
+/// Largest embedded scene (bytes of canonical JSON): a sphere of any
+/// scene takes well under 256 bytes, and a scene has at most
+/// [`crate::limits::MAX_SPHERES`].
+pub const MAX_SCENE_BYTES: u64 = crate::limits::MAX_SPHERES as u64 * 256 + (1 << 20);
 /// The file extension of partial films.
 pub const EXTENSION: &str = "rtfilm";
 
@@ -273,6 +294,8 @@ pub struct Header {
     pub sum_bytes: u32,
     /// Whether the per-pixel sums of squares follow the sums.
     pub moments: bool,
+    /// Length of the embedded scene (its canonical JSON).
+    pub scene_bytes: u64,
     pub counters: PartCounters,
 }
 
@@ -281,6 +304,8 @@ pub struct Header {
 pub struct Part {
     pub header: Header,
     pub film: Film,
+    /// The scene's canonical JSON, whose hash is the header's `scene_hash`.
+    pub scene: Vec<u8>,
 }
 
 fn hex(v: u64) -> String {
@@ -303,8 +328,9 @@ const TRAILER: usize = 4;
 
 impl Part {
     /// A part of the image `id` with `spp` samples per pixel: `film` holds the
-    /// rows and `split` says which samples.
-    pub fn new(id: &Identity, spp: u32, split: Split, film: Film, counters: PartCounters) -> Part {
+    /// rows and `split` says which samples; `scene` is the scene's canonical
+    /// JSON (the bytes hashed into `id.scene_hash`).
+    pub fn new(id: &Identity, scene: Vec<u8>, spp: u32, split: Split, film: Film, counters: PartCounters) -> Part {
         let samples = split.samples(spp);
         let header = Header {
             rtow: env!("CARGO_PKG_VERSION").into(),
@@ -320,9 +346,10 @@ impl Part {
             fraction_bits: accum::FRACTION_BITS,
             sum_bytes: sum_bytes(&film),
             moments: film.has_moments(),
+            scene_bytes: scene.len() as u64,
             counters,
         };
-        Part { header, film }
+        Part { header, film, scene }
     }
 
     fn pixel_bytes(h: &Header) -> u64 {
@@ -334,13 +361,16 @@ impl Part {
         let mut h = self.header.clone();
         h.sum_bytes = sum_bytes(&self.film);
         h.moments = self.film.has_moments();
+        h.scene_bytes = self.scene.len() as u64;
         let json = serde_json::to_vec(&h).expect("a header serializes");
         let px = self.film.count.len();
-        let mut out = Vec::with_capacity(PREFIX + json.len() + px * Self::pixel_bytes(&h) as usize + TRAILER);
+        let mut out =
+            Vec::with_capacity(PREFIX + json.len() + self.scene.len() + px * Self::pixel_bytes(&h) as usize + TRAILER);
         out.extend_from_slice(MAGIC);
         out.extend_from_slice(&VERSION.to_le_bytes());
         out.extend_from_slice(&(json.len() as u32).to_le_bytes());
         out.extend_from_slice(&json);
+        out.extend_from_slice(&self.scene);
         let nb = h.sum_bytes as usize;
         for i in 0..px {
             out.extend_from_slice(&self.film.count[i].to_le_bytes());
@@ -363,115 +393,332 @@ impl Part {
         crate::output::write_atomic(path, &self.to_bytes())
     }
 
-    /// Reads and checks a partial film; every error names `path` (exit status 2).
+    /// Reads and checks a partial film; every error names `path` (exit
+    /// status 2). The header is read and checked first (every field within
+    /// the documented limits, the file's length the one it implies), then the
+    /// accumulators are allocated and the data read in bounded pieces.
     pub fn read(path: &Path) -> Result<Part> {
-        let bytes = crate::limits::read_bounded(path, MAX_FILM_BYTES, "partial film")?;
-        Part::from_bytes(&bytes, path)
+        Part::read_from(Part::open(path)?)
+    }
+
+    /// Opens a partial film and reads its preamble and header (at most
+    /// `16 + MAX_HEADER_BYTES` bytes), checked; the data is not read yet.
+    pub fn open(path: &Path) -> Result<PartReader<std::io::BufReader<std::fs::File>>> {
+        let cannot = |e: &dyn std::fmt::Display| Error::Input(format!("cannot read {}: {e}", path.display()));
+        let file = std::fs::File::open(path).map_err(|e| cannot(&e))?;
+        let meta = file.metadata().map_err(|e| cannot(&e))?;
+        if meta.is_dir() {
+            return Err(cannot(&"is a directory"));
+        }
+        if meta.is_file() && meta.len() > MAX_FILM_BYTES {
+            return Err(Error::Input(format!(
+                "partial film {} is too large: {} bytes, at most {MAX_FILM_BYTES}",
+                path.display(),
+                meta.len()
+            )));
+        }
+        let len = meta.is_file().then_some(meta.len());
+        PartReader::new(std::io::BufReader::with_capacity(1 << 16, file), len, path).map_err(|(_, e)| e)
+    }
+
+    /// The part an opened reader holds, read whole.
+    fn read_from<R: Read>(r: PartReader<R>) -> Result<Part> {
+        let h = r.header().clone();
+        let mut film = Film::new(h.width, h.height, h.rows[0]..h.rows[1], h.moments);
+        let (header, scene) = r.read_pixels(|i, p| film.set_pixel(i, p))?;
+        Ok(Part { header, film, scene })
     }
 
     /// Parses and checks the bytes of a partial film read from `path`.
     pub fn from_bytes(bytes: &[u8], path: &Path) -> Result<Part> {
-        let bad = |m: String| Error::Input(format!("{}: {m}", path.display()));
-        if bytes.len() < 8 || &bytes[..8] != MAGIC {
-            return Err(bad("not an rtow partial film (no RTOWFILM signature)".into()));
+        match PartReader::new(bytes, Some(bytes.len() as u64), path) {
+            Ok(r) => Part::read_from(r),
+            // The bytes are at hand: a header that is wrong because the file
+            // is corrupted is reported as corrupted.
+            Err((Stage::Header, e)) => Err(match checksum_mismatch(bytes) {
+                Some(m) => Error::Input(format!("{}: {m}", path.display())),
+                None => e,
+            }),
+            Err((_, e)) => Err(e),
         }
-        if bytes.len() < PREFIX {
-            return Err(bad(format!("truncated: {} bytes, shorter than the 16-byte preamble", bytes.len())));
+    }
+}
+
+/// `Some(message)` when `bytes` (a whole film) do not end with the checksum
+/// of what precedes it.
+fn checksum_mismatch(bytes: &[u8]) -> Option<String> {
+    let body_end = bytes.len().checked_sub(TRAILER)?;
+    let stored = u32::from_le_bytes(bytes[body_end..].try_into().expect("4 bytes"));
+    let actual = crc32fast::hash(&bytes[..body_end]);
+    (stored != actual).then(|| format!("corrupted: checksum {actual:08x} does not match the stored {stored:08x}"))
+}
+
+/// Whether the file at `path` ends with the checksum of what precedes it,
+/// read in bounded pieces (`None`: it cannot be read, or is too short).
+pub fn checksum_ok(path: &Path) -> Option<bool> {
+    let mut file = std::io::BufReader::with_capacity(1 << 16, std::fs::File::open(path).ok()?);
+    let mut crc = crc32fast::Hasher::new();
+    let mut last = Vec::with_capacity(TRAILER);
+    let mut buf = vec![0u8; 1 << 16];
+    let mut total = 0u64;
+    loop {
+        let n = file.read(&mut buf).ok()?;
+        if n == 0 {
+            break;
         }
-        let u32_at = |i: usize| u32::from_le_bytes(bytes[i..i + 4].try_into().expect("4 bytes"));
-        let version = u32_at(8);
+        total += n as u64;
+        if total > MAX_FILM_BYTES {
+            return None;
+        }
+        // Everything but the last 4 bytes seen so far goes into the checksum.
+        last.extend_from_slice(&buf[..n]);
+        if last.len() > TRAILER {
+            let k = last.len() - TRAILER;
+            crc.update(&last[..k]);
+            last.drain(..k);
+        }
+    }
+    let stored = u32::from_le_bytes(last.as_slice().try_into().ok()?);
+    Some(stored == crc.finalize())
+}
+
+/// One pixel's accumulators as a partial film stores them.
+#[derive(Clone, Copy, Debug, Default, PartialEq)]
+pub struct Pixel {
+    /// Accepted samples.
+    pub count: u32,
+    /// The fixed-point sums ([`accum`]).
+    pub sum: [i128; 3],
+    /// The sums of squares (zero when the film has none).
+    pub sum_sq: [f64; 3],
+}
+
+/// Where a reader refused a file: before its header could be believed (not
+/// a film, truncated, a future version), in the header, or in the data.
+#[derive(Clone, Copy, Debug, PartialEq, Eq)]
+pub enum Stage {
+    Preamble,
+    Header,
+    Data,
+}
+
+/// Bytes of the data read at once (whole pixels).
+const CHUNK: usize = 1 << 16;
+
+/// A partial film being read: its preamble and header read and checked
+/// (every field within the documented limits, the file's length the one the
+/// header implies), its data not read yet. [`PartReader::read_pixels`] reads
+/// the data in bounded pieces and hands each pixel to a caller (who may add
+/// it to an accumulator: `rtow merge` holds one image, whatever the number of
+/// parts).
+pub struct PartReader<R: Read> {
+    path: PathBuf,
+    header: Header,
+    src: R,
+    crc: crc32fast::Hasher,
+}
+
+impl<R: Read> PartReader<R> {
+    /// Reads the preamble and the header of a film of `len` bytes (`None`:
+    /// unknown, e.g. a pipe) from `src`: at most `16 + MAX_HEADER_BYTES`
+    /// bytes. Every error names `path` and says at which stage it was found.
+    pub fn new(mut src: R, len: Option<u64>, path: &Path) -> std::result::Result<Self, (Stage, Error)> {
+        let bad = |stage: Stage, m: String| (stage, Error::Input(format!("{}: {m}", path.display())));
+        let early = |m: String| bad(Stage::Preamble, m);
+        let io = |e: std::io::Error| early(format!("cannot read: {e}"));
+        let mut pre = [0u8; PREFIX];
+        let n = read_up_to(&mut src, &mut pre).map_err(io)?;
+        if n < 8 || &pre[..8] != MAGIC {
+            return Err(early("not an rtow partial film (no RTOWFILM signature)".into()));
+        }
+        if n < PREFIX {
+            return Err(early(format!("truncated: {n} bytes, shorter than the 16-byte preamble")));
+        }
+        let version = u32::from_le_bytes(pre[8..12].try_into().expect("4 bytes"));
         if version > VERSION {
-            return Err(bad(format!(
+            return Err(early(format!(
                 "format version {version} is newer than this rtow reads ({VERSION}); use a newer rtow"
             )));
         }
         if version == 0 {
-            return Err(bad("corrupted: format version 0 does not exist".into()));
+            return Err(early("corrupted: format version 0 does not exist".into()));
         }
-        let hlen = u32_at(12) as u64;
-        let header_end = PREFIX as u64 + hlen;
-        if bytes.len() as u64 <= header_end + TRAILER as u64 {
-            return Err(bad(format!(
-                "truncated: {} bytes, but the header alone is {} bytes long (with the checksum {})",
-                bytes.len(),
-                header_end,
-                header_end + TRAILER as u64
+        if version < VERSION {
+            return Err(early(format!(
+                "format version {version} is older than this rtow reads ({VERSION}): it carries no scene, so its \
+                 data cannot be verified; merge or resume it with the rtow that wrote it, or render it again"
             )));
         }
-        // The header is parsed before the checksum is checked, to tell a
-        // truncated file (its length falls short of what the header says)
-        // from a corrupted one.
-        let header: Option<Header> = serde_json::from_slice(&bytes[PREFIX..header_end as usize]).ok();
-        let expected = header.as_ref().and_then(|h| {
-            let px = h.width as u64 * (h.rows[1] as u64).checked_sub(h.rows[0] as u64)?;
-            Some(header_end + px.checked_mul(Self::pixel_bytes(h))? + TRAILER as u64)
-        });
-        if let Some(n) = expected {
-            if (bytes.len() as u64) < n {
-                return Err(bad(format!("truncated: {} bytes, the header says {n}", bytes.len())));
+        let hlen = u32::from_le_bytes(pre[12..16].try_into().expect("4 bytes"));
+        let header_end = PREFIX as u64 + hlen as u64;
+        if let Some(len) = len {
+            if len <= header_end + TRAILER as u64 {
+                return Err(early(format!(
+                    "truncated: {len} bytes, but the header alone is {header_end} bytes long (with the checksum {})",
+                    header_end + TRAILER as u64
+                )));
             }
         }
-        let body_end = bytes.len() - TRAILER;
-        let stored = u32_at(body_end);
-        let actual = crc32fast::hash(&bytes[..body_end]);
+        if hlen > MAX_HEADER_BYTES {
+            return Err(bad(
+                Stage::Header,
+                format!("corrupted: a header of {hlen} bytes, more than the {MAX_HEADER_BYTES} any film has"),
+            ));
+        }
+        let mut text = vec![0u8; hlen as usize];
+        let got = read_up_to(&mut src, &mut text).map_err(io)?;
+        if got < text.len() {
+            return Err(early(format!("truncated: {} bytes, inside the header", PREFIX + got)));
+        }
+        let mut crc = crc32fast::Hasher::new();
+        crc.update(&pre);
+        crc.update(&text);
+        let h: Header = serde_json::from_slice(&text)
+            .map_err(|_| bad(Stage::Header, "corrupted: the header is not valid JSON".into()))?;
+        Part::check_header(&h).map_err(|m| bad(Stage::Header, format!("inconsistent header: {m}")))?;
+        let expected = header_end + h.scene_bytes + Part::pixel_count(&h) * Part::pixel_bytes(&h) + TRAILER as u64;
+        if let Some(len) = len {
+            if len < expected {
+                return Err(early(format!("truncated: {len} bytes, the header says {expected}")));
+            }
+            if len > expected {
+                return Err(bad(Stage::Header, format!("corrupted: {len} bytes, the header says {expected}")));
+            }
+        }
+        Ok(PartReader { path: path.to_path_buf(), header: h, src, crc })
+    }
+
+    /// The header, checked.
+    pub fn header(&self) -> &Header {
+        &self.header
+    }
+
+    /// Reads the data in bounded pieces, giving every pixel (with its index
+    /// in the film's rows, row-major) to `sink`, then the checksum; then
+    /// checks that the data holds what the header claims. On a refusal,
+    /// `sink` may have seen some of the pixels. Returns the header and the
+    /// embedded scene (checked against the header's `scene_hash`).
+    pub fn read_pixels(mut self, mut sink: impl FnMut(usize, &Pixel)) -> Result<(Header, Vec<u8>)> {
+        let path = self.path.display().to_string();
+        let bad = |m: String| Error::Input(format!("{path}: {m}"));
+        let h = &self.header;
+        let px = Part::pixel_count(h) as usize;
+        let pb = Part::pixel_bytes(h) as usize;
+        let per_chunk = (CHUNK / pb).max(1);
+        let mut buf = vec![0u8; per_chunk.min(px.max(1)) * pb];
+        let max_count = h.samples[1] - h.samples[0];
+        let mut problem: Option<String> = None;
+        let mut accepted = 0u64;
+        let mut i = 0;
+        let short = |e: std::io::Error| match e.kind() {
+            std::io::ErrorKind::UnexpectedEof => bad("truncated while it was read (did the file change?)".into()),
+            _ => bad(format!("cannot read: {e}")),
+        };
+        // The scene (its length checked against the limit with the header).
+        let mut scene = vec![0u8; h.scene_bytes as usize];
+        self.src.read_exact(&mut scene).map_err(short)?;
+        self.crc.update(&scene);
+        if hex(fnv1a(&scene)) != h.scene_hash {
+            problem =
+                Some(format!("corrupted: the embedded scene does not have the scene hash {}", quoted(&h.scene_hash)));
+        }
+        while i < px {
+            let k = per_chunk.min(px - i);
+            let b = &mut buf[..k * pb];
+            self.src.read_exact(b).map_err(short)?;
+            self.crc.update(b);
+            // After a problem the rest is only checksummed, so that a
+            // corrupted file is reported as such.
+            if problem.is_none() {
+                for (j, raw) in b.chunks_exact(pb).enumerate() {
+                    match decode(h, raw, max_count) {
+                        Ok(p) => {
+                            accepted += p.count as u64;
+                            sink(i + j, &p);
+                        }
+                        Err(m) => {
+                            problem = Some(m);
+                            break;
+                        }
+                    }
+                }
+            }
+            i += k;
+        }
+        let mut tail = [0u8; TRAILER];
+        self.src.read_exact(&mut tail).map_err(short)?;
+        let stored = u32::from_le_bytes(tail);
+        let actual = self.crc.clone().finalize();
+        if read_up_to(&mut self.src, &mut [0u8; 1]).map_err(short)? != 0 {
+            return Err(bad("corrupted: bytes after the checksum (did the file change while it was read?)".into()));
+        }
         if stored != actual {
             return Err(bad(format!("corrupted: checksum {actual:08x} does not match the stored {stored:08x}")));
         }
-        let h = header.ok_or_else(|| bad("corrupted: the header is not valid JSON".into()))?;
-        if expected != Some(bytes.len() as u64) {
-            return Err(bad(format!("corrupted: {} bytes, the header says {expected:?}", bytes.len())));
+        if let Some(m) = problem {
+            return Err(bad(m));
         }
-        Self::check_header(&h).map_err(|m| bad(format!("inconsistent header: {m}")))?;
-        let film = Self::pixels(&h, &bytes[header_end as usize..body_end]).map_err(bad)?;
-        Ok(Part { header: h, film })
-    }
-
-    /// The accumulators of a checked header's pixels, from the file's body:
-    /// per pixel the sample count, the three sums and (with moments) the three
-    /// sums of squares. The error says what is inconsistent.
-    fn pixels(h: &Header, body: &[u8]) -> std::result::Result<Film, String> {
-        let mut film = Film::new(h.width, h.height, h.rows[0]..h.rows[1], h.moments);
-        let nb = h.sum_bytes as usize;
-        let max_count = h.samples[1] - h.samples[0];
-        let mut at = 0;
-        let mut accepted = 0u64;
-        for i in 0..film.count.len() {
-            let n = u32::from_le_bytes(body[at..at + 4].try_into().expect("4 bytes"));
-            at += 4;
-            if n > max_count {
-                return Err(format!("corrupted: a pixel has {n} samples, more than the part's {max_count}"));
-            }
-            accepted += n as u64;
-            film.count[i] = n;
-            for k in 0..3 {
-                let mut b = if body[at + nb - 1] & 0x80 != 0 { [0xff; 16] } else { [0; 16] };
-                b[..nb].copy_from_slice(&body[at..at + nb]);
-                at += nb;
-                let s = i128::from_le_bytes(b);
-                // Each accepted sample is below 2^63 in fixed point.
-                if s.unsigned_abs() > (n as u128) << 63 {
-                    return Err("corrupted: a pixel's sum is out of range for its samples".into());
-                }
-                film.sum[i][k] = s;
-            }
-            if h.moments {
-                for k in 0..3 {
-                    let v = f64::from_le_bytes(body[at..at + 8].try_into().expect("8 bytes"));
-                    at += 8;
-                    if !(v.is_finite() && v >= 0.0) {
-                        return Err("corrupted: a sum of squares is negative or not finite".into());
-                    }
-                    film.sum_sq[i][k] = v;
-                }
-            }
-        }
-        if accepted + h.counters.rejected_samples != h.counters.samples {
-            return Err(format!(
+        let c = &h.counters;
+        if accepted + c.rejected_samples != c.samples {
+            return Err(bad(format!(
                 "inconsistent header: {} samples counted, but the pixels hold {accepted} and {} were rejected",
-                h.counters.samples, h.counters.rejected_samples
-            ));
+                c.samples, c.rejected_samples
+            )));
         }
-        Ok(film)
+        Ok((self.header, scene))
+    }
+}
+
+/// Reads until `buf` is full or the input ends; the bytes read.
+fn read_up_to(src: &mut impl Read, buf: &mut [u8]) -> std::io::Result<usize> {
+    let mut n = 0;
+    while n < buf.len() {
+        match src.read(&mut buf[n..]) {
+            Ok(0) => break,
+            Ok(k) => n += k,
+            Err(e) if e.kind() == std::io::ErrorKind::Interrupted => {}
+            Err(e) => return Err(e),
+        }
+    }
+    Ok(n)
+}
+
+/// One pixel of the data of a film with header `h`: the sample count (at
+/// most `max_count`), the three sums (in range for the count) and, with
+/// moments, the three sums of squares (finite, not negative).
+fn decode(h: &Header, raw: &[u8], max_count: u32) -> std::result::Result<Pixel, String> {
+    let nb = h.sum_bytes as usize;
+    let mut p = Pixel { count: u32::from_le_bytes(raw[..4].try_into().expect("4 bytes")), ..Pixel::default() };
+    if p.count > max_count {
+        return Err(format!("corrupted: a pixel has {} samples, more than the part's {max_count}", p.count));
+    }
+    let mut at = 4;
+    for s in &mut p.sum {
+        let mut b = if raw[at + nb - 1] & 0x80 != 0 { [0xff; 16] } else { [0; 16] };
+        b[..nb].copy_from_slice(&raw[at..at + nb]);
+        at += nb;
+        *s = i128::from_le_bytes(b);
+        // Each accepted sample is below 2^63 in fixed point.
+        if s.unsigned_abs() > (p.count as u128) << 63 {
+            return Err("corrupted: a pixel's sum is out of range for its samples".into());
+        }
+    }
+    if h.moments {
+        for v in &mut p.sum_sq {
+            *v = f64::from_le_bytes(raw[at..at + 8].try_into().expect("8 bytes"));
+            at += 8;
+            if !(v.is_finite() && *v >= 0.0) {
+                return Err("corrupted: a sum of squares is negative or not finite".into());
+            }
+        }
+    }
+    Ok(p)
+}
+
+impl Part {
+    /// Pixels of the film's rows (checked headers only: at most `MAX_PIXELS`).
+    fn pixel_count(h: &Header) -> u64 {
+        h.width as u64 * (h.rows[1] as u64).saturating_sub(h.rows[0] as u64)
     }
 
     fn check_header(h: &Header) -> std::result::Result<(), String> {
@@ -482,11 +729,26 @@ impl Part {
                 accum::FRACTION_BITS
             ));
         }
+        if h.scene_bytes > MAX_SCENE_BYTES {
+            return Err(format!("a scene of {} bytes, more than the {MAX_SCENE_BYTES} any scene takes", h.scene_bytes));
+        }
         if !(1..=16).contains(&h.sum_bytes) {
             return Err(format!("sum_bytes {} is not between 1 and 16", h.sum_bytes));
         }
         if h.width == 0 || h.height == 0 || h.spp == 0 {
             return Err("width, height and spp must be at least 1".into());
+        }
+        // The limits every render is held to (`Settings::validate`), before
+        // anything is allocated for the pixels.
+        let pixels = h.width as u64 * h.height as u64;
+        if pixels > MAX_PIXELS {
+            return Err(format!(
+                "{}x{} is {pixels} pixels, more than the {MAX_PIXELS} any render has",
+                h.width, h.height
+            ));
+        }
+        if pixels * h.spp as u64 > u32::MAX as u64 * 1024 {
+            return Err(format!("{} samples per pixel at {pixels} pixels is more than any render takes", h.spp));
         }
         let s = h.split;
         let whole = s.kind == SplitKind::None;
@@ -506,8 +768,31 @@ impl Part {
                 h.rows
             ));
         }
+        // What the data must hold: every pixel of the rows traced every
+        // sample of the range (fewer with adaptive sampling, the films with
+        // moments). Rejected samples are counted apart (see `read_pixels`).
+        let c = &h.counters;
+        let traced = Self::pixel_count(h) * samples.len() as u64;
+        if c.samples > traced || (!h.moments && c.samples != traced) {
+            return Err(format!(
+                "{} samples counted, but {} pixels over samples {samples:?} trace {traced}",
+                c.samples,
+                Self::pixel_count(h)
+            ));
+        }
         Ok(())
     }
+}
+
+/// A header's text value for a message: at most 40 characters, control
+/// characters shown as `?` (a message is one bounded line).
+pub fn quoted(v: &str) -> String {
+    quoted_to(v, 40)
+}
+
+/// [`quoted`], at most `n` characters.
+pub fn quoted_to(v: &str, n: usize) -> String {
+    crate::output::clip_to(v, n).chars().map(|ch| if ch.is_control() { '?' } else { ch }).collect()
 }
 
 /// Refuses (naming `p`, ending the message with `consequence`) a part whose
@@ -515,14 +800,16 @@ impl Part {
 /// setting. The sample count is not compared.
 pub fn same_image(p: &Path, h: &Header, p0: &Path, h0: &Header, consequence: &str) -> Result<()> {
     let a = p0.display();
+    let c = quoted;
     let refuse = |what: String| Error::Input(format!("{}: {what}; {consequence}", p.display()));
     if h.rtow != h0.rtow {
-        return Err(refuse(format!("written by rtow {}, {a} by rtow {}", h.rtow, h0.rtow)));
+        return Err(refuse(format!("written by rtow {}, {a} by rtow {}", c(&h.rtow), c(&h0.rtow))));
     }
     if h.scene_hash != h0.scene_hash {
         return Err(refuse(format!(
             "renders a different scene than {a} (scene hash {} against {})",
-            h.scene_hash, h0.scene_hash
+            c(&h.scene_hash),
+            c(&h0.scene_hash)
         )));
     }
     if (h.width, h.height) != (h0.width, h0.height) {
@@ -531,59 +818,67 @@ pub fn same_image(p: &Path, h: &Header, p0: &Path, h0: &Header, consequence: &st
     for name in h.settings.keys().chain(h0.settings.keys()) {
         let (v, v0) = (h.settings.get(name), h0.settings.get(name));
         if v != v0 {
-            let show = |v: Option<&String>| v.cloned().unwrap_or_else(|| "(unset)".into());
-            return Err(refuse(format!("rendered with {name} = {}, {a} with {name} = {}", show(v), show(v0))));
+            let show = |v: Option<&String>| v.map_or_else(|| "(unset)".into(), |v| c(v));
+            return Err(refuse(format!(
+                "rendered with {} = {}, {a} with {} = {}",
+                c(name),
+                show(v),
+                c(name),
+                show(v0)
+            )));
         }
     }
     if h.key != h0.key {
-        return Err(refuse(format!("its image key {} differs from {a}'s {}", h.key, h0.key)));
+        return Err(refuse(format!("its image key {} differs from {a}'s {}", c(&h.key), c(&h0.key))));
     }
     Ok(())
 }
 
-/// Merges parts (with the paths they were read from, for messages) into the
-/// whole render's film. Refuses, naming the files: parts of different scenes
-/// or settings, parts of different splits, duplicate shards, and missing
-/// shards (naming which). The result is the whole render's film, with a header
-/// that describes it as a whole render (counters summed over the parts).
-pub fn merge(parts: &[(PathBuf, Part)]) -> Result<Part> {
-    let Some((p0, first)) = parts.first() else {
-        return Err(Error::Input("merge needs at least one partial film".into()));
+/// Checks that parts (their headers, with the paths they were read from)
+/// are every shard of one render, once: refuses, naming the files, parts of
+/// different scenes or settings, parts of different splits, duplicate shards
+/// and missing shards (naming which). A refusal that one part causes comes
+/// with that part's index (the first in the order given).
+pub fn check_set(parts: &[(&Path, &Header)]) -> std::result::Result<(), (Option<usize>, Error)> {
+    let Some(&(p0, h0)) = parts.first() else {
+        return Err((None, Error::Input("merge needs at least one partial film".into())));
     };
-    let h0 = &first.header;
-    for (p, part) in &parts[1..] {
-        let h = &part.header;
-        same_image(p, h, p0, h0, "parts of different renders cannot be merged")?;
+    for (i, &(p, h)) in parts.iter().enumerate().skip(1) {
+        let blame = |e: Error| (Some(i), e);
+        same_image(p, h, p0, h0, "parts of different renders cannot be merged").map_err(blame)?;
         if h.spp != h0.spp {
-            return Err(Error::Input(format!(
+            return Err(blame(Error::Input(format!(
                 "{}: has {} samples per pixel, {} has {}; parts of different renders cannot be merged",
                 p.display(),
                 h.spp,
                 p0.display(),
                 h0.spp
-            )));
+            ))));
         }
         let (a, b) = (p0.display(), p.display());
         if (h.split.kind, h.split.of) != (h0.split.kind, h0.split.of) {
-            return Err(Error::Input(format!(
+            return Err(blame(Error::Input(format!(
                 "{b} is {} but {a} is {}: parts of different splits overlap or leave gaps",
                 h.split.describe(),
                 h0.split.describe()
-            )));
+            ))));
         }
     }
     let n = h0.split.of;
     let mut seen: std::collections::BTreeMap<u32, &Path> = std::collections::BTreeMap::new();
-    for (p, part) in parts {
-        let k = part.header.split.shard;
+    for (i, &(p, h)) in parts.iter().enumerate() {
+        let k = h.split.shard;
         if let Some(prev) = seen.insert(k, p) {
-            return Err(Error::Input(format!(
-                "{}: duplicate: {} and {} are both {}",
-                p.display(),
-                prev.display(),
-                p.display(),
-                part.header.split.describe()
-            )));
+            return Err((
+                Some(i),
+                Error::Input(format!(
+                    "{}: duplicate: {} and {} are both {}",
+                    p.display(),
+                    prev.display(),
+                    p.display(),
+                    h.split.describe()
+                )),
+            ));
         }
     }
     if seen.len() as u64 != n as u64 {
@@ -592,29 +887,59 @@ pub fn merge(parts: &[(PathBuf, Part)]) -> Result<Part> {
         let count = n as usize - seen.len();
         let more = if count > missing.len() { format!(" and {} more", count - missing.len()) } else { String::new() };
         let kind = if h0.split.kind == SplitKind::Rows { "rows" } else { "samples" };
-        return Err(Error::Input(format!(
-            "missing {} {}{more} of {n} (split by {kind}); merged parts: {}",
-            if count == 1 { "shard" } else { "shards" },
-            missing.join(", "),
-            parts.iter().map(|(p, _)| p.display().to_string()).collect::<Vec<_>>().join(", ")
-        )));
+        // The list of parts is bounded too (a merge may be given thousands).
+        let mut names: Vec<String> = parts.iter().take(20).map(|(p, _)| p.display().to_string()).collect();
+        if parts.len() > names.len() {
+            names.push(format!("and {} more", parts.len() - names.len()));
+        }
+        return Err((
+            None,
+            Error::Input(format!(
+                "missing {} {}{more} of {n} (split by {kind}); merged parts: {}",
+                if count == 1 { "shard" } else { "shards" },
+                missing.join(", "),
+                names.join(", ")
+            )),
+        ));
     }
-    let mut film = Film::new(h0.width, h0.height, 0..h0.height, parts.iter().all(|(_, p)| p.film.has_moments()));
+    Ok(())
+}
+
+/// The header of the whole render that parts with headers `headers` (checked
+/// by [`check_set`]) merge into, with the accumulators `film`.
+pub fn merged_header(headers: &[&Header], film: &Film) -> Header {
     let mut counters = PartCounters::default();
-    for (p, part) in parts {
-        film.absorb(&part.film).ok_or_else(|| {
-            Error::Input(format!("{}: overlaps the other parts (a pixel's count overflows)", p.display()))
-        })?;
-        counters.add(&part.header.counters);
+    for h in headers {
+        counters.add(&h.counters);
     }
+    let h0 = headers[0];
     let mut header = h0.clone();
     header.split = Split::WHOLE;
     header.samples = [0, h0.spp];
     header.rows = [0, h0.height];
     header.counters = counters;
     header.moments = film.has_moments();
-    header.sum_bytes = sum_bytes(&film);
-    Ok(Part { header, film })
+    header.sum_bytes = sum_bytes(film);
+    header
+}
+
+/// Merges parts held in memory (with the paths they were read from, for
+/// messages) into the whole render's film, after [`check_set`]. The result
+/// has a header that describes it as a whole render (counters summed over
+/// the parts). `rtow merge` streams instead (`shard::merge_files`): it holds
+/// one part at a time.
+pub fn merge(parts: &[(PathBuf, Part)]) -> Result<Part> {
+    let headers: Vec<(&Path, &Header)> = parts.iter().map(|(p, part)| (p.as_path(), &part.header)).collect();
+    check_set(&headers).map_err(|(_, e)| e)?;
+    let h0 = &parts[0].1.header;
+    let mut film = Film::new(h0.width, h0.height, 0..h0.height, parts.iter().all(|(_, p)| p.film.has_moments()));
+    for (p, part) in parts {
+        film.absorb(&part.film).ok_or_else(|| {
+            Error::Input(format!("{}: overlaps the other parts (a pixel's count overflows)", p.display()))
+        })?;
+    }
+    let header = merged_header(&headers.iter().map(|(_, h)| *h).collect::<Vec<_>>(), &film);
+    Ok(Part { header, film, scene: parts[0].1.scene.clone() })
 }
 
 #[cfg(test)]
@@ -625,11 +950,13 @@ mod tests {
     const W: u32 = 6;
     const H: u32 = 5;
     const SPP: u32 = 11;
+    /// A stand-in for a scene's canonical JSON.
+    const SCENE: &[u8] = br#"{"spheres":[]}"#;
 
     fn identity(seed: u64) -> Identity {
         let settings = [("seed", seed.to_string()), ("max_depth", "50".to_string())];
         Identity {
-            scene_hash: 0x1234,
+            scene_hash: fnv1a(SCENE),
             width: W,
             height: H,
             settings: settings.into_iter().map(|(k, v)| (k.to_string(), v)).collect(),
@@ -663,7 +990,7 @@ mod tests {
             counters.rejected_samples += t.rejected;
             film.put_tile(&t);
         }
-        Part::new(&identity(0), SPP, split, film, counters)
+        Part::new(&identity(0), SCENE.to_vec(), SPP, split, film, counters)
     }
 
     fn shards(kind: SplitKind, n: u32) -> Vec<(PathBuf, Part)> {
@@ -698,7 +1025,8 @@ mod tests {
         assert_eq!(p.header.sum_bytes, 6);
         let mut zero = p.clone();
         zero.film = Film::new(W, H, 0..H, false);
-        zero.header.counters = PartCounters::default();
+        // (Every sample rejected.)
+        zero.header.counters = PartCounters { rays: 0, samples: 330, rejected_samples: 330 };
         assert_eq!(reread(&zero, "z.rtfilm").unwrap().header.sum_bytes, 1);
     }
 
@@ -743,7 +1071,7 @@ mod tests {
         let whole = render(Split::WHOLE, true);
         let mut film = Film::new(W, H, 0..H, true);
         let counters = continue_film(&mut film, 0..4);
-        let done = Part::new(&identity(0), 4, Split::WHOLE, film, counters);
+        let done = Part::new(&identity(0), SCENE.to_vec(), 4, Split::WHOLE, film, counters);
         let mut resumed = reread(&done, "done-4.rtfilm").unwrap();
         continue_film(&mut resumed.film, 4..SPP);
         // Sums, counts, and the sums of squares (added in sample order) too.
@@ -847,9 +1175,13 @@ mod tests {
         assert!(m.contains("not an rtow partial film"), "{m}");
         // A future version is refused as such, whatever follows.
         let mut future = bytes.clone();
-        future[8..12].copy_from_slice(&2u32.to_le_bytes());
+        future[8..12].copy_from_slice(&(VERSION + 1).to_le_bytes());
         let m = refusal(read(&future[..20]), name);
-        assert!(m.contains("format version 2 is newer"), "{m}");
+        assert!(m.contains(&format!("format version {} is newer", VERSION + 1)), "{m}");
+        // An older version (no embedded scene) is refused as such.
+        let mut old = bytes.clone();
+        old[8..12].copy_from_slice(&1u32.to_le_bytes());
+        assert!(refusal(read(&old), name).contains("format version 1 is older"));
         let mut zero = bytes.clone();
         zero[8..12].copy_from_slice(&0u32.to_le_bytes());
         refusal(read(&zero), name);
@@ -871,6 +1203,17 @@ mod tests {
         assert!(edit(&|q| q.header.split.kind = SplitKind::None).contains("does not exist"));
         assert!(edit(&|q| q.header.fraction_bits = 24).contains("fractional bits"));
         assert!(edit(&|q| q.header.counters.samples += 1).contains("samples counted"));
+        // Header values are quoted on one line (found by the fuzzer).
+        let m = edit(&|q| q.header.scene_hash = "x\ny".into());
+        assert!(m.contains("scene hash x?y") && m.lines().count() == 1, "{m}");
+        // More pixels than any render has: refused before anything is allocated.
+        let m = edit(&|q| (q.header.width, q.header.height) = (1 << 14, 1 << 13));
+        assert!(m.contains("134217728 pixels, more than the 67108864"), "{m}");
+        // A header longer than any film's.
+        let mut b = p.to_bytes();
+        b[12..16].copy_from_slice(&(MAX_HEADER_BYTES + 1).to_le_bytes());
+        b.resize(b.len() + MAX_HEADER_BYTES as usize + 1, b' ');
+        assert!(refusal(Part::from_bytes(&b, Path::new(name)), name).contains("corrupted"));
         // A pixel with more samples than the part renders.
         assert!(edit(&|q| q.film.count[3] = 5).contains("more than the part's"));
         // A sum too large for its samples (it could make an infinite mean).

@@ -245,6 +245,23 @@ impl Job {
         &self.scene
     }
 
+    /// The scene's canonical JSON: the bytes [`Job::scene_hash`] hashes,
+    /// which a partial film embeds (so that a merge can render its pixels again).
+    pub fn scene_json(&self) -> Vec<u8> {
+        serde_json::to_vec(&self.scene).expect("a scene serializes")
+    }
+
+    /// The job of a scene given as canonical JSON (a partial film's embedded
+    /// scene, read from `origin`), with `overrides` and `options`.
+    pub fn from_scene_json(json: &[u8], origin: &Path, overrides: &Overrides, options: &RenderOptions) -> Result<Job> {
+        // Not `scene_from_bytes`: the embedded scene is bounded by the film's
+        // own limit (`film::part::MAX_SCENE_BYTES`), not a scene file's.
+        let text = std::str::from_utf8(json)
+            .map_err(|e| Error::Input(format!("{}: the embedded scene is not UTF-8: {e}", origin.display())))?;
+        let scene = crate::scene::scene_from_str(text, crate::scene::Format::Json, origin)?;
+        Job::resolve(&scene, Some(origin), overrides, options)
+    }
+
     /// A hash of the scene's canonical JSON (what the film identity and the statistics name).
     pub fn scene_hash(&self) -> u64 {
         self.scene_hash
