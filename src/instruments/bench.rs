@@ -102,6 +102,13 @@ pub struct PerRay {
     pub box_tests: f64,
     pub sphere_tests: f64,
     pub roots: f64,
+    /// Quad tests (absent from baselines of sphere-only scenes).
+    #[serde(default, skip_serializing_if = "is_zero")]
+    pub quad_tests: f64,
+}
+
+fn is_zero(x: &f64) -> bool {
+    *x == 0.0
 }
 
 impl PerRay {
@@ -112,6 +119,7 @@ impl PerRay {
             box_tests: w.box_tests as f64 / r,
             sphere_tests: w.sphere_tests as f64 / r,
             roots: w.roots as f64 / r,
+            quad_tests: w.quad_tests as f64 / r,
         }
     }
 }
@@ -500,7 +508,7 @@ pub struct BaselineComparison {
 }
 
 fn total(w: &WorkCounters) -> u64 {
-    w.nodes + w.box_tests + w.sphere_tests + w.roots
+    w.nodes + w.box_tests + w.sphere_tests + w.roots + w.quad_tests
 }
 
 /// Compares a fresh report with a baseline (checked with [`Baseline::check`]).
