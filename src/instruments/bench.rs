@@ -254,6 +254,11 @@ impl BenchReport {
                 s.image_hash
             );
         }
+        if self.kernels.iter().any(|e| e.work_per_ray.quad_tests > 0.0) {
+            let per: Vec<String> =
+                self.kernels.iter().map(|e| format!("{} {:.2}", e.stats.kernel, e.work_per_ray.quad_tests)).collect();
+            t += &format!("quad tests per ray: {}\n", per.join(", "));
+        }
         t += &format!(
             "(seconds and Mrays/s: the median of {} run(s); CI: a distribution-free confidence interval for the median \
              rate, from the order statistics of the runs; work per ray: node visits, box tests, sphere tests and square \
