@@ -150,7 +150,7 @@ impl Prepared {
         }
         let mut best = Closest { t, index };
         match &self.quad_bvh {
-            Some(b) => b.walk_scalar(o, d, &mut best, probe),
+            Some(b) => best = b.walk_scalar(o, d, best, probe),
             None => geometry::closest_quad_hit(&self.quads, o, d, &mut best, probe),
         }
         (best.index, best.t)
@@ -174,7 +174,7 @@ impl Prepared {
         let t = W::select(W::mask_from_bits(live), t, W::splat(f32::NEG_INFINITY));
         let mut best = Closest { t, index };
         match &self.quad_bvh {
-            Some(b) => b.walk_packet(o, d, &mut best, probe),
+            Some(b) => best = b.walk_packet(o, d, best, probe),
             None => geometry::closest_quad_hit(&self.quads, o, d, &mut best, probe),
         }
         (best.index, best.t)

@@ -149,8 +149,7 @@ fn check_quads(q: &Quads, extent: f32, start: (u32, f32), rays: &[(V3<f32>, V3<f
     for &(o, d) in rays {
         let mut brute = Closest::<f32> { index: start.0, t: start.1 };
         closest_quad_hit(q, o, d, &mut brute, &mut ());
-        let mut tree = Closest::<f32> { index: start.0, t: start.1 };
-        bvh.walk_scalar(o, d, &mut tree, &mut ());
+        let tree = bvh.walk_scalar(o, d, Closest::<f32> { index: start.0, t: start.1 }, &mut ());
         prop_assert_eq!((brute.index, brute.t.to_bits()), (tree.index, tree.t.to_bits()), "scalar quad walk");
     }
     quad_packets::<f32x8>(q, &bvh, start, rays)?;
@@ -168,8 +167,7 @@ fn quad_packets<W: Wide>(
         let at = |k: usize| chunk[k.min(n - 1)];
         let o = V3::new(W::from_fn(|k| at(k).0.x), W::from_fn(|k| at(k).0.y), W::from_fn(|k| at(k).0.z));
         let d = V3::new(W::from_fn(|k| at(k).1.x), W::from_fn(|k| at(k).1.y), W::from_fn(|k| at(k).1.z));
-        let mut best = Closest::<W> { index: W::u_splat(start.0), t: W::splat(start.1) };
-        bvh.walk_packet(o, d, &mut best, &mut ());
+        let best = bvh.walk_packet(o, d, Closest::<W> { index: W::u_splat(start.0), t: W::splat(start.1) }, &mut ());
         for (k, &(o, d)) in chunk.iter().enumerate() {
             let mut brute = Closest::<f32> { index: start.0, t: start.1 };
             closest_quad_hit(q, o, d, &mut brute, &mut ());

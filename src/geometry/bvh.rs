@@ -482,16 +482,16 @@ impl<L: LeafPrim> Bvh<L> {
     }
 
     /// The closest hit of one ray, one box and one sphere at a time (scalar kernel).
+    #[inline(always)]
     pub fn closest_hit_scalar<P: Probe>(&self, o: V3<f32>, d: V3<f32>, probe: &mut P) -> (u32, f32) {
-        let mut best = Closest::<f32>::none();
-        self.walk_scalar(o, d, &mut best, probe);
+        let best = self.walk_scalar(o, d, Closest::<f32>::none(), probe);
         (best.index, best.t)
     }
 
-    /// The scalar walk, improving `best` (a closest hit found so far, by
-    /// another tree, say).
+    /// The scalar walk from `best` (a closest hit found so far, by another
+    /// tree, say), returning the improved closest hit.
     #[inline(always)]
-    pub fn walk_scalar<P: Probe>(&self, o: V3<f32>, d: V3<f32>, best: &mut Closest<f32>, probe: &mut P) {
+    pub fn walk_scalar<P: Probe>(&self, o: V3<f32>, d: V3<f32>, mut best: Closest<f32>, probe: &mut P) -> Closest<f32> {
         let mut tally = WorkTally::<P>::new();
         let (inv, noi) = slab_ray(o, d);
         let mut stack = Stack::new((0, 0.0));
@@ -514,11 +514,12 @@ impl<L: LeafPrim> Bvh<L> {
                 }
                 match node.count[k] {
                     0 => stack.push((node.child[k], near)),
-                    count => self.leaf(node.child[k] as usize, count as usize, o, d, best, &mut tally),
+                    count => self.leaf(node.child[k] as usize, count as usize, o, d, &mut best, &mut tally),
                 }
             }
         }
         tally.flush(probe);
+        best
     }
 
     /// The closest hits of a packet of rays walking the tree together: a child
@@ -527,15 +528,22 @@ impl<L: LeafPrim> Bvh<L> {
     /// Lanes not in `live` return `MISS` with `t = -inf`: starting them at
     /// `best.t = -inf` keeps them out of every box (entries are at least 0)
     /// without a mask per box test.
+    #[inline(always)]
     pub fn closest_hit_packet<W: Wide, P: Probe>(&self, o: V3<W>, d: V3<W>, live: u32, probe: &mut P) -> (W::U32, W) {
-        let mut best = Closest::<W>::live(W::mask_from_bits(live));
-        self.walk_packet(o, d, &mut best, probe);
+        let best = self.walk_packet(o, d, Closest::<W>::live(W::mask_from_bits(live)), probe);
         (best.index, best.t)
     }
 
-    /// The packet walk, improving `best` (lanes at `t = -inf` take no part).
+    /// The packet walk from `best` (lanes at `t = -inf` take no part),
+    /// returning the improved closest hit.
     #[inline(always)]
-    pub fn walk_packet<W: Wide, P: Probe>(&self, o: V3<W>, d: V3<W>, best: &mut Closest<W>, probe: &mut P) {
+    pub fn walk_packet<W: Wide, P: Probe>(
+        &self,
+        o: V3<W>,
+        d: V3<W>,
+        mut best: Closest<W>,
+        probe: &mut P,
+    ) -> Closest<W> {
         let mut tally = WorkTally::<P>::new();
         let (inv, noi) = slab_ray(o, d);
         let mut stack = Stack::new(0u32);
@@ -556,11 +564,12 @@ impl<L: LeafPrim> Bvh<L> {
                 }
                 match node.count[k] {
                     0 => stack.push(node.child[k]),
-                    count => self.leaf(node.child[k] as usize, count as usize, o, d, best, &mut tally),
+                    count => self.leaf(node.child[k] as usize, count as usize, o, d, &mut best, &mut tally),
                 }
             }
         }
         tally.flush(probe);
+        best
     }
 }
 

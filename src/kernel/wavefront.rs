@@ -333,7 +333,9 @@ fn index_run<W: Wide>(i: usize) -> W::Idx {
 
 /// One bounce of every live path: intersect, classify, shade misses, scatter.
 /// `depth` counts the rays each path has traced before this bounce (0: camera
-/// rays). Returns the rays traced.
+/// rays). Returns the rays traced. (Inlined, as the compiler chose to before
+/// the light pass made it larger.)
+#[cfg_attr(not(feature = "phases"), inline(always))]
 fn bounce<W: Wide, P: Probe, S: PathSampler>(
     prep: &Prepared,
     sampler: S,
@@ -363,16 +365,25 @@ fn bounce<W: Wide, P: Probe, S: PathSampler>(
     let kind_mask = prep.spheres.kind.len().wrapping_sub(1);
     let quad_mask = prep.quads.kind.len().wrapping_sub(1);
     debug_assert!(prep.spheres.kind.len().is_power_of_two() && prep.quads.kind.len().is_power_of_two());
-    for (i, &h) in ws.hit[..n].iter().enumerate() {
-        let q = if h < QUAD_BASE {
-            prep.spheres.kind[h as usize & kind_mask] as usize
-        } else if h == MISS {
-            MISS_QUEUE
-        } else {
-            prep.quads.kind[(h - QUAD_BASE) as usize & quad_mask] as usize
-        };
-        queues[q][len[q] & MASK] = i as u32;
-        len[q] += 1;
+    // The loop for a scene without quads is book one's own (one test per hit).
+    if prep.quads.is_empty() {
+        for (i, &h) in ws.hit[..n].iter().enumerate() {
+            let q = if h == MISS { MISS_QUEUE } else { prep.spheres.kind[h as usize & kind_mask] as usize };
+            queues[q][len[q] & MASK] = i as u32;
+            len[q] += 1;
+        }
+    } else {
+        for (i, &h) in ws.hit[..n].iter().enumerate() {
+            let q = if h < QUAD_BASE {
+                prep.spheres.kind[h as usize & kind_mask] as usize
+            } else if h == MISS {
+                MISS_QUEUE
+            } else {
+                prep.quads.kind[(h - QUAD_BASE) as usize & quad_mask] as usize
+            };
+            queues[q][len[q] & MASK] = i as u32;
+            len[q] += 1;
+        }
     }
     ws.next.len = 0;
     for_packets::<W, P>(&queues[MISS_QUEUE], len[MISS_QUEUE], probe, |idx, active, _| {
@@ -458,19 +469,23 @@ struct Hits<W: Wide> {
 #[inline(always)]
 fn surfaces<W: Wide, P: Probe>(prep: &Prepared, ws: &Workspace, idx: &W::Idx, active: usize, probe: &mut P) -> Hits<W> {
     let sph = W::gather_u_pow2(&ws.hit, idx);
-    let d = v3_gather::<W>(&ws.cur.d, idx);
-    let o = v3_gather::<W>(&ws.cur.o, idx);
-    let t = W::gather_pow2(&ws.t, idx);
-    let (srf, rec) = if prep.quads.is_empty() {
+    if prep.quads.is_empty() {
+        // Book one's surfaces, as they were.
         let rec = W::gather_rows8(&prep.spheres.shade, &W::idx_of(sph));
         let c = V3::new(rec[Shade::CX], rec[Shade::CY], rec[Shade::CZ]);
         let r = rec[Shade::R];
-        let srf = surface(o, d, t, c, r);
+        let d = v3_gather::<W>(&ws.cur.d, idx);
+        let srf = surface(v3_gather::<W>(&ws.cur.o, idx), d, W::gather_pow2(&ws.t, idx), c, r);
         if P::PATHS {
             probe.shaded(ws.ids::<W>(idx), sph, r, srf.n, srf.front, low_bits(active));
         }
-        (srf, rec)
-    } else {
+        let a = Shade::ALBEDO;
+        return Hits { d, srf, albedo: V3::new(rec[a], rec[a + 1], rec[a + 2]), param: rec[Shade::PARAM] };
+    }
+    let d = v3_gather::<W>(&ws.cur.d, idx);
+    let o = v3_gather::<W>(&ws.cur.o, idx);
+    let t = W::gather_pow2(&ws.t, idx);
+    let (srf, rec): (Surface<W>, [W; 8]) = {
         let is_sphere = W::u_lt(sph, W::u_splat(QUAD_BASE));
         let s_mask = W::u_splat(prep.spheres.shade.len() as u32 - 1);
         let q_mask = W::u_splat(prep.quads.shade.len() as u32 - 1);
