@@ -38,6 +38,11 @@ pub const MAX_IMAGE_BYTES: u64 = MAX_PIXELS * 12 + 4096;
 /// file stops being read at the first sphere over the limit): 1,048,576
 /// spheres take 40 MB as a scene and about 160 MB prepared (SoA, BVH).
 pub const MAX_SPHERES: usize = 1 << 20;
+/// The most quads a scene may hold once its boxes (six quads each) and groups
+/// are flattened; a scene file's quad and box lists are bounded while they are read.
+pub const MAX_QUADS: usize = 1 << 20;
+/// The most groups (instances) a scene file may hold.
+pub const MAX_GROUPS: usize = 1 << 16;
 
 /// The world-length range where the kernels' intersection error bounds hold,
 /// the range `rtow stress` measures (radius and distance 1e-4 .. 1e6; its

@@ -19,15 +19,18 @@ pub enum Kind {
     Lambertian = 0,
     Metal = 1,
     Dielectric = 2,
+    /// The Next Week's `diffuse_light`: emission, and the path ends (no scatter).
+    DiffuseLight = 3,
 }
 
 impl Kind {
-    pub const ALL: [Kind; 3] = [Kind::Lambertian, Kind::Metal, Kind::Dielectric];
+    pub const ALL: [Kind; 4] = [Kind::Lambertian, Kind::Metal, Kind::Dielectric, Kind::DiffuseLight];
     pub fn name(self) -> &'static str {
         match self {
             Kind::Lambertian => "lambertian",
             Kind::Metal => "metal",
             Kind::Dielectric => "dielectric",
+            Kind::DiffuseLight => "diffuse_light",
         }
     }
 }
@@ -39,6 +42,8 @@ pub struct MaterialTables {
     /// (albedo, fuzz)
     pub metal: Vec<([f32; 3], f32)>,
     pub dielectric: Vec<f32>,
+    /// (emitted radiance, one-sided)
+    pub light: Vec<([f32; 3], bool)>,
 }
 
 impl MaterialTables {
@@ -48,8 +53,30 @@ impl MaterialTables {
             Kind::Lambertian => self.lambertian[row as usize],
             Kind::Metal => self.metal[row as usize].0,
             Kind::Dielectric => [1.0, 1.0, 1.0],
+            Kind::DiffuseLight => self.light[row as usize].0,
         }
     }
+
+    /// What a shading record holds of material (`kind`, `row`): the albedo
+    /// (white for a dielectric, the emitted radiance for a light) and one
+    /// parameter (a metal's fuzz, a dielectric's index of refraction, 1 for a
+    /// one-sided light; 0 otherwise).
+    pub fn record(&self, kind: Kind, row: u32) -> ([f32; 3], f32) {
+        let row = row as usize;
+        match kind {
+            Kind::Lambertian => (self.lambertian[row], 0.0),
+            Kind::Metal => self.metal[row],
+            Kind::Dielectric => ([1.0; 3], self.dielectric[row]),
+            Kind::DiffuseLight => (self.light[row].0, if self.light[row].1 { 1.0 } else { 0.0 }),
+        }
+    }
+}
+
+/// The radiance a light emits towards a ray that hit it: `emit`, or 0 on the
+/// back face (`front` false) of a one-sided light (`one_sided` true).
+#[inline(always)]
+pub fn emission<R: Real>(emit: V3<R>, one_sided: R::Mask, front: R::Mask) -> V3<R> {
+    V3::select(one_sided & !front, V3::splat3([0.0; 3]), emit)
 }
 
 /// Mirror `d` about `n`: `d - 2 (d.n) n`.

@@ -6,7 +6,7 @@
 use crate::camera::PreparedCamera;
 use crate::choice::Mode;
 use crate::estimator::Estimator;
-use crate::geometry::{self, Bvh, Spheres};
+use crate::geometry::{self, Bvh, Closest, QuadBvh, Quads, Spheres, QUAD_BASE};
 use crate::material::{Kind, MaterialTables};
 use crate::probe::Probe;
 use crate::real::Wide;
@@ -81,6 +81,11 @@ pub struct Plan {
     pub jitter: bool,
     /// Closest-hit search.
     pub accel: Accel,
+    /// The closest-hit search over quads, when the scene has any (searched
+    /// after the spheres', improving their closest hit; a scene without quads
+    /// pays nothing).
+    #[serde(skip_serializing_if = "Option::is_none")]
+    pub quads: Option<Accel>,
 }
 
 impl Plan {
@@ -88,8 +93,13 @@ impl Plan {
     pub fn explain(&self) -> String {
         let kinds: Vec<&str> = self.kinds.iter().map(Kind::name).collect();
         let kinds = if kinds.is_empty() { "none".to_string() } else { kinds.join(", ") };
+        let quads = match self.quads {
+            Some(Accel::Brute) => "; quads: brute force",
+            Some(_) => "; quads: their own bvh8, one box at a time",
+            None => "",
+        };
         format!(
-            "plan: mode {:?}; material passes: {kinds}; camera: {} rays, {}; closest hit: {}; paths stop at zero throughput",
+            "plan: mode {:?}; material passes: {kinds}; camera: {} rays, {}; closest hit: {}{quads}; paths stop at zero throughput",
             self.mode,
             if self.lens { "thin-lens" } else { "pinhole" },
             if self.jitter { "jittered in the pixel" } else { "through pixel centres" },
@@ -98,11 +108,14 @@ impl Plan {
     }
 }
 
-/// The sky as two colours, ready for both kernels.
+/// What rays that leave the scene see, ready for both kernels: the sky
+/// gradient's two colours, or one constant colour (The Next Week's background).
 #[derive(Clone, Copy, Debug)]
 pub struct SkyColours {
     pub horizon: [f32; 3],
     pub zenith: [f32; 3],
+    /// A constant background in place of the gradient.
+    pub constant: Option<[f32; 3]>,
 }
 
 /// Everything the kernels read, laid out for them.
@@ -111,11 +124,15 @@ pub struct Prepared {
     pub plan: Plan,
     pub settings: Settings,
     pub spheres: Spheres,
+    /// The quads (empty for a scene without: padding only).
+    pub quads: Quads,
     pub materials: MaterialTables,
     pub camera: PreparedCamera,
     pub sky: SkyColours,
     /// Present when the plan chose a BVH.
     pub bvh: Option<Bvh>,
+    /// The quads' tree, when the plan chose one for them.
+    pub quad_bvh: Option<QuadBvh>,
     /// Russian roulette and adaptive sampling (off unless the render options say so).
     pub estimator: Estimator,
 }
@@ -124,10 +141,19 @@ impl Prepared {
     /// The closest hit of one ray (scalar kernel): the BVH one box at a time, or brute force.
     #[inline(always)]
     pub fn closest_hit<P: Probe>(&self, o: V3<f32>, d: V3<f32>, probe: &mut P) -> (u32, f32) {
-        match &self.bvh {
+        let (index, t) = match &self.bvh {
             Some(b) => b.closest_hit_scalar(o, d, probe),
             None => geometry::closest_hit(&self.spheres, o, d, probe),
+        };
+        if self.quads.is_empty() {
+            return (index, t);
         }
+        let mut best = Closest { t, index };
+        match &self.quad_bvh {
+            Some(b) => best = b.walk_scalar(o, d, best, probe),
+            None => geometry::closest_quad_hit(&self.quads, o, d, &mut best, probe),
+        }
+        (best.index, best.t)
     }
 
     /// The closest hits of a packet of rays (wavefront kernel; bit k of `live`
@@ -136,10 +162,27 @@ impl Prepared {
     #[cfg_attr(not(feature = "phases"), inline(always))]
     #[cfg_attr(feature = "phases", inline(never))]
     pub fn closest_hits<W: Wide, P: Probe>(&self, o: V3<W>, d: V3<W>, live: u32, probe: &mut P) -> (W::U32, W) {
-        match (&self.bvh, self.plan.accel) {
+        let (index, t) = match (&self.bvh, self.plan.accel) {
             (Some(b), Accel::BvhRays) => b.closest_hits_one_by_one(o, d, live, probe),
             (Some(b), _) => b.closest_hit_packet(o, d, live, probe),
             (None, _) => geometry::closest_hit(&self.spheres, o, d, probe),
+        };
+        if self.quads.is_empty() {
+            return (index, t);
         }
+        // Lanes not in `live` take no part (t = -inf), as in the packet walk.
+        let t = W::select(W::mask_from_bits(live), t, W::splat(f32::NEG_INFINITY));
+        let mut best = Closest { t, index };
+        match &self.quad_bvh {
+            Some(b) => best = b.walk_packet(o, d, best, probe),
+            None => geometry::closest_quad_hit(&self.quads, o, d, &mut best, probe),
+        }
+        (best.index, best.t)
+    }
+
+    /// Whether hit index `hit` (not `MISS`) is a quad's.
+    #[inline(always)]
+    pub fn is_quad(hit: u32) -> bool {
+        hit >= QUAD_BASE
     }
 }

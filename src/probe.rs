@@ -33,10 +33,12 @@ pub enum Work {
     Sphere,
     /// A sphere test that reached the square root (some lane's discriminant >= 0).
     Root,
+    /// A quad tested (The Next Week's primitives).
+    Quad,
 }
 
 impl Work {
-    pub const ALL: [Work; 4] = [Work::Node, Work::Box, Work::Sphere, Work::Root];
+    pub const ALL: [Work; 5] = [Work::Node, Work::Box, Work::Sphere, Work::Root, Work::Quad];
 }
 
 /// The work of one traversal, counted in registers and handed to the probe
@@ -44,14 +46,14 @@ impl Work {
 /// cost about 9% of the render (measured; docs/performance.md). Nothing is
 /// counted, and nothing is left in the code, unless `P::WORK`.
 pub struct WorkTally<P> {
-    n: [u32; 4],
+    n: [u32; 5],
     _probe: std::marker::PhantomData<fn(&mut P)>,
 }
 
 impl<P: Probe> WorkTally<P> {
     #[inline(always)]
     pub fn new() -> Self {
-        WorkTally { n: [0; 4], _probe: std::marker::PhantomData }
+        WorkTally { n: [0; 5], _probe: std::marker::PhantomData }
     }
 
     #[inline(always)]
@@ -138,6 +140,7 @@ pub struct WorkCounters {
     pub box_tests: u64,
     pub sphere_tests: u64,
     pub roots: u64,
+    pub quad_tests: u64,
     pub isect_active: u64,
     pub isect_lanes: u64,
     pub scatter_active: u64,
@@ -150,6 +153,7 @@ impl WorkCounters {
         self.box_tests += o.box_tests;
         self.sphere_tests += o.sphere_tests;
         self.roots += o.roots;
+        self.quad_tests += o.quad_tests;
         self.isect_active += o.isect_active;
         self.isect_lanes += o.isect_lanes;
         self.scatter_active += o.scatter_active;
@@ -173,6 +177,7 @@ impl Probe for WorkCounters {
             Work::Box => &mut self.box_tests,
             Work::Sphere => &mut self.sphere_tests,
             Work::Root => &mut self.roots,
+            Work::Quad => &mut self.quad_tests,
         };
         *c += n as u64;
     }

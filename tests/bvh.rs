@@ -4,7 +4,7 @@
 //! deep trees.
 
 use proptest::prelude::*;
-use rtow::internals::geometry::{closest_hit, Bvh, Spheres, Walk};
+use rtow::internals::geometry::{closest_hit, closest_quad_hit, Bvh, Closest, QuadBvh, Quads, Spheres, Walk};
 use rtow::internals::material::Kind;
 use rtow::internals::real::Wide;
 use rtow::internals::vec3::V3;
@@ -114,5 +114,122 @@ proptest! {
         let targets: Vec<[f32; 3]> = list.iter().step_by(37).map(|l| l.0).collect();
         let far = list.last().unwrap().0[0] + 10.0;
         check(&spheres(&list), far, &rays_toward(&targets, &origins))?;
+    }
+}
+
+/// Quads from a list of (corner, edge u, edge v).
+fn quads(list: &[([f32; 3], [f32; 3], [f32; 3])], extent: f32) -> Quads {
+    let mut q = Quads::default();
+    for &(c, u, v) in list {
+        q.push(c, u, v, extent, Kind::Lambertian, 0);
+    }
+    q.pad();
+    q
+}
+
+/// The six faces of the box `min..max`, as `box()` builds them.
+fn box_faces(min: [f32; 3], max: [f32; 3]) -> Vec<([f32; 3], [f32; 3], [f32; 3])> {
+    let (dx, dy, dz) = ([max[0] - min[0], 0.0, 0.0], [0.0, max[1] - min[1], 0.0], [0.0, 0.0, max[2] - min[2]]);
+    let neg = |v: [f32; 3]| v.map(|x| -x);
+    vec![
+        ([min[0], min[1], max[2]], dx, dy),
+        ([max[0], min[1], max[2]], neg(dz), dy),
+        ([max[0], min[1], min[2]], neg(dx), dy),
+        ([min[0], min[1], min[2]], dz, dy),
+        ([min[0], max[1], max[2]], dx, neg(dz)),
+        ([min[0], min[1], min[2]], dx, dz),
+    ]
+}
+
+/// The quads' tree (scalar walk, packets of 8 and 16), starting from a
+/// sphere hit or none, against brute force: the same quad (or sphere), the
+/// same `t` bits.
+fn check_quads(q: &Quads, extent: f32, start: (u32, f32), rays: &[(V3<f32>, V3<f32>)]) -> Result<(), TestCaseError> {
+    let bvh = QuadBvh::build_quads(q, extent);
+    for &(o, d) in rays {
+        let mut brute = Closest::<f32> { index: start.0, t: start.1 };
+        closest_quad_hit(q, o, d, &mut brute, &mut ());
+        let tree = bvh.walk_scalar(o, d, Closest::<f32> { index: start.0, t: start.1 }, &mut ());
+        prop_assert_eq!((brute.index, brute.t.to_bits()), (tree.index, tree.t.to_bits()), "scalar quad walk");
+    }
+    quad_packets::<f32x8>(q, &bvh, start, rays)?;
+    quad_packets::<f32x16>(q, &bvh, start, rays)
+}
+
+fn quad_packets<W: Wide>(
+    q: &Quads,
+    bvh: &QuadBvh,
+    start: (u32, f32),
+    rays: &[(V3<f32>, V3<f32>)],
+) -> Result<(), TestCaseError> {
+    for chunk in rays.chunks(W::LANES) {
+        let n = chunk.len();
+        let at = |k: usize| chunk[k.min(n - 1)];
+        let o = V3::new(W::from_fn(|k| at(k).0.x), W::from_fn(|k| at(k).0.y), W::from_fn(|k| at(k).0.z));
+        let d = V3::new(W::from_fn(|k| at(k).1.x), W::from_fn(|k| at(k).1.y), W::from_fn(|k| at(k).1.z));
+        let best = bvh.walk_packet(o, d, Closest::<W> { index: W::u_splat(start.0), t: W::splat(start.1) }, &mut ());
+        for (k, &(o, d)) in chunk.iter().enumerate() {
+            let mut brute = Closest::<f32> { index: start.0, t: start.1 };
+            closest_quad_hit(q, o, d, &mut brute, &mut ());
+            prop_assert_eq!(
+                (brute.index, brute.t.to_bits()),
+                (W::lane_u(best.index, k), best.t.lane(k).to_bits()),
+                "quad packet of {}",
+                W::LANES
+            );
+        }
+    }
+    Ok(())
+}
+
+/// Rays from `origins` to the corners, edge midpoints and centres of the quads.
+fn rays_to_quads(list: &[([f32; 3], [f32; 3], [f32; 3])], origins: &[[f32; 3]]) -> Vec<(V3<f32>, V3<f32>)> {
+    let mut targets = Vec::new();
+    for &(c, u, v) in list {
+        for (a, b) in [(0.0, 0.0), (1.0, 0.0), (0.0, 1.0), (1.0, 1.0), (0.5, 0.0), (0.0, 0.5), (0.5, 0.5), (1.0, 0.5)] {
+            targets.push(std::array::from_fn(|k| c[k] + a * u[k] + b * v[k]));
+        }
+    }
+    rays_toward(&targets, origins)
+}
+
+proptest! {
+    #![proptest_config(ProptestConfig { cases: 48, ..ProptestConfig::default() })]
+
+    /// Axis-aligned boxes (flat quads: their bounding boxes have no
+    /// thickness before padding), with shared edges and coplanar faces of
+    /// touching boxes, and rays at their corners and edges.
+    #[test]
+    fn quad_boxes_match_brute_force(
+        boxes in prop::collection::vec((prop::array::uniform3(-50.0f32..50.0), prop::array::uniform3(0.5f32..30.0)), 1..40),
+        origins in prop::collection::vec(prop::array::uniform3(-120.0f32..120.0), 1..30),
+        sphere_t in prop_oneof![Just(f32::INFINITY), 1.0f32..200.0],
+    ) {
+        let mut list = Vec::new();
+        for &(min, size) in &boxes {
+            let max = std::array::from_fn(|k| min[k] + size[k]);
+            list.extend(box_faces(min, max));
+            // A touching neighbour along x: coplanar faces, a shared face.
+            list.extend(box_faces([max[0], min[1], min[2]], [max[0] + size[0], max[1], max[2]]));
+        }
+        let q = quads(&list, 200.0);
+        let start = if sphere_t.is_finite() { (7, sphere_t) } else { (u32::MAX, f32::INFINITY) };
+        check_quads(&q, 200.0, start, &rays_to_quads(&list, &origins))?;
+    }
+
+    /// Quads of any orientation and shape (sines down to 0.01), at large
+    /// and small scales.
+    #[test]
+    fn oriented_quads_match_brute_force(
+        list in prop::collection::vec((prop::array::uniform3(-1e4f32..1e4), prop::array::uniform3(-100.0f32..100.0), prop::array::uniform3(-100.0f32..100.0)), 1..120),
+        origins in prop::collection::vec(prop::array::uniform3(-2e4f32..2e4), 1..30),
+    ) {
+        let list: Vec<_> = list.into_iter().filter(|(_, u, v)| {
+            let (u, v) = (V3::new(u[0], u[1], u[2]), V3::new(v[0], v[1], v[2]));
+            u.cross(v).length_squared() > 1e-4 * u.length_squared() * v.length_squared()
+        }).collect();
+        prop_assume!(!list.is_empty());
+        let q = quads(&list, 2.1e4);
+        check_quads(&q, 2.1e4, (u32::MAX, f32::INFINITY), &rays_to_quads(&list, &origins))?;
     }
 }

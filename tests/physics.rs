@@ -13,7 +13,11 @@ fn one_sphere(material: Material, sky: Sky) -> Scene {
         mode: Mode::Path,
         camera: Camera::looking([0.0, 0.0, 3.0], [0.0, 0.0, 0.0], 40.0),
         spheres: vec![Sphere { center: [0.0, 0.0, 0.0], radius: 1.0, material }],
+        quads: vec![],
+        boxes: vec![],
+        groups: vec![],
         sky,
+        background: Default::default(),
         render: Default::default(),
     }
 }

@@ -197,7 +197,11 @@ fn scene_strategy() -> impl Strategy<Value = Scene> {
                 focus_dist,
             },
             spheres,
+            quads: vec![],
+            boxes: vec![],
+            groups: vec![],
             sky: Sky { horizon, zenith },
+            background: Default::default(),
             render: RenderTable { width: w, seed, ..Default::default() },
         })
 }

@@ -33,6 +33,7 @@
 //!   pruned only when its entry exceeds `best * (1 + 2^-20)`.
 
 use super::intersect::{sphere_disc, sphere_t, Closest};
+use super::quads::{QuadRec, Quads, QUAD_BASE};
 use super::spheres::{Spheres, MISS};
 use crate::probe::{Probe, Work, WorkTally};
 use crate::real::{Real, Wide, MAX_LANES};
@@ -110,20 +111,53 @@ impl Node8 {
 /// bounds-checked once.
 #[derive(Clone, Copy, Debug)]
 #[repr(C)]
-struct LeafSphere {
+pub struct LeafSphere {
     c: [f32; 3],
     r2: f32,
     /// The sphere's index in the scene (the tie rule's order).
     index: u32,
 }
 
+/// A leaf's quad: its record and its hit index (`QUAD_BASE + i`).
+#[derive(Clone, Copy, Debug)]
+#[repr(C)]
+pub struct LeafQuad {
+    rec: QuadRec,
+    index: u32,
+}
+
+/// A primitive kind stored in a tree's leaves: its test against a group of
+/// rays, improving the closest hit (the tie rule is [`Closest::offer`]'s).
+pub trait LeafPrim: Copy + std::fmt::Debug {
+    fn test<R: Real, P: Probe>(&self, o: V3<R>, d: V3<R>, best: &mut Closest<R>, probe: &mut P);
+}
+
+impl LeafPrim for LeafSphere {
+    #[inline(always)]
+    fn test<R: Real, P: Probe>(&self, o: V3<R>, d: V3<R>, best: &mut Closest<R>, probe: &mut P) {
+        let c = V3::new(R::splat(self.c[0]), R::splat(self.c[1]), R::splat(self.c[2]));
+        best.test(o, d, c, R::splat(self.r2), self.index, probe);
+    }
+}
+
+impl LeafPrim for LeafQuad {
+    #[inline(always)]
+    fn test<R: Real, P: Probe>(&self, o: V3<R>, d: V3<R>, best: &mut Closest<R>, probe: &mut P) {
+        best.test_quad(o, d, &self.rec, self.index, probe);
+    }
+}
+
+/// The tree over a scene's quads (one tree per primitive kind: a
+/// sphere-only scene's walks are exactly what they were).
+pub type QuadBvh = Bvh<LeafQuad>;
+
 /// The tree plus the spheres in leaf order: as records for the walks that
 /// test one sphere at a time, and as SoA padded by 8 for whole loads (the
 /// one-ray walk's 8-wide leaf test).
 #[derive(Clone, Debug)]
-pub struct Bvh {
+pub struct Bvh<L = LeafSphere> {
     nodes: Vec<Node8>,
-    leaf: Vec<LeafSphere>,
+    leaf: Vec<L>,
     cx: Vec<f32>,
     cy: Vec<f32>,
     cz: Vec<f32>,
@@ -291,6 +325,17 @@ impl Builder<'_> {
     }
 }
 
+/// The binary SAH tree over `boxes` (with centroids `centroid`) for `walk`:
+/// its nodes and the primitives' order in its leaves.
+fn build_binary(boxes: &[Aabb], centroid: Vec<[f32; 3]>, walk: Walk) -> (Vec<BNode>, Vec<u32>) {
+    let n = boxes.len();
+    let mut b = Builder { cost: SahCost::of(walk), boxes, centroid, order: (0..n as u32).collect(), nodes: Vec::new() };
+    if n > 0 {
+        b.build(0, n, 0);
+    }
+    (b.nodes, b.order)
+}
+
 impl Bvh {
     /// Builds the tree for the one-by-one walks (packets, scalar); `extent`
     /// bounds |coordinates| of every ray origin (the camera and its lens),
@@ -315,19 +360,10 @@ impl Bvh {
             })
             .collect();
         let centroid = (0..n).map(|i| [s.cx[i], s.cy[i], s.cz[i]]).collect();
-        let mut b = Builder {
-            cost: SahCost::of(walk),
-            boxes: &boxes,
-            centroid,
-            order: (0..n as u32).collect(),
-            nodes: Vec::new(),
-        };
-        if n > 0 {
-            b.build(0, n, 0);
-        }
+        let (bnodes, order) = build_binary(&boxes, centroid, walk);
         let mut bvh =
             Bvh { nodes: Vec::new(), leaf: vec![], cx: vec![], cy: vec![], cz: vec![], r2: vec![], index: vec![] };
-        for &i in &b.order {
+        for &i in &order {
             let i = i as usize;
             bvh.leaf.push(LeafSphere { c: [s.cx[i], s.cy[i], s.cz[i]], r2: s.r2[i], index: i as u32 });
             bvh.cx.push(s.cx[i]);
@@ -345,11 +381,50 @@ impl Bvh {
         }
         bvh.nodes.push(Node8::EMPTY);
         if n > 0 {
-            bvh.collapse(&b.nodes, 0, 0);
+            bvh.collapse(&bnodes, 0, 0);
         }
         bvh
     }
+}
 
+impl QuadBvh {
+    /// Builds the tree over the quads for the one-by-one walks; `extent`
+    /// bounds |coordinates| of every ray origin and every primitive.
+    ///
+    /// A quad's box covers its four corners widened by the edge tolerance
+    /// ([`QuadRec::bounds`]), then padded by `2 * extent * 2^-19` on every
+    /// side, as the spheres' boxes are: an axis-aligned quad's box is flat,
+    /// and the padding gives it a thickness of `2^-17 extent`, well above
+    /// what the quad test's rounding needs (the computed hit point lies within
+    /// about `10u extent` of the plane, u = 2^-24) and the slab test's (see
+    /// the module's bounds). So a flat box is entered by every ray the quad
+    /// test can accept, and brute force and the tree agree bit for bit.
+    pub fn build_quads(q: &Quads, extent: f32) -> QuadBvh {
+        let n = q.len;
+        let pad = 2.0 * extent.abs() * PAD;
+        let boxes: Vec<Aabb> = q.rec[..n]
+            .iter()
+            .map(|r| {
+                let (min, max) = r.bounds();
+                Aabb { min: min.map(|x| x - pad), max: max.map(|x| x + pad) }
+            })
+            .collect();
+        let centroid = boxes.iter().map(|b| std::array::from_fn(|k| 0.5 * b.min[k] + 0.5 * b.max[k])).collect();
+        let (bnodes, order) = build_binary(&boxes, centroid, Walk::OneByOne);
+        let mut bvh =
+            Bvh { nodes: Vec::new(), leaf: vec![], cx: vec![], cy: vec![], cz: vec![], r2: vec![], index: vec![] };
+        for &i in &order {
+            bvh.leaf.push(LeafQuad { rec: q.rec[i as usize], index: QUAD_BASE + i });
+        }
+        bvh.nodes.push(Node8::EMPTY);
+        if n > 0 {
+            bvh.collapse(&bnodes, 0, 0);
+        }
+        bvh
+    }
+}
+
+impl<L: LeafPrim> Bvh<L> {
     /// Fills node `at` with up to 8 descendants of binary node `root`.
     fn collapse(&mut self, bn: &[BNode], root: u32, at: usize) {
         let mut kids = vec![root];
@@ -402,16 +477,23 @@ impl Bvh {
         probe: &mut P,
     ) {
         for s in &self.leaf[start..start + count] {
-            let c = V3::new(R::splat(s.c[0]), R::splat(s.c[1]), R::splat(s.c[2]));
-            best.test(o, d, c, R::splat(s.r2), s.index, probe);
+            s.test(o, d, best, probe);
         }
     }
 
     /// The closest hit of one ray, one box and one sphere at a time (scalar kernel).
+    #[inline(always)]
     pub fn closest_hit_scalar<P: Probe>(&self, o: V3<f32>, d: V3<f32>, probe: &mut P) -> (u32, f32) {
+        let best = self.walk_scalar(o, d, Closest::<f32>::none(), probe);
+        (best.index, best.t)
+    }
+
+    /// The scalar walk from `best` (a closest hit found so far, by another
+    /// tree, say), returning the improved closest hit.
+    #[inline(always)]
+    pub fn walk_scalar<P: Probe>(&self, o: V3<f32>, d: V3<f32>, mut best: Closest<f32>, probe: &mut P) -> Closest<f32> {
         let mut tally = WorkTally::<P>::new();
         let (inv, noi) = slab_ray(o, d);
-        let mut best = Closest::<f32>::none();
         let mut stack = Stack::new((0, 0.0));
         while let Some((ni, entry)) = stack.pop() {
             if entry > best.t * PRUNE_SCALE {
@@ -437,9 +519,61 @@ impl Bvh {
             }
         }
         tally.flush(probe);
+        best
+    }
+
+    /// The closest hits of a packet of rays walking the tree together: a child
+    /// is entered when any live ray (bit k of `live`) enters its box; a leaf's
+    /// spheres are each broadcast against the packet, as in brute force.
+    /// Lanes not in `live` return `MISS` with `t = -inf`: starting them at
+    /// `best.t = -inf` keeps them out of every box (entries are at least 0)
+    /// without a mask per box test.
+    #[inline(always)]
+    pub fn closest_hit_packet<W: Wide, P: Probe>(&self, o: V3<W>, d: V3<W>, live: u32, probe: &mut P) -> (W::U32, W) {
+        let best = self.walk_packet(o, d, Closest::<W>::live(W::mask_from_bits(live)), probe);
         (best.index, best.t)
     }
 
+    /// The packet walk from `best` (lanes at `t = -inf` take no part),
+    /// returning the improved closest hit.
+    #[inline(always)]
+    pub fn walk_packet<W: Wide, P: Probe>(
+        &self,
+        o: V3<W>,
+        d: V3<W>,
+        mut best: Closest<W>,
+        probe: &mut P,
+    ) -> Closest<W> {
+        let mut tally = WorkTally::<P>::new();
+        let (inv, noi) = slab_ray(o, d);
+        let mut stack = Stack::new(0u32);
+        let exit = W::splat(EXIT_SCALE);
+        let prune = W::splat(PRUNE_SCALE);
+        while let Some(ni) = stack.pop() {
+            tally.work(Work::Node, 1);
+            let node = &self.nodes[ni as usize];
+            let kids = node.kids();
+            tally.work(Work::Box, kids as u32);
+            for k in 0..kids {
+                let bmin = V3::new(node.min[0][k], node.min[1][k], node.min[2][k]);
+                let bmax = V3::new(node.max[0][k], node.max[1][k], node.max[2][k]);
+                let (near, far) = slab(V3::splat3(bmin.to_array()), V3::splat3(bmax.to_array()), inv, noi);
+                let enter = near.le(far * exit) & near.le(best.t * prune);
+                if !enter.any() {
+                    continue;
+                }
+                match node.count[k] {
+                    0 => stack.push(node.child[k]),
+                    count => self.leaf(node.child[k] as usize, count as usize, o, d, &mut best, &mut tally),
+                }
+            }
+        }
+        tally.flush(probe);
+        best
+    }
+}
+
+impl Bvh {
     /// The closest hit of one ray: 8 child boxes, or 8 leaf spheres, per `f32x8` test.
     pub fn closest_hit_wide<P: Probe>(&self, o: V3<f32>, d: V3<f32>, probe: &mut P) -> (u32, f32) {
         let mut tally = WorkTally::<P>::new();
@@ -504,42 +638,6 @@ impl Bvh {
             (hit[k], t[k]) = self.closest_hit_wide(lane(o), lane(d), probe);
         }
         (W::u_from_fn(|k| hit[k]), W::from_fn(|k| t[k]))
-    }
-
-    /// The closest hits of a packet of rays walking the tree together: a child
-    /// is entered when any live ray (bit k of `live`) enters its box; a leaf's
-    /// spheres are each broadcast against the packet, as in brute force.
-    /// Lanes not in `live` return `MISS` with `t = -inf`: starting them at
-    /// `best.t = -inf` keeps them out of every box (entries are at least 0)
-    /// without a mask per box test.
-    pub fn closest_hit_packet<W: Wide, P: Probe>(&self, o: V3<W>, d: V3<W>, live: u32, probe: &mut P) -> (W::U32, W) {
-        let mut tally = WorkTally::<P>::new();
-        let (inv, noi) = slab_ray(o, d);
-        let mut best = Closest::<W>::live(W::mask_from_bits(live));
-        let mut stack = Stack::new(0u32);
-        let exit = W::splat(EXIT_SCALE);
-        let prune = W::splat(PRUNE_SCALE);
-        while let Some(ni) = stack.pop() {
-            tally.work(Work::Node, 1);
-            let node = &self.nodes[ni as usize];
-            let kids = node.kids();
-            tally.work(Work::Box, kids as u32);
-            for k in 0..kids {
-                let bmin = V3::new(node.min[0][k], node.min[1][k], node.min[2][k]);
-                let bmax = V3::new(node.max[0][k], node.max[1][k], node.max[2][k]);
-                let (near, far) = slab(V3::splat3(bmin.to_array()), V3::splat3(bmax.to_array()), inv, noi);
-                let enter = near.le(far * exit) & near.le(best.t * prune);
-                if !enter.any() {
-                    continue;
-                }
-                match node.count[k] {
-                    0 => stack.push(node.child[k]),
-                    count => self.leaf(node.child[k] as usize, count as usize, o, d, &mut best, &mut tally),
-                }
-            }
-        }
-        tally.flush(probe);
-        (best.index, best.t)
     }
 
     /// One ray against the up-to-8 spheres of a leaf at once (`f32x8` lanes are

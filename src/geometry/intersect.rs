@@ -49,6 +49,7 @@
 //!   radii away). Rendering never asks that question: [`spawn`] moves every new
 //!   origin off the surface by more than the bound on `c'`.
 
+use super::quads::{quad_hit, QuadRec, Quads, QUAD_BASE};
 use super::spheres::{Spheres, MISS};
 use crate::probe::{Probe, Work, WorkTally};
 use crate::real::{Mask, Real};
@@ -132,6 +133,27 @@ impl<R: Real> Closest<R> {
         let (hit, t) = sphere_t(disc, f, b, r2);
         self.offer(hit, t, R::u_splat(index));
     }
+}
+
+impl<R: Real> Closest<R> {
+    /// Quad `index` (its hit index, `QUAD_BASE + i`) against the rays: the
+    /// leaf test of brute force and of the quad BVH's walks.
+    #[inline(always)]
+    pub fn test_quad<P: Probe>(&mut self, o: V3<R>, d: V3<R>, q: &QuadRec, index: u32, probe: &mut P) {
+        probe.work(Work::Quad, 1);
+        let (hit, t) = quad_hit(o, d, q);
+        self.offer(hit, t, R::u_splat(index));
+    }
+}
+
+/// Every quad against the rays (brute force), improving `best`.
+#[inline]
+pub fn closest_quad_hit<R: Real, P: Probe>(q: &Quads, o: V3<R>, d: V3<R>, best: &mut Closest<R>, probe: &mut P) {
+    let mut tally = WorkTally::<P>::new();
+    for (i, rec) in q.rec[..q.len].iter().enumerate() {
+        best.test_quad(o, d, rec, QUAD_BASE + i as u32, &mut tally);
+    }
+    tally.flush(probe);
 }
 
 /// The closest hits of a group of rays (one ray: the scalar kernel; a packet:

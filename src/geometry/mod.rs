@@ -2,8 +2,12 @@
 
 pub mod bvh;
 pub mod intersect;
+pub mod quads;
 pub mod spheres;
 
-pub use bvh::{Bvh, SahCost, Walk};
-pub use intersect::{closest_hit, spawn, sphere_disc, sphere_t, surface, Closest, Surface, OFFSET_ULPS};
+pub use bvh::{Bvh, LeafQuad, QuadBvh, SahCost, Walk};
+pub use intersect::{
+    closest_hit, closest_quad_hit, spawn, sphere_disc, sphere_t, surface, Closest, Surface, OFFSET_ULPS,
+};
+pub use quads::{quad_hit, quad_surface, QuadRec, Quads, QUAD_BASE};
 pub use spheres::{Shade, Spheres, MISS};

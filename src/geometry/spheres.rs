@@ -104,12 +104,7 @@ impl Spheres {
     pub fn shade_with(&mut self, m: &MaterialTables) {
         self.shade = (0..self.cx.len())
             .map(|i| {
-                let (albedo, param) = match (i < self.len, self.kind[i]) {
-                    (false, _) => ([0.0; 3], 0.0),
-                    (true, Kind::Lambertian) => (m.lambertian[self.row[i] as usize], 0.0),
-                    (true, Kind::Metal) => m.metal[self.row[i] as usize],
-                    (true, Kind::Dielectric) => ([1.0; 3], m.dielectric[self.row[i] as usize]),
-                };
+                let (albedo, param) = if i < self.len { m.record(self.kind[i], self.row[i]) } else { ([0.0; 3], 0.0) };
                 let [a0, a1, a2] = albedo;
                 Shade([self.cx[i], self.cy[i], self.cz[i], self.r[i], a0, a1, a2, param])
             })

@@ -102,6 +102,13 @@ pub struct PerRay {
     pub box_tests: f64,
     pub sphere_tests: f64,
     pub roots: f64,
+    /// Quad tests (absent from baselines of sphere-only scenes).
+    #[serde(default, skip_serializing_if = "is_zero")]
+    pub quad_tests: f64,
+}
+
+fn is_zero(x: &f64) -> bool {
+    *x == 0.0
 }
 
 impl PerRay {
@@ -112,6 +119,7 @@ impl PerRay {
             box_tests: w.box_tests as f64 / r,
             sphere_tests: w.sphere_tests as f64 / r,
             roots: w.roots as f64 / r,
+            quad_tests: w.quad_tests as f64 / r,
         }
     }
 }
@@ -245,6 +253,11 @@ impl BenchReport {
                 w.roots,
                 s.image_hash
             );
+        }
+        if self.kernels.iter().any(|e| e.work_per_ray.quad_tests > 0.0) {
+            let per: Vec<String> =
+                self.kernels.iter().map(|e| format!("{} {:.2}", e.stats.kernel, e.work_per_ray.quad_tests)).collect();
+            t += &format!("quad tests per ray: {}\n", per.join(", "));
         }
         t += &format!(
             "(seconds and Mrays/s: the median of {} run(s); CI: a distribution-free confidence interval for the median \
@@ -500,7 +513,7 @@ pub struct BaselineComparison {
 }
 
 fn total(w: &WorkCounters) -> u64 {
-    w.nodes + w.box_tests + w.sphere_tests + w.roots
+    w.nodes + w.box_tests + w.sphere_tests + w.roots + w.quad_tests
 }
 
 /// Compares a fresh report with a baseline (checked with [`Baseline::check`]).

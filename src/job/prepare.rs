@@ -6,10 +6,10 @@
 use crate::camera::{PreparedCamera, View};
 use crate::choice::{AccelChoice, Mode};
 use crate::estimator::Estimator;
-use crate::geometry::{Bvh, Spheres, Walk};
+use crate::geometry::{Bvh, QuadBvh, Quads, Spheres, Walk};
 use crate::material::{Kind, MaterialTables};
 use crate::plan::{Accel, KindSet, Plan, Prepared, SkyColours};
-use crate::scene::{Camera, Material, Scene};
+use crate::scene::{Background, Camera, Material, Scene};
 use crate::settings::Settings;
 use glam::DVec3;
 
@@ -38,13 +38,26 @@ fn kind(m: &Material) -> Kind {
         Material::Lambertian { .. } => Kind::Lambertian,
         Material::Metal { .. } => Kind::Metal,
         Material::Dielectric { .. } => Kind::Dielectric,
+        Material::DiffuseLight { .. } => Kind::DiffuseLight,
     }
+}
+
+/// The closest-hit search over `quads` quads (none: no search at all):
+/// brute force below the crossover, a tree of their own above it.
+fn choose_quad_accel(choice: AccelChoice, quads: usize, mode: Mode) -> Option<Accel> {
+    (quads > 0).then(|| match choose_accel(choice, quads, mode) {
+        Accel::Brute => Accel::Brute,
+        _ => Accel::BvhPackets,
+    })
 }
 
 /// The plan (cheap: no geometry is built).
 pub(super) fn plan(scene: &Scene, settings: &Settings, accel: AccelChoice) -> Plan {
+    let flat = scene.flatten();
     let kinds: KindSet = match scene.mode {
-        Mode::Path => scene.spheres.iter().map(|s| kind(&s.material)).collect(),
+        Mode::Path => {
+            flat.spheres.iter().map(|s| kind(&s.material)).chain(flat.quads.iter().map(|q| kind(&q.material))).collect()
+        }
         Mode::Gradient | Mode::Flat | Mode::Normals => KindSet::default(),
     };
     Plan {
@@ -52,7 +65,8 @@ pub(super) fn plan(scene: &Scene, settings: &Settings, accel: AccelChoice) -> Pl
         kinds,
         lens: scene.camera.lens_radius() > 0.0 && scene.mode != Mode::Gradient,
         jitter: settings.spp > 1,
-        accel: choose_accel(accel, scene.spheres.len(), scene.mode),
+        accel: choose_accel(accel, flat.spheres.len(), scene.mode),
+        quads: choose_quad_accel(accel, flat.quads.len(), scene.mode),
     }
 }
 
@@ -73,35 +87,70 @@ pub(super) fn view(c: &Camera) -> View {
 pub(super) fn prepare(scene: &Scene, settings: Settings, plan: Plan, estimator: Estimator) -> Prepared {
     let mut materials = MaterialTables::default();
     let mut spheres = Spheres::default();
-    for s in &scene.spheres {
-        let row = match s.material {
-            Material::Lambertian { albedo } => push(&mut materials.lambertian, albedo),
-            Material::Metal { albedo, fuzz } => push(&mut materials.metal, (albedo, fuzz)),
-            Material::Dielectric { ior } => push(&mut materials.dielectric, ior),
-        };
-        spheres.push(s.center, s.radius, kind(&s.material), row);
+    let flat = scene.flatten();
+    let mut row_of = |m: &Material| match *m {
+        Material::Lambertian { albedo } => push(&mut materials.lambertian, albedo),
+        Material::Metal { albedo, fuzz } => push(&mut materials.metal, (albedo, fuzz)),
+        Material::Dielectric { ior } => push(&mut materials.dielectric, ior),
+        Material::DiffuseLight { emit, one_sided } => push(&mut materials.light, (emit, one_sided)),
+    };
+    for s in &flat.spheres {
+        spheres.push(s.center, s.radius, kind(&s.material), row_of(&s.material));
+    }
+    let view = view(&scene.camera);
+    // Every ray origin and every primitive lies within `extent` of the origin
+    // on each axis (the quads' edge tolerance and boxes are scaled by it).
+    let mut extent = scene.camera.look_from.iter().fold(0.0f32, |m, x| m.max(x.abs())) + view.lens_radius as f32;
+    for s in &flat.spheres {
+        extent = extent.max(s.center.iter().fold(0.0f32, |m, x| m.max(x.abs())) + s.radius.abs());
+    }
+    for q in &flat.quads {
+        for (a, b) in [(0.0, 0.0), (1.0, 0.0), (0.0, 1.0), (1.0, 1.0)] {
+            for k in 0..3 {
+                extent = extent.max((q.q[k] + a * q.u[k] + b * q.v[k]).abs());
+            }
+        }
+    }
+    let mut quads = Quads::default();
+    for q in &flat.quads {
+        quads.push(q.q, q.u, q.v, extent, kind(&q.material), row_of(&q.material));
     }
     spheres.pad();
-    // The wavefront's per-sphere shading records (geometry::Shade).
+    quads.pad();
+    // The wavefront's per-primitive shading records (geometry::Shade).
     spheres.shade_with(&materials);
-    let view = view(&scene.camera);
+    for i in 0..quads.len {
+        let (albedo, param) = materials.record(quads.kind[i], quads.row[i]);
+        quads.shade[i].0[4..].copy_from_slice(&[albedo[0], albedo[1], albedo[2], param]);
+    }
     let camera =
         PreparedCamera { lens: plan.lens, ..PreparedCamera::new(&view, settings.width, settings.height, plan.jitter) };
     let bvh = (plan.accel != Accel::Brute).then(|| {
-        // Ray origins lie within the camera's lens of the eye.
-        let extent = scene.camera.look_from.iter().fold(0.0f32, |m, x| m.max(x.abs())) + view.lens_radius as f32;
+        // Ray origins lie within the camera's lens of the eye, or on a
+        // primitive (`extent`; for a scene of spheres only, the spheres'
+        // extent is the one the build computes itself).
         // The tree is shaped for the walk that uses it (geometry::bvh::SahCost).
         let walk = if plan.accel == Accel::BvhRays { Walk::Wide8 } else { Walk::OneByOne };
         Bvh::build_for(&spheres, extent, walk)
     });
+    let quad_bvh = (plan.quads.is_some_and(|a| a != Accel::Brute)).then(|| QuadBvh::build_quads(&quads, extent));
     Prepared {
         plan,
         settings,
         spheres,
         materials,
         camera,
-        sky: SkyColours { horizon: scene.sky.horizon, zenith: scene.sky.zenith },
+        sky: SkyColours {
+            horizon: scene.sky.horizon,
+            zenith: scene.sky.zenith,
+            constant: match scene.background {
+                Background::Sky => None,
+                Background::Constant(c) => Some(c),
+            },
+        },
+        quads,
         bvh,
+        quad_bvh,
         estimator,
     }
 }
@@ -129,7 +178,13 @@ mod tests {
         assert_eq!(p.kinds.iter().collect::<Vec<_>>(), [Kind::Lambertian]);
         let fin = preset("final").unwrap();
         let p = plan(&fin, &settings(4), AccelChoice::Auto);
-        assert_eq!(p.kinds.iter().collect::<Vec<_>>(), Kind::ALL);
+        assert_eq!(p.kinds.iter().collect::<Vec<_>>(), [Kind::Lambertian, Kind::Metal, Kind::Dielectric]);
+        assert_eq!(p.quads, None);
+        let cornell = preset("nw-cornell-box").unwrap();
+        let p = plan(&cornell, &settings(4), AccelChoice::Auto);
+        assert_eq!(p.kinds.iter().collect::<Vec<_>>(), [Kind::Lambertian, Kind::DiffuseLight]);
+        assert_eq!(p.quads, Some(Accel::BvhPackets));
+        assert_eq!(plan(&cornell, &settings(4), AccelChoice::Brute).quads, Some(Accel::Brute));
         let normals = preset("ch05-normals").unwrap();
         assert!(plan(&normals, &settings(4), AccelChoice::Auto).kinds.is_empty());
     }

@@ -88,6 +88,16 @@ pub fn sky<R: Real>(s: &SkyColours, d: V3<R>) -> V3<R> {
     V3::splat3(s.horizon) * (R::splat(1.0) - a) + V3::splat3(s.zenith) * a
 }
 
+/// What a ray leaving the scene in unit direction `d` sees: the constant
+/// background, or the sky gradient.
+#[inline(always)]
+pub fn background<R: Real>(s: &SkyColours, d: V3<R>) -> V3<R> {
+    match s.constant {
+        Some(c) => V3::splat3(c),
+        None => sky(s, d),
+    }
+}
+
 /// Chapter 5's normal shading, `0.5 (n + 1)`.
 #[inline(always)]
 pub fn normal_colour<R: Real>(n: V3<R>) -> V3<R> {

@@ -1,12 +1,12 @@
 //! The reference path tracer: one path at a time, iterative, straightforward.
 //! Every formula comes from the width-generic modules, instantiated at `f32`.
 
-use super::{normal_colour, sky};
+use super::{background, normal_colour};
 use crate::choice::Mode;
 use crate::estimator::{roulette, roulette_applies};
 use crate::film::TileFilm;
-use crate::geometry::{spawn, surface, Surface, MISS};
-use crate::material::{dielectric, lambertian, metal, Kind};
+use crate::geometry::{quad_surface, spawn, surface, Surface, MISS, QUAD_BASE};
+use crate::material::{dielectric, emission, lambertian, metal, Kind};
 use crate::plan::Prepared;
 use crate::probe::{PathId, Probe};
 use crate::sampling::{layout, PathSampler, Stream};
@@ -90,6 +90,8 @@ fn scatter(
             (dir, albedo)
         }
         Kind::Dielectric => (dielectric(d, srf.n, srf.front, m.dielectric[row], rng), [1.0; 3]),
+        // Lights end the path before scattering (`trace`).
+        Kind::DiffuseLight => return None,
     })
 }
 
@@ -114,18 +116,34 @@ pub fn trace<P: Probe>(
             probe.traced(id, o, d, hit, t, 1);
         }
         if hit == MISS {
-            return (thr.mul_elem(sky(&prep.sky, d)).to_array(), rays);
+            return (thr.mul_elem(background(&prep.sky, d)).to_array(), rays);
         }
-        let i = hit as usize;
-        let srf = surface(o, d, t, V3::new(sp.cx[i], sp.cy[i], sp.cz[i]), sp.r[i]);
-        if P::PATHS {
-            probe.shaded(id, hit, sp.r[i], srf.n, srf.front, 1);
-        }
-        let (kind, row) = (sp.kind[i], sp.row[i] as usize);
+        let (srf, kind, row) = if hit < QUAD_BASE {
+            let i = hit as usize;
+            let srf = surface(o, d, t, V3::new(sp.cx[i], sp.cy[i], sp.cz[i]), sp.r[i]);
+            if P::PATHS {
+                probe.shaded(id, hit, sp.r[i], srf.n, srf.front, 1);
+            }
+            (srf, sp.kind[i], sp.row[i] as usize)
+        } else {
+            let qs = &prep.quads;
+            let i = (hit - QUAD_BASE) as usize;
+            let [nx, ny, nz, dn, ..] = qs.shade[i].0;
+            let srf = quad_surface(o, d, t, V3::new(nx, ny, nz), dn);
+            if P::PATHS {
+                probe.shaded(id, hit, 0.0, srf.n, srf.front, 1);
+            }
+            (srf, qs.kind[i], qs.row[i] as usize)
+        };
         let m = &prep.materials;
         let (dir, atten) = match prep.plan.mode {
             Mode::Normals => return (normal_colour(srf.n).to_array(), rays),
             Mode::Flat | Mode::Gradient => return (m.flat_colour(kind, row as u32), rays),
+            Mode::Path if kind == Kind::DiffuseLight => {
+                let (emit, one_sided) = m.light[row];
+                let e = emission(V3::from_array(emit), one_sided, srf.front);
+                return (thr.mul_elem(e).to_array(), rays);
+            }
             Mode::Path => match scatter(prep, kind, row, d, &srf, depth, rng) {
                 Some(s) => s,
                 None => return ([0.0; 3], rays),

@@ -9,7 +9,8 @@
 //! loop until no path is alive or max_depth rays were traced:
 //!     intersect: W contiguous rays per packet (brute force or the BVH, as planned)
 //!     classify:  each path joins the queue of its hit's material kind, or the miss queue
-//!     miss pass: throughput x sky -> the path's result
+//!     miss pass: throughput x background (sky or constant) -> the path's result
+//!     light pass (scenes with lights): throughput x emission -> the result; the path ends
 //!     one scatter pass per material kind the scene uses (W paths at a time, gathered)
 //!     compaction: survivors are appended to the next bounce's arrays
 //! add results to the film in sample order
@@ -23,12 +24,12 @@
 //! closest-hit tie rule is the same.
 //! Memory is bounded: a workspace holds at most `MAX_PATHS` paths.
 
-use super::{normal_colour, sky};
+use super::{background, normal_colour};
 use crate::choice::Mode;
 use crate::estimator::{roulette, roulette_applies};
 use crate::film::TileFilm;
-use crate::geometry::{spawn, surface, Shade, Surface, MISS};
-use crate::material::{dielectric, lambertian, metal, Kind};
+use crate::geometry::{quad_surface, spawn, surface, Shade, Surface, MISS, QUAD_BASE};
+use crate::material::{dielectric, emission, lambertian, metal, Kind};
 use crate::plan::Prepared;
 use crate::probe::{PathId, Probe, Stage};
 use crate::real::{Wide, MAX_LANES};
@@ -350,7 +351,9 @@ fn index_run<W: Wide>(i: usize) -> W::Idx {
 
 /// One bounce of every live path: intersect, classify, shade misses, scatter.
 /// `depth` counts the rays each path has traced before this bounce (0: camera
-/// rays). Returns the rays traced.
+/// rays). Returns the rays traced. (Inlined, as the compiler chose to before
+/// the light pass made it larger.)
+#[cfg_attr(not(feature = "phases"), inline(always))]
 fn bounce<W: Wide, P: Probe, S: PathSampler>(
     prep: &Prepared,
     sampler: S,
@@ -374,22 +377,48 @@ fn bounce<W: Wide, P: Probe, S: PathSampler>(
     }
     let mut len = [0usize; MISS_QUEUE + 1];
     let mut queues = ws.queue.take().expect("the queues are put back after every bounce");
-    // The sphere arrays have a power-of-two length above every hit index (`Spheres::pad`).
+    // The sphere and quad arrays have a power-of-two length above every hit
+    // index (`Spheres::pad`, `Quads::pad`). Quads' hit indices are
+    // `QUAD_BASE + i`, above every sphere's and below `MISS`.
     let kind_mask = prep.spheres.kind.len().wrapping_sub(1);
-    debug_assert!(prep.spheres.kind.len().is_power_of_two());
-    for (i, &h) in ws.hit[..n].iter().enumerate() {
-        let q = if h == MISS { MISS_QUEUE } else { prep.spheres.kind[h as usize & kind_mask] as usize };
-        queues[q][len[q] & MASK] = i as u32;
-        len[q] += 1;
+    let quad_mask = prep.quads.kind.len().wrapping_sub(1);
+    debug_assert!(prep.spheres.kind.len().is_power_of_two() && prep.quads.kind.len().is_power_of_two());
+    // The loop for a scene without quads is book one's own (one test per hit).
+    if prep.quads.is_empty() {
+        for (i, &h) in ws.hit[..n].iter().enumerate() {
+            let q = if h == MISS { MISS_QUEUE } else { prep.spheres.kind[h as usize & kind_mask] as usize };
+            queues[q][len[q] & MASK] = i as u32;
+            len[q] += 1;
+        }
+    } else {
+        for (i, &h) in ws.hit[..n].iter().enumerate() {
+            let q = if h < QUAD_BASE {
+                prep.spheres.kind[h as usize & kind_mask] as usize
+            } else if h == MISS {
+                MISS_QUEUE
+            } else {
+                prep.quads.kind[(h - QUAD_BASE) as usize & quad_mask] as usize
+            };
+            queues[q][len[q] & MASK] = i as u32;
+            len[q] += 1;
+        }
     }
     ws.next.len = 0;
     for_packets::<W, P>(&queues[MISS_QUEUE], len[MISS_QUEUE], probe, |idx, active, _| {
-        let c = v3_gather::<W>(&ws.cur.thr, idx).mul_elem(sky(&prep.sky, v3_gather::<W>(&ws.cur.d, idx)));
+        let c = v3_gather::<W>(&ws.cur.thr, idx).mul_elem(background(&prep.sky, v3_gather::<W>(&ws.cur.d, idx)));
         write_results(ws, idx, active, c);
     });
     for kind in Kind::ALL {
         let (q, qlen) = (&queues[kind as usize], len[kind as usize]);
         match prep.plan.mode {
+            Mode::Path if kind == Kind::DiffuseLight && prep.plan.kinds.contains(kind) => {
+                for_packets::<W, P>(q, qlen, probe, |idx, active, probe| {
+                    let Hits { srf, albedo: emit, param, .. } = surfaces::<W, P>(prep, ws, idx, active, probe);
+                    let one_sided = param.gt(W::splat(0.0));
+                    let c = v3_gather::<W>(&ws.cur.thr, idx).mul_elem(emission(emit, one_sided, srf.front));
+                    write_results(ws, idx, active, c);
+                });
+            }
             Mode::Path if prep.plan.kinds.contains(kind) => {
                 for_packets::<W, P>(q, qlen, probe, |idx, active, probe| {
                     scatter::<W, P, S>(prep, sampler, ws, kind, depth, idx, active, probe)
@@ -450,19 +479,51 @@ struct Hits<W: Wide> {
     param: W,
 }
 
-/// The hit surfaces of a packet of queued paths. The hit spheres' shading
-/// records ([`Shade`]) are loaded whole, one per lane, and transposed.
+/// The hit surfaces of a packet of queued paths. The hit primitives'
+/// shading records ([`Shade`]) are loaded whole, one per lane, and
+/// transposed. In a scene with quads a packet may hold both kinds: both
+/// records and both surfaces are computed, and each lane keeps its own (the
+/// same values the scalar kernel computes for its one kind).
 #[inline(always)]
 fn surfaces<W: Wide, P: Probe>(prep: &Prepared, ws: &Workspace, idx: &W::Idx, active: usize, probe: &mut P) -> Hits<W> {
     let sph = W::gather_u_pow2(&ws.hit, idx);
-    let rec = W::gather_rows8(&prep.spheres.shade, &W::idx_of(sph));
-    let c = V3::new(rec[Shade::CX], rec[Shade::CY], rec[Shade::CZ]);
-    let r = rec[Shade::R];
-    let d = v3_gather::<W>(&ws.cur.d, idx);
-    let srf = surface(v3_gather::<W>(&ws.cur.o, idx), d, W::gather_pow2(&ws.t, idx), c, r);
-    if P::PATHS {
-        probe.shaded(ws.ids::<W>(idx), sph, r, srf.n, srf.front, low_bits(active));
+    if prep.quads.is_empty() {
+        // Book one's surfaces, as they were.
+        let rec = W::gather_rows8(&prep.spheres.shade, &W::idx_of(sph));
+        let c = V3::new(rec[Shade::CX], rec[Shade::CY], rec[Shade::CZ]);
+        let r = rec[Shade::R];
+        let d = v3_gather::<W>(&ws.cur.d, idx);
+        let srf = surface(v3_gather::<W>(&ws.cur.o, idx), d, W::gather_pow2(&ws.t, idx), c, r);
+        if P::PATHS {
+            probe.shaded(ws.ids::<W>(idx), sph, r, srf.n, srf.front, low_bits(active));
+        }
+        let a = Shade::ALBEDO;
+        return Hits { d, srf, albedo: V3::new(rec[a], rec[a + 1], rec[a + 2]), param: rec[Shade::PARAM] };
     }
+    let d = v3_gather::<W>(&ws.cur.d, idx);
+    let o = v3_gather::<W>(&ws.cur.o, idx);
+    let t = W::gather_pow2(&ws.t, idx);
+    let (srf, rec): (Surface<W>, [W; 8]) = {
+        let is_sphere = W::u_lt(sph, W::u_splat(QUAD_BASE));
+        let s_mask = W::u_splat(prep.spheres.shade.len() as u32 - 1);
+        let q_mask = W::u_splat(prep.quads.shade.len() as u32 - 1);
+        let srec = W::gather_rows8(&prep.spheres.shade, &W::idx_of(sph & s_mask));
+        let qrec = W::gather_rows8(&prep.quads.shade, &W::idx_of(sph & q_mask));
+        let c = V3::new(srec[Shade::CX], srec[Shade::CY], srec[Shade::CZ]);
+        let r = W::select(is_sphere, srec[Shade::R], W::splat(0.0));
+        let s_srf = surface(o, d, t, c, srec[Shade::R]);
+        let q_srf = quad_surface(o, d, t, V3::new(qrec[0], qrec[1], qrec[2]), qrec[3]);
+        let srf = Surface {
+            p: V3::select(is_sphere, s_srf.p, q_srf.p),
+            n: V3::select(is_sphere, s_srf.n, q_srf.n),
+            front: W::select(is_sphere, s_srf.front, q_srf.front),
+            offset: W::select(is_sphere, s_srf.offset, q_srf.offset),
+        };
+        if P::PATHS {
+            probe.shaded(ws.ids::<W>(idx), sph, r, srf.n, srf.front, low_bits(active));
+        }
+        (srf, std::array::from_fn(|k| W::select(is_sphere, srec[k], qrec[k])))
+    };
     let a = Shade::ALBEDO;
     Hits { d, srf, albedo: V3::new(rec[a], rec[a + 1], rec[a + 2]), param: rec[Shade::PARAM] }
 }
@@ -515,6 +576,8 @@ fn scatter<W: Wide, P: Probe, S: PathSampler>(
         Kind::Lambertian => (lambertian(srf.n, &mut rng), all),
         Kind::Metal => metal(d, srf.n, param, &mut rng),
         Kind::Dielectric => (dielectric(d, srf.n, srf.front, param, &mut rng), all),
+        // Lights have their own pass (`bounce`) and never scatter.
+        Kind::DiffuseLight => (d, !all),
     };
     let zero = W::splat(0.0);
     let dark = thr.x.eq(zero) & thr.y.eq(zero) & thr.z.eq(zero);

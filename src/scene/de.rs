@@ -7,7 +7,7 @@
 //! sphere list stops at [`MAX_SPHERES`] while it is read (memory is bounded
 //! by the limit, not by the file).
 
-use crate::limits::MAX_SPHERES;
+use crate::limits::{MAX_GROUPS, MAX_QUADS, MAX_SPHERES};
 use serde::de::{self, Deserializer, IgnoredAny, MapAccess, SeqAccess, Unexpected, Visitor};
 use std::fmt;
 use std::marker::PhantomData;
@@ -176,20 +176,28 @@ pub fn opt_vec3<'de, D: Deserializer<'de>>(d: D) -> Result<Option<[f32; 3]>, D::
     Option::<V3>::deserialize(d).map(|o| o.map(|v| v.0))
 }
 
-struct SpheresVisitor;
+/// A list refused as soon as it holds more than `max` entries (memory is
+/// bounded by the limit, not by the file).
+struct BoundedVisitor<T> {
+    max: usize,
+    what: &'static str,
+    limit: &'static str,
+    item: PhantomData<T>,
+}
 
-impl<'de> Visitor<'de> for SpheresVisitor {
-    type Value = Vec<super::Sphere>;
+impl<'de, T: de::Deserialize<'de>> Visitor<'de> for BoundedVisitor<T> {
+    type Value = Vec<T>;
     fn expecting(&self, f: &mut fmt::Formatter) -> fmt::Result {
-        write!(f, "a list of at most {MAX_SPHERES} spheres")
+        write!(f, "a list of at most {} {}", self.max, self.what)
     }
     fn visit_seq<A: SeqAccess<'de>>(self, mut seq: A) -> Result<Self::Value, A::Error> {
         // The size hint comes from the input: never allocate on its word alone.
         let mut v = Vec::with_capacity(seq.size_hint().unwrap_or(0).min(4096));
         while let Some(s) = seq.next_element()? {
-            if v.len() == MAX_SPHERES {
+            if v.len() == self.max {
                 return Err(de::Error::custom(format_args!(
-                    "too many spheres: at most {MAX_SPHERES} (limits::MAX_SPHERES)"
+                    "too many {}: at most {} ({})",
+                    self.what, self.max, self.limit
                 )));
             }
             v.push(s);
@@ -201,7 +209,57 @@ impl<'de> Visitor<'de> for SpheresVisitor {
     }
 }
 
+fn bounded<'de, D: Deserializer<'de>, T: de::Deserialize<'de>>(
+    d: D,
+    max: usize,
+    what: &'static str,
+    limit: &'static str,
+) -> Result<Vec<T>, D::Error> {
+    d.deserialize_seq(BoundedVisitor { max, what, limit, item: PhantomData })
+}
+
 /// The sphere list, refused as soon as it holds more than [`MAX_SPHERES`].
 pub fn spheres<'de, D: Deserializer<'de>>(d: D) -> Result<Vec<super::Sphere>, D::Error> {
-    d.deserialize_seq(SpheresVisitor)
+    bounded(d, MAX_SPHERES, "spheres", "limits::MAX_SPHERES")
+}
+
+/// The quad list, refused as soon as it holds more than [`MAX_QUADS`].
+pub fn quads<'de, D: Deserializer<'de>>(d: D) -> Result<Vec<super::Quad>, D::Error> {
+    bounded(d, MAX_QUADS, "quads", "limits::MAX_QUADS")
+}
+
+/// The box list: six quads each, so at most [`MAX_QUADS`] / 6 boxes.
+pub fn boxes<'de, D: Deserializer<'de>>(d: D) -> Result<Vec<super::QuadBox>, D::Error> {
+    bounded(d, MAX_QUADS / 6, "boxes", "limits::MAX_QUADS / 6")
+}
+
+/// The group list, refused beyond [`MAX_GROUPS`].
+pub fn groups<'de, D: Deserializer<'de>>(d: D) -> Result<Vec<super::Group>, D::Error> {
+    bounded(d, MAX_GROUPS, "groups", "limits::MAX_GROUPS")
+}
+
+struct BackgroundVisitor;
+
+impl<'de> Visitor<'de> for BackgroundVisitor {
+    type Value = super::Background;
+    fn expecting(&self, f: &mut fmt::Formatter) -> fmt::Result {
+        f.write_str("\"sky\" or a colour [r, g, b]")
+    }
+    fn visit_str<E: de::Error>(self, v: &str) -> Result<Self::Value, E> {
+        match v {
+            "sky" => Ok(super::Background::Sky),
+            other => Err(E::invalid_value(Unexpected::Str(other), &self)),
+        }
+    }
+    fn visit_seq<A: SeqAccess<'de>>(self, seq: A) -> Result<Self::Value, A::Error> {
+        Vec3Visitor.visit_seq(seq).map(super::Background::Constant)
+    }
+    fn visit_map<A: MapAccess<'de>>(self, map: A) -> Result<Self::Value, A::Error> {
+        unexpected_map(map, &self)
+    }
+}
+
+/// The background: `"sky"` or a colour.
+pub fn background<'de, D: Deserializer<'de>>(d: D) -> Result<super::Background, D::Error> {
+    d.deserialize_any(BackgroundVisitor)
 }

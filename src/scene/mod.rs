@@ -9,6 +9,7 @@
 
 pub(crate) mod de;
 mod file;
+mod flatten;
 mod presets;
 mod render_table;
 mod source;
@@ -16,6 +17,7 @@ mod validate;
 
 pub use crate::choice::Mode;
 pub use file::{load_scene, save_scene, scene_from_bytes, scene_from_str, scene_to_string, Format};
+pub use flatten::Flat;
 pub use presets::{final_scene, preset, presets, Preset, PresetGroup};
 pub use render_table::RenderTable;
 pub use source::SceneSource;
@@ -28,9 +30,30 @@ use serde::{Deserialize, Serialize};
 #[derive(Serialize, Deserialize, Clone, Copy, Debug, PartialEq)]
 #[serde(tag = "type", rename_all = "lowercase", try_from = "MaterialFields")]
 pub enum Material {
-    Lambertian { albedo: [f32; 3] },
-    Metal { albedo: [f32; 3], fuzz: f32 },
-    Dielectric { ior: f32 },
+    Lambertian {
+        albedo: [f32; 3],
+    },
+    Metal {
+        albedo: [f32; 3],
+        fuzz: f32,
+    },
+    Dielectric {
+        ior: f32,
+    },
+    /// The Next Week's light: emits `emit` and ends the path. Two-sided (as
+    /// The Next Week) unless `one_sided`, then only the front face (the side
+    /// the primitive's normal points to: `u x v` for a quad, outwards for a
+    /// sphere of positive radius) emits, as The Rest of Your Life.
+    #[serde(rename = "diffuse_light")]
+    DiffuseLight {
+        emit: [f32; 3],
+        #[serde(default, skip_serializing_if = "is_false")]
+        one_sided: bool,
+    },
+}
+
+fn is_false(b: &bool) -> bool {
+    !*b
 }
 
 /// A material as a file writes it: every field of every kind, checked against
@@ -46,6 +69,10 @@ struct MaterialFields {
     fuzz: Option<f32>,
     #[serde(default, deserialize_with = "de::opt_f32")]
     ior: Option<f32>,
+    #[serde(default, deserialize_with = "de::opt_vec3")]
+    emit: Option<[f32; 3]>,
+    #[serde(default)]
+    one_sided: Option<bool>,
 }
 
 impl TryFrom<MaterialFields> for Material {
@@ -55,7 +82,13 @@ impl TryFrom<MaterialFields> for Material {
         fn need<T>(v: Option<T>, field: &str, name: &str) -> std::result::Result<T, String> {
             v.ok_or_else(|| format!("missing field `{field}` for a {name} material"))
         }
-        let present = [("albedo", m.albedo.is_some()), ("fuzz", m.fuzz.is_some()), ("ior", m.ior.is_some())];
+        let present = [
+            ("albedo", m.albedo.is_some()),
+            ("fuzz", m.fuzz.is_some()),
+            ("ior", m.ior.is_some()),
+            ("emit", m.emit.is_some()),
+            ("one_sided", m.one_sided.is_some()),
+        ];
         let (material, fields) = match m.kind {
             MaterialType::Lambertian => {
                 (Material::Lambertian { albedo: need(m.albedo, "albedo", name)? }, &["albedo"][..])
@@ -65,6 +98,10 @@ impl TryFrom<MaterialFields> for Material {
                 &["albedo", "fuzz"][..],
             ),
             MaterialType::Dielectric => (Material::Dielectric { ior: need(m.ior, "ior", name)? }, &["ior"][..]),
+            MaterialType::DiffuseLight => (
+                Material::DiffuseLight { emit: need(m.emit, "emit", name)?, one_sided: m.one_sided.unwrap_or(false) },
+                &["emit", "one_sided"][..],
+            ),
         };
         match present.iter().find(|(f, p)| *p && !fields.contains(f)) {
             Some((f, _)) => Err(format!(
@@ -78,11 +115,12 @@ impl TryFrom<MaterialFields> for Material {
 
 /// A material's `type` as files write it.
 #[derive(Deserialize, Clone, Copy, Debug, PartialEq, Eq)]
-#[serde(rename_all = "lowercase")]
+#[serde(rename_all = "snake_case")]
 enum MaterialType {
     Lambertian,
     Metal,
     Dielectric,
+    DiffuseLight,
 }
 
 impl MaterialType {
@@ -91,6 +129,7 @@ impl MaterialType {
             MaterialType::Lambertian => "lambertian",
             MaterialType::Metal => "metal",
             MaterialType::Dielectric => "dielectric",
+            MaterialType::DiffuseLight => "diffuse_light",
         }
     }
 }
@@ -102,6 +141,7 @@ impl Material {
             Material::Lambertian { .. } => "lambertian",
             Material::Metal { .. } => "metal",
             Material::Dielectric { .. } => "dielectric",
+            Material::DiffuseLight { .. } => "diffuse_light",
         }
     }
 }
@@ -115,6 +155,81 @@ pub struct Sphere {
     #[serde(deserialize_with = "de::f32")]
     pub radius: f32,
     pub material: Material,
+}
+
+/// A parallelogram (The Next Week's `quad`): the points `q + a u + b v` for
+/// `a, b` in [0, 1]. Its normal, and so its front face, is `u x v`.
+#[derive(Serialize, Deserialize, Clone, Copy, Debug, PartialEq)]
+#[serde(deny_unknown_fields)]
+pub struct Quad {
+    #[serde(deserialize_with = "de::vec3")]
+    pub q: [f32; 3],
+    #[serde(deserialize_with = "de::vec3")]
+    pub u: [f32; 3],
+    #[serde(deserialize_with = "de::vec3")]
+    pub v: [f32; 3],
+    pub material: Material,
+}
+
+/// The Next Week's `box(a, b)`: the axis-aligned box with opposite corners
+/// `a` and `b`, as its six quads (faces outwards, in the book's order).
+#[derive(Serialize, Deserialize, Clone, Copy, Debug, PartialEq)]
+#[serde(deny_unknown_fields)]
+pub struct QuadBox {
+    #[serde(deserialize_with = "de::vec3")]
+    pub a: [f32; 3],
+    #[serde(deserialize_with = "de::vec3")]
+    pub b: [f32; 3],
+    pub material: Material,
+}
+
+/// Primitives under one transform, the book's instance order: first
+/// `rotate_y` (degrees, about the y axis through the origin), then
+/// `translate`. Flattened into world-space primitives when a render job is
+/// prepared ([`Scene::flatten`]). Groups do not nest.
+#[derive(Serialize, Deserialize, Clone, Debug, PartialEq, Default)]
+#[serde(deny_unknown_fields)]
+pub struct Group {
+    #[serde(default, skip_serializing_if = "is_zero", deserialize_with = "de::f32")]
+    pub rotate_y: f32,
+    #[serde(default, skip_serializing_if = "is_default", deserialize_with = "de::vec3")]
+    pub translate: [f32; 3],
+    #[serde(default, skip_serializing_if = "Vec::is_empty", deserialize_with = "de::spheres")]
+    pub spheres: Vec<Sphere>,
+    #[serde(default, skip_serializing_if = "Vec::is_empty", deserialize_with = "de::quads")]
+    pub quads: Vec<Quad>,
+    #[serde(default, skip_serializing_if = "Vec::is_empty", deserialize_with = "de::boxes")]
+    pub boxes: Vec<QuadBox>,
+}
+
+fn is_zero(x: &f32) -> bool {
+    *x == 0.0
+}
+
+/// What a ray that leaves the scene sees: book one's sky gradient (the
+/// scene's `sky` colours; the default), or one colour in every direction
+/// (The Next Week's `background`, black for its lit scenes). Written as
+/// `"sky"` or as a colour `[r, g, b]`.
+#[derive(Clone, Copy, Debug, PartialEq, Default)]
+pub enum Background {
+    #[default]
+    Sky,
+    Constant([f32; 3]),
+}
+
+impl Serialize for Background {
+    fn serialize<S: serde::Serializer>(&self, s: S) -> std::result::Result<S::Ok, S::Error> {
+        match self {
+            Background::Sky => s.serialize_str("sky"),
+            Background::Constant(c) => c.serialize(s),
+        }
+    }
+}
+
+impl<'de> Deserialize<'de> for Background {
+    fn deserialize<D: serde::Deserializer<'de>>(d: D) -> std::result::Result<Self, D::Error> {
+        de::background(d)
+    }
 }
 
 fn default_vup() -> [f32; 3] {
@@ -213,8 +328,20 @@ pub struct Scene {
     pub camera: Camera,
     #[serde(default, deserialize_with = "de::spheres")]
     pub spheres: Vec<Sphere>,
+    /// The Next Week's quads (world space).
+    #[serde(default, skip_serializing_if = "Vec::is_empty", deserialize_with = "de::quads")]
+    pub quads: Vec<Quad>,
+    /// The Next Week's boxes (six quads each, world space).
+    #[serde(default, skip_serializing_if = "Vec::is_empty", deserialize_with = "de::boxes")]
+    pub boxes: Vec<QuadBox>,
+    /// Instances: primitives under `rotate_y` then `translate`.
+    #[serde(default, skip_serializing_if = "Vec::is_empty", deserialize_with = "de::groups")]
+    pub groups: Vec<Group>,
     #[serde(default)]
     pub sky: Sky,
+    /// What rays that leave the scene see (default: the sky gradient).
+    #[serde(default, skip_serializing_if = "is_default")]
+    pub background: Background,
     /// The render table: size, samples, depth, seed and sampler a scene asks
     /// for (overrides win; see `crate::job`).
     #[serde(default, skip_serializing_if = "is_default")]

@@ -1,6 +1,6 @@
 //! A preset for every image of the seed (SEED-NOTES.md), with the book's physics.
 
-use super::{Camera, Material, Mode, RenderTable, Scene, Sky, Sphere};
+use super::{Background, Camera, Group, Material, Mode, Quad, QuadBox, RenderTable, Scene, Sky, Sphere};
 use crate::real::Real;
 use rand_core::{Rng, SeedableRng};
 use rand_xoshiro::Xoshiro128Plus;
@@ -19,18 +19,21 @@ pub struct Preset {
 pub enum PresetGroup {
     /// *Ray Tracing in One Weekend*, chapter by chapter.
     Weekend,
+    /// *Ray Tracing: The Next Week* (names `nw-...`).
+    NextWeek,
     /// Numerical stress scenes (`rtow stress`), not images of a book.
     Stress,
 }
 
 impl PresetGroup {
     /// Every group, in the order `rtow scenes` lists them.
-    pub const ALL: &'static [PresetGroup] = &[PresetGroup::Weekend, PresetGroup::Stress];
+    pub const ALL: &'static [PresetGroup] = &[PresetGroup::Weekend, PresetGroup::NextWeek, PresetGroup::Stress];
 
     /// The heading `rtow scenes` gives the group.
     pub fn title(self) -> &'static str {
         match self {
             PresetGroup::Weekend => "Ray Tracing in One Weekend",
+            PresetGroup::NextWeek => "Ray Tracing: The Next Week (v4; part 1: quads, boxes, instances, lights)",
             PresetGroup::Stress => "Stress scenes (numerical robustness, for rtow stress)",
         }
     }
@@ -67,7 +70,17 @@ fn origin_camera() -> Camera {
 }
 
 fn scene(mode: Mode, camera: Camera, spheres: Vec<Sphere>, render: RenderTable) -> Scene {
-    Scene { mode, camera, spheres, sky: Sky::default(), render }
+    Scene {
+        mode,
+        camera,
+        spheres,
+        quads: vec![],
+        boxes: vec![],
+        groups: vec![],
+        sky: Sky::default(),
+        background: Background::Sky,
+        render,
+    }
 }
 
 const SMALL: fn() -> RenderTable = || settings(400, 225, 1, 1);
@@ -215,6 +228,97 @@ fn stress_tiny() -> Scene {
     scaled(ch09(), 2e-4)
 }
 
+const fn light(emit: [f32; 3]) -> Material {
+    Material::DiffuseLight { emit, one_sided: false }
+}
+const fn quad(q: [f32; 3], u: [f32; 3], v: [f32; 3], material: Material) -> Quad {
+    Quad { q, u, v, material }
+}
+
+/// A scene of The Next Week: a pinhole camera (vup +y), a constant background.
+fn next_week(camera: Camera, background: [f32; 3], render: RenderTable) -> Scene {
+    Scene { background: Background::Constant(background), ..scene(Mode::Path, camera, vec![], render) }
+}
+
+/// The Next Week's blue-grey background of its daylight scenes.
+const NW_DAYLIGHT: [f32; 3] = [0.70, 0.80, 1.00];
+
+/// The Next Week, `quads()`: five coloured quads, 400x400, 100 spp.
+fn nw_quads() -> Scene {
+    let mut s =
+        next_week(Camera::looking([0.0, 0.0, 9.0], [0.0, 0.0, 0.0], 80.0), NW_DAYLIGHT, settings(400, 400, 100, 50));
+    s.quads = vec![
+        quad([-3.0, -2.0, 5.0], [0.0, 0.0, -4.0], [0.0, 4.0, 0.0], lam([1.0, 0.2, 0.2])),
+        quad([-2.0, -2.0, 0.0], [4.0, 0.0, 0.0], [0.0, 4.0, 0.0], lam([0.2, 1.0, 0.2])),
+        quad([3.0, -2.0, 1.0], [0.0, 0.0, 4.0], [0.0, 4.0, 0.0], lam([0.2, 0.2, 1.0])),
+        quad([-2.0, 3.0, 1.0], [4.0, 0.0, 0.0], [0.0, 0.0, 4.0], lam([1.0, 0.5, 0.0])),
+        quad([-2.0, -3.0, 5.0], [4.0, 0.0, 0.0], [0.0, 0.0, -4.0], lam([0.2, 0.8, 0.8])),
+    ];
+    s
+}
+
+/// The Next Week, `simple_light()`, with grey Lambertian spheres in place of
+/// the Perlin-noise texture (textures come with part 2).
+fn nw_simple_light() -> Scene {
+    let mut s =
+        next_week(Camera::looking([26.0, 3.0, 6.0], [0.0, 2.0, 0.0], 20.0), [0.0; 3], settings(400, 225, 100, 50));
+    s.spheres = vec![
+        sphere([0.0, -1000.0, 0.0], 1000.0, lam([0.5, 0.5, 0.5])),
+        sphere([0.0, 2.0, 0.0], 2.0, lam([0.5, 0.5, 0.5])),
+        sphere([0.0, 7.0, 0.0], 2.0, light([4.0; 3])),
+    ];
+    s.quads = vec![quad([3.0, 1.0, -2.0], [2.0, 0.0, 0.0], [0.0, 2.0, 0.0], light([4.0; 3]))];
+    s
+}
+
+const NW_RED: Material = lam([0.65, 0.05, 0.05]);
+const NW_WHITE: Material = lam([0.73, 0.73, 0.73]);
+const NW_GREEN: Material = lam([0.12, 0.45, 0.15]);
+
+/// The Next Week's Cornell box without its boxes (its image 19): five walls
+/// and a two-sided light of 15, 600x600, 200 spp, depth 50.
+fn nw_cornell_box_empty() -> Scene {
+    let cam = Camera::looking([278.0, 278.0, -800.0], [278.0, 278.0, 0.0], 40.0);
+    let mut s = next_week(cam, [0.0; 3], settings(600, 600, 200, 50));
+    s.quads = vec![
+        quad([555.0, 0.0, 0.0], [0.0, 555.0, 0.0], [0.0, 0.0, 555.0], NW_GREEN),
+        quad([0.0, 0.0, 0.0], [0.0, 555.0, 0.0], [0.0, 0.0, 555.0], NW_RED),
+        quad([343.0, 554.0, 332.0], [-130.0, 0.0, 0.0], [0.0, 0.0, -105.0], light([15.0; 3])),
+        quad([0.0, 0.0, 0.0], [555.0, 0.0, 0.0], [0.0, 0.0, 555.0], NW_WHITE),
+        quad([555.0, 555.0, 555.0], [-555.0, 0.0, 0.0], [0.0, 0.0, -555.0], NW_WHITE),
+        quad([0.0, 0.0, 555.0], [555.0, 0.0, 0.0], [0.0, 555.0, 0.0], NW_WHITE),
+    ];
+    s
+}
+
+/// The Next Week's Cornell box: the room and two white boxes, 165x330x165
+/// under `rotate_y(15)` then `translate(265, 0, 295)`, 165^3 under
+/// `rotate_y(-18)` then `translate(130, 0, 65)`.
+fn nw_cornell_box() -> Scene {
+    let mut s = nw_cornell_box_empty();
+    let cube = |b: [f32; 3]| QuadBox { a: [0.0; 3], b, material: NW_WHITE };
+    s.groups = vec![
+        Group {
+            rotate_y: 15.0,
+            translate: [265.0, 0.0, 295.0],
+            boxes: vec![cube([165.0, 330.0, 165.0])],
+            ..Group::default()
+        },
+        Group { rotate_y: -18.0, translate: [130.0, 0.0, 65.0], boxes: vec![cube([165.0; 3])], ..Group::default() },
+    ];
+    s
+}
+
+/// The Next Week's image 20: the two boxes axis-aligned, not yet rotated.
+fn nw_cornell_box_unrotated() -> Scene {
+    let mut s = nw_cornell_box_empty();
+    s.boxes = vec![
+        QuadBox { a: [130.0, 0.0, 65.0], b: [295.0, 165.0, 230.0], material: NW_WHITE },
+        QuadBox { a: [265.0, 0.0, 295.0], b: [430.0, 330.0, 460.0], material: NW_WHITE },
+    ];
+    s
+}
+
 /// Stress: a diffuse sphere of radius 1e6 seen from 1 unit above its top
 /// (1e-6 of its radius), looking slightly down: a plane to the horizon.
 fn stress_horizon() -> Scene {
@@ -332,6 +436,36 @@ static PRESETS: &[Preset] = &[
         build: final_scene,
     },
     Preset {
+        name: "nw-quads",
+        description: "The Next Week: five coloured quads (400x400, 100 spp)",
+        group: PresetGroup::NextWeek,
+        build: nw_quads,
+    },
+    Preset {
+        name: "nw-simple-light",
+        description: "The Next Week: a sphere light and a quad light over two spheres, grey (the book's Perlin texture comes with part 2)",
+        group: PresetGroup::NextWeek,
+        build: nw_simple_light,
+    },
+    Preset {
+        name: "nw-cornell-box",
+        description: "The Next Week: the Cornell box, two rotated boxes (600x600, 200 spp)",
+        group: PresetGroup::NextWeek,
+        build: nw_cornell_box,
+    },
+    Preset {
+        name: "nw-cornell-box-empty",
+        description: "The Next Week: the empty Cornell box (its image 19)",
+        group: PresetGroup::NextWeek,
+        build: nw_cornell_box_empty,
+    },
+    Preset {
+        name: "nw-cornell-box-unrotated",
+        description: "The Next Week: the Cornell box with its two boxes axis-aligned (its image 20)",
+        group: PresetGroup::NextWeek,
+        build: nw_cornell_box_unrotated,
+    },
+    Preset {
         name: "stress-final-small",
         description: "stress: the final scene scaled by 1e-3 (spheres of radius 2e-4)",
         group: PresetGroup::Stress,
@@ -395,7 +529,19 @@ mod tests {
     fn stress_presets_are_grouped_apart() {
         for p in presets() {
             assert_eq!(p.name.starts_with("stress-"), p.group == PresetGroup::Stress, "{}", p.name);
+            assert_eq!(p.name.starts_with("nw-"), p.group == PresetGroup::NextWeek, "{}", p.name);
         }
+    }
+
+    #[test]
+    fn the_cornell_box_has_the_books_primitives() {
+        let s = nw_cornell_box();
+        let flat = s.flatten();
+        // Five walls, the light, and two boxes of six quads.
+        assert_eq!((flat.spheres.len(), flat.quads.len()), (0, 6 + 12));
+        assert_eq!(s.render.width, Some(600));
+        assert_eq!(s.render.samples_per_pixel, Some(200));
+        assert_eq!(s.background, Background::Constant([0.0; 3]));
     }
 
     #[test]

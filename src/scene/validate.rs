@@ -3,9 +3,9 @@
 //! an error names the field. The kernels' own check (that the f32 camera is
 //! computable at every image size) is the job module's, which runs both once.
 
-use super::{Camera, Material, Mode, Scene, Sphere};
+use super::{Background, Camera, Group, Material, Mode, Quad, QuadBox, Scene, Sphere};
 use crate::error::{Error, Result};
-use crate::limits::{self, MAX_SPHERES};
+use crate::limits::{self, MAX_QUADS, MAX_SPHERES};
 
 /// What a non-finite value is: a number that overflowed f32 reads as an
 /// infinity (JSON has no infinity literal, so there it always is one).
@@ -69,10 +69,125 @@ impl Scene {
                 format!("at most {MAX_SPHERES} spheres, got {}", self.spheres.len()),
             ));
         }
-        for (i, s) in self.spheres.iter().enumerate() {
-            s.validate(&|name: &str| format!("spheres[{i}].{name}"))?;
+        if let Background::Constant(c) = self.background {
+            colour("background", c)?;
+        }
+        let (spheres, quads) = self.primitive_counts();
+        if spheres > MAX_SPHERES {
+            return Err(Error::invalid(
+                "spheres",
+                format!("at most {MAX_SPHERES} spheres (groups' included), got {spheres}"),
+            ));
+        }
+        if quads > MAX_QUADS {
+            return Err(Error::invalid(
+                "quads",
+                format!("at most {MAX_QUADS} quads (six per box, groups' included), got {quads}"),
+            ));
+        }
+        members("", &self.spheres, &self.quads, &self.boxes)?;
+        for (i, g) in self.groups.iter().enumerate() {
+            g.validate(&format!("groups[{i}]"))?;
         }
         Ok(())
+    }
+}
+
+/// The spheres, quads and boxes of a scene or of a group (`prefix`: "" or `groups[i].`).
+fn members(prefix: &str, spheres: &[Sphere], quads: &[Quad], boxes: &[QuadBox]) -> Result<()> {
+    for (i, s) in spheres.iter().enumerate() {
+        s.validate(&|name: &str| format!("{prefix}spheres[{i}].{name}"))?;
+    }
+    for (i, q) in quads.iter().enumerate() {
+        q.validate(&|name: &str| format!("{prefix}quads[{i}].{name}"))?;
+    }
+    for (i, b) in boxes.iter().enumerate() {
+        b.validate(&|name: &str| format!("{prefix}boxes[{i}].{name}"))?;
+    }
+    Ok(())
+}
+
+impl Group {
+    /// The transform and the members, then the members' world-space
+    /// positions (within [`limits::MAX_COORD`] once moved).
+    fn validate(&self, field: &str) -> Result<()> {
+        finite(&format!("{field}.rotate_y"), self.rotate_y)?;
+        point(&format!("{field}.translate"), self.translate)?;
+        members(&format!("{field}."), &self.spheres, &self.quads, &self.boxes)?;
+        let flat = super::flatten::group(self);
+        for s in &flat.spheres {
+            point(&format!("{field}.translate"), s.center)?;
+        }
+        for q in &flat.quads {
+            q.validate(&|name: &str| format!("{field} (a quad once moved).{name}"))?;
+        }
+        Ok(())
+    }
+}
+
+/// The sine of the angle between `u` and `v` below which a quad is refused:
+/// a sliver this thin is not a parallelogram the f32 hit test can resolve.
+pub const MIN_QUAD_SINE: f64 = 1e-3;
+
+impl Quad {
+    /// The corner and edges: every corner within range, edges not zero and
+    /// not parallel (their sine at least [`MIN_QUAD_SINE`]).
+    fn validate(&self, field: &dyn Fn(&str) -> String) -> Result<()> {
+        point(&field("q"), self.q)?;
+        finite3(&field("u"), self.u)?;
+        finite3(&field("v"), self.v)?;
+        let d = |a: [f32; 3]| glam::DVec3::from_array(a.map(f64::from));
+        let (q, u, v) = (d(self.q), d(self.u), d(self.v));
+        for (name, c) in [("u", q + u), ("v", q + v), ("u", q + u + v)] {
+            if c.abs().max_element() > limits::MAX_COORD as f64 {
+                return Err(Error::invalid(
+                    field(name),
+                    format!(
+                        "the quad's corner {:?} is outside [-{m:e}, {m:e}] (the range rtow's f32 kernels are verified in)",
+                        c.to_array(),
+                        m = limits::MAX_COORD
+                    ),
+                ));
+            }
+        }
+        for (name, e) in [("u", u), ("v", v)] {
+            if e.length() < limits::MIN_RADIUS as f64 {
+                return Err(Error::invalid(
+                    field(name),
+                    format!("an edge must be at least {:e} long, got {:?}", limits::MIN_RADIUS, e.to_array()),
+                ));
+            }
+        }
+        let sine = u.cross(v).length() / (u.length() * v.length());
+        if !(sine >= MIN_QUAD_SINE) {
+            return Err(Error::invalid(
+                field("v"),
+                format!("u and v must not be parallel (the sine of their angle must be at least {MIN_QUAD_SINE:e}, got {sine:e})"),
+            ));
+        }
+        self.material.validate(&|name: &str| field(&format!("material.{name}")))
+    }
+}
+
+impl QuadBox {
+    /// Both corners in range, and a positive size along every axis.
+    fn validate(&self, field: &dyn Fn(&str) -> String) -> Result<()> {
+        point(&field("a"), self.a)?;
+        point(&field("b"), self.b)?;
+        for axis in 0..3 {
+            let size = (self.a[axis] as f64 - self.b[axis] as f64).abs();
+            if size < limits::MIN_RADIUS as f64 {
+                return Err(Error::invalid(
+                    field("b"),
+                    format!(
+                        "a box must be at least {:e} in size along each axis, got {size:e} along {}",
+                        limits::MIN_RADIUS,
+                        ["x", "y", "z"][axis]
+                    ),
+                ));
+            }
+        }
+        self.material.validate(&|name: &str| field(&format!("material.{name}")))
     }
 }
 
@@ -216,6 +331,7 @@ impl Material {
                 }
                 Ok(())
             }
+            Material::DiffuseLight { emit, .. } => colour(&field("emit"), emit),
         }
     }
 }

@@ -1,0 +1,213 @@
+//! Quads (The Next Week's parallelograms) as structure-of-arrays, their hit
+//! test over [`Real`] (one formula for the scalar kernel and every lane
+//! width), their surfaces and their shading records.
+//!
+//! # The hit
+//!
+//! A quad is the points `Q + a u + b v`, `a, b` in [0, 1], with the plane
+//! normal `n = u x v` (not normalized), `D = n.Q` and `w = n / (n.n)` (the
+//! book's). A ray `o + t d` meets the plane at `t = (D - n.o) / (n.d)` and
+//! the point `p = o + t d` has `a = w.((p - Q) x v)`, `b = w.(u x (p - Q))`.
+//! It is a hit when `0 < t < inf` and `a, b` lie in `[-eps, 1 + eps]`:
+//!
+//! * No epsilon on `n.d`: a ray parallel to the plane has `n.d = 0`, so `t` is
+//!   infinite or NaN and fails `0 < t < inf` (the book rejects `|n.d| < 1e-8`,
+//!   which also rejects real grazing hits of large quads).
+//! * **The tie rule at edges** is inclusive, widened by `eps`, a bound on the
+//!   rounding error of `a` and `b` ([`Quads::push`]): a ray through the edge
+//!   shared by two faces of a box is a hit on at least one of them (rounding
+//!   cannot open a gap between faces; light does not leak through a box's
+//!   edges), and where both faces are hit the closest-hit rule decides
+//!   (smaller `t`, then the lower index), as for any two primitives.
+//! * Self-hits are prevented the way they are for spheres, by where a new ray
+//!   starts ([`quad_surface`]), not by a `t_min`.
+
+use super::intersect::{Surface, OFFSET_ULPS};
+use super::spheres::Shade;
+use crate::material::Kind;
+use crate::real::Real;
+use crate::vec3::V3;
+
+/// The hit index of quad `i` is `QUAD_BASE + i`: every quad comes after every
+/// sphere in the one global order of the closest-hit tie rule (spheres are
+/// fewer than `2^20`), and below [`super::MISS`].
+pub const QUAD_BASE: u32 = 1 << 30;
+
+/// `u = 2^-24`, the f32 unit roundoff.
+const U: f64 = 1.0 / 16_777_216.0;
+
+/// Everything the hit test reads of one quad, in one record (brute force
+/// reads them in scene order, the BVH's leaves in leaf order).
+#[derive(Clone, Copy, Debug, Default, PartialEq)]
+#[repr(C)]
+pub struct QuadRec {
+    pub q: [f32; 3],
+    pub u: [f32; 3],
+    pub v: [f32; 3],
+    /// `u x v`.
+    pub n: [f32; 3],
+    /// `n . q`.
+    pub d: f32,
+    /// `n / (n . n)`.
+    pub w: [f32; 3],
+    /// The edge tolerance: `a` is accepted in `[lo[0], hi[0]]`, `b` in `[lo[1], hi[1]]`.
+    pub lo: [f32; 2],
+    pub hi: [f32; 2],
+}
+
+impl QuadRec {
+    /// The quad's axis-aligned bounds: its four corners widened by the edge
+    /// tolerance (so the box covers every point the test can accept).
+    pub fn bounds(&self) -> ([f32; 3], [f32; 3]) {
+        let mut min = [f32::INFINITY; 3];
+        let mut max = [f32::NEG_INFINITY; 3];
+        for a in [self.lo[0] as f64, self.hi[0] as f64] {
+            for b in [self.lo[1] as f64, self.hi[1] as f64] {
+                for k in 0..3 {
+                    let c = self.q[k] as f64 + a * self.u[k] as f64 + b * self.v[k] as f64;
+                    // Rounded outwards.
+                    min[k] = min[k].min(next_down(c));
+                    max[k] = max[k].max(next_up(c));
+                }
+            }
+        }
+        (min, max)
+    }
+}
+
+fn next_up(x: f64) -> f32 {
+    let f = x as f32;
+    if (f as f64) < x {
+        f.next_up()
+    } else {
+        f
+    }
+}
+
+fn next_down(x: f64) -> f32 {
+    let f = x as f32;
+    if (f as f64) > x {
+        f.next_down()
+    } else {
+        f
+    }
+}
+
+/// Quads, structure of arrays, padded to a power of two (at least 8) with
+/// quads no ray can hit, so a quad index masked with `len - 1` is in bounds.
+#[derive(Clone, Debug, Default)]
+pub struct Quads {
+    pub rec: Vec<QuadRec>,
+    /// Material kind and row of each quad.
+    pub kind: Vec<Kind>,
+    pub row: Vec<u32>,
+    /// The unit normal `u x v / |u x v|` and `n^ . q`, per quad, for the
+    /// surface ([`quad_surface`]), in the shading record's first four slots.
+    pub shade: Vec<Shade>,
+    /// Number of real quads (the arrays are longer: padding).
+    pub len: usize,
+}
+
+impl Quads {
+    /// Appends the quad `(q, u, v)` with material (`kind`, `row`); the
+    /// shading record's material slots are filled by the caller.
+    ///
+    /// The edge tolerance bounds the rounding error of the computed `a`
+    /// (and `b`): `p - Q` is off by about `3u (|o| + |t d| + |Q|)` per
+    /// component (the plane point's own rounding and that of the
+    /// subtraction), which `a` turns into `|v| / |u x v|` per unit of length
+    /// (the inverse of the parallelogram's height across `a`), plus a few
+    /// units of roundoff of the products. With every coordinate within
+    /// `extent` (rays start and hit within it), `eps_a = 64u extent |v| /
+    /// |u x v|` (and `eps_b` with `|u|`) covers it with a margin of 4 or
+    /// more for rays that are not grazing: a band of `64u extent / sin(u, v)`
+    /// in length around the quad (2.3e-3 in the Cornell box).
+    pub fn push(&mut self, q: [f32; 3], u: [f32; 3], v: [f32; 3], extent: f32, kind: Kind, row: u32) {
+        let d3 = |a: [f32; 3]| glam::DVec3::from_array(a.map(f64::from));
+        let (qd, ud, vd) = (d3(q), d3(u), d3(v));
+        let nd = ud.cross(vd);
+        let n = nd.to_array().map(|x| x as f32);
+        let n32 = d3(n);
+        let w = (n32 / n32.dot(n32)).to_array().map(|x| x as f32);
+        let band = 64.0 * U * extent as f64 / nd.length();
+        let (eps_a, eps_b) = (band * vd.length(), band * ud.length());
+        let rec = QuadRec {
+            q,
+            u,
+            v,
+            n,
+            d: n32.dot(qd) as f32,
+            w,
+            lo: [(-eps_a) as f32, (-eps_b) as f32],
+            hi: [(1.0 + eps_a) as f32, (1.0 + eps_b) as f32],
+        };
+        let unit = nd.normalize();
+        let dn = unit.dot(qd);
+        let unit = unit.to_array().map(|x| x as f32);
+        self.rec.push(rec);
+        self.kind.push(kind);
+        self.row.push(row);
+        self.shade.push(Shade([unit[0], unit[1], unit[2], dn as f32, 0.0, 0.0, 0.0, 0.0]));
+        self.len += 1;
+    }
+
+    /// Pads to a power of two, at least 8, with quads no ray can hit (their
+    /// `a` range is empty).
+    pub fn pad(&mut self) {
+        let target = self.rec.len().max(8).next_power_of_two();
+        while self.rec.len() < target {
+            self.rec.push(QuadRec {
+                lo: [1.0; 2],
+                hi: [0.0; 2],
+                n: [0.0, 1.0, 0.0],
+                w: [0.0, 1.0, 0.0],
+                ..QuadRec::default()
+            });
+            self.kind.push(Kind::Lambertian);
+            self.row.push(0);
+            self.shade.push(Shade::default());
+        }
+    }
+
+    pub fn is_empty(&self) -> bool {
+        self.len == 0
+    }
+}
+
+/// The quad test: the hit mask and `t` of the rays `o + t d` against `q`
+/// (broadcast), as the module describes.
+#[inline(always)]
+pub fn quad_hit<R: Real>(o: V3<R>, d: V3<R>, q: &QuadRec) -> (R::Mask, R) {
+    let n = V3::splat3(q.n);
+    let t = (R::splat(q.d) - n.dot(o)) / n.dot(d);
+    let pq = (o + d * t) - V3::splat3(q.q);
+    let w = V3::splat3(q.w);
+    let a = w.dot(pq.cross(V3::splat3(q.v)));
+    let b = w.dot(V3::splat3(q.u).cross(pq));
+    let in_a = a.ge(R::splat(q.lo[0])) & a.le(R::splat(q.hi[0]));
+    let in_b = b.ge(R::splat(q.lo[1])) & b.le(R::splat(q.hi[1]));
+    let hit = t.gt(R::splat(0.0)) & t.lt(R::splat(f32::INFINITY)) & in_a & in_b;
+    (hit, t)
+}
+
+/// The surface at distance `t` along `o + t d` on the plane with unit normal
+/// `nu` and offset `dn = nu . Q` (a quad's shading record).
+///
+/// The hit point is re-projected onto the plane, `p = p' - nu (nu.p' - dn)`,
+/// so its distance from the plane is bounded by that expression's rounding
+/// (about `3u |p|` from the dot and the subtraction, `u |dn|`, `u |p|` from the
+/// product and the sum, and `|nu|` off 1 by a few u) whatever the error of
+/// `t`. The next test decides the side from the sign of `D - n.o` (with an
+/// error of about `3u (|o| + |dn|)` in distance), so a new ray starting at
+/// `p +- offset nu` with `offset = 32u (|p|_inf + |dn|)` is on the intended
+/// side (a margin above 2 on the `|p|` terms, `|p|_2 <= sqrt 3 |p|_inf`): it
+/// cannot hit the quad it leaves.
+#[inline(always)]
+pub fn quad_surface<R: Real>(o: V3<R>, d: V3<R>, t: R, nu: V3<R>, dn: R) -> Surface<R> {
+    let p_ray = o + d * t;
+    let p = p_ray - nu * (nu.dot(p_ray) - dn);
+    let front = d.dot(nu).lt(R::splat(0.0));
+    let n = V3::select(front, nu, -nu);
+    let offset = (p.max_abs() + dn.abs()) * R::splat(2.0 * OFFSET_ULPS);
+    Surface { p, n, front, offset }
+}

@@ -1,0 +1,180 @@
+//! Instances flattened into world-space primitives: boxes become their six
+//! quads, groups apply `rotate_y` then `translate` (the book's instance order)
+//! to their members, once, in f64, each result rounded to f32 once.
+//!
+//! Flattening avoids the book's instance pitfalls by construction (BOOKS23.md
+//! section 6): there is no object space at render time, so the front face is
+//! decided in world space only (#965), the rotation is applied once with the
+//! book's sign, `x' = cos x + sin z, z' = -sin x + cos z` (#544), and the
+//! bounding box of a rotated box is that of its world-space quads, each
+//! covering its four corners (#749, #1402).
+
+use super::{Group, Material, Quad, QuadBox, Scene, Sphere};
+
+/// A scene's primitives in world space, in the one global order the
+/// closest-hit tie rule uses: spheres (the scene's, then each group's), then
+/// quads (the scene's, the scene's boxes, then each group's quads and boxes).
+#[derive(Clone, Debug, Default, PartialEq)]
+pub struct Flat {
+    pub spheres: Vec<Sphere>,
+    pub quads: Vec<Quad>,
+}
+
+/// `rotate_y` (degrees) then `translate`, in f64.
+#[derive(Clone, Copy, Debug)]
+struct Transform {
+    cos: f64,
+    sin: f64,
+    t: [f64; 3],
+}
+
+impl Transform {
+    const IDENTITY: Transform = Transform { cos: 1.0, sin: 0.0, t: [0.0; 3] };
+
+    fn of(g: &Group) -> Transform {
+        let (sin, cos) = match g.rotate_y {
+            // Exact for the right angles (sin_cos(pi/2) is not exactly (1, 0)).
+            a if a.rem_euclid(90.0) == 0.0 => match (a.rem_euclid(360.0) / 90.0) as u32 {
+                0 => (0.0, 1.0),
+                1 => (1.0, 0.0),
+                2 => (0.0, -1.0),
+                _ => (-1.0, 0.0),
+            },
+            a => (a as f64).to_radians().sin_cos(),
+        };
+        Transform { cos, sin, t: g.translate.map(f64::from) }
+    }
+
+    /// A direction (no translation).
+    fn vector(&self, v: [f64; 3]) -> [f64; 3] {
+        [self.cos * v[0] + self.sin * v[2], v[1], -self.sin * v[0] + self.cos * v[2]]
+    }
+
+    fn point(&self, p: [f64; 3]) -> [f64; 3] {
+        let r = self.vector(p);
+        [r[0] + self.t[0], r[1] + self.t[1], r[2] + self.t[2]]
+    }
+}
+
+fn f64s(v: [f32; 3]) -> [f64; 3] {
+    v.map(f64::from)
+}
+
+fn f32s(v: [f64; 3]) -> [f32; 3] {
+    v.map(|x| x as f32)
+}
+
+/// A quad given in f64 (corner, edges), transformed and rounded.
+fn quad(t: &Transform, q: [f64; 3], u: [f64; 3], v: [f64; 3], material: Material) -> Quad {
+    Quad { q: f32s(t.point(q)), u: f32s(t.vector(u)), v: f32s(t.vector(v)), material }
+}
+
+/// The six faces of the box, as the book's `box(a, b, mat)` (v4) builds
+/// them: front, right, back, left, top, bottom, each facing outwards.
+pub fn box_quads(b: &QuadBox) -> [([f64; 3], [f64; 3], [f64; 3]); 6] {
+    let (a, c) = (f64s(b.a), f64s(b.b));
+    let min: [f64; 3] = std::array::from_fn(|i| a[i].min(c[i]));
+    let max: [f64; 3] = std::array::from_fn(|i| a[i].max(c[i]));
+    let dx = [max[0] - min[0], 0.0, 0.0];
+    let dy = [0.0, max[1] - min[1], 0.0];
+    let dz = [0.0, 0.0, max[2] - min[2]];
+    let neg = |v: [f64; 3]| v.map(|x| -x);
+    [
+        ([min[0], min[1], max[2]], dx, dy),
+        ([max[0], min[1], max[2]], neg(dz), dy),
+        ([max[0], min[1], min[2]], neg(dx), dy),
+        ([min[0], min[1], min[2]], dz, dy),
+        ([min[0], max[1], max[2]], dx, neg(dz)),
+        ([min[0], min[1], min[2]], dx, dz),
+    ]
+}
+
+impl Flat {
+    fn add(&mut self, t: &Transform, spheres: &[Sphere], quads: &[Quad], boxes: &[QuadBox]) {
+        for s in spheres {
+            self.spheres.push(Sphere { center: f32s(t.point(f64s(s.center))), ..*s });
+        }
+        for q in quads {
+            self.quads.push(quad(t, f64s(q.q), f64s(q.u), f64s(q.v), q.material));
+        }
+        for b in boxes {
+            for (q, u, v) in box_quads(b) {
+                self.quads.push(quad(t, q, u, v, b.material));
+            }
+        }
+    }
+}
+
+/// One group's members in world space.
+pub(super) fn group(g: &Group) -> Flat {
+    let mut flat = Flat::default();
+    flat.add(&Transform::of(g), &g.spheres, &g.quads, &g.boxes);
+    flat
+}
+
+impl Scene {
+    /// The scene's primitives in world space (see [`Flat`]); a scene without
+    /// quads, boxes or groups gives back its spheres unchanged.
+    pub fn flatten(&self) -> Flat {
+        let mut flat = Flat::default();
+        flat.add(&Transform::IDENTITY, &self.spheres, &self.quads, &self.boxes);
+        for g in &self.groups {
+            flat.add(&Transform::of(g), &g.spheres, &g.quads, &g.boxes);
+        }
+        flat
+    }
+
+    /// The number of spheres and of quads [`Scene::flatten`] gives (without flattening).
+    pub fn primitive_counts(&self) -> (usize, usize) {
+        let mut s = self.spheres.len();
+        let mut q = self.quads.len() + 6 * self.boxes.len();
+        for g in &self.groups {
+            s += g.spheres.len();
+            q += g.quads.len() + 6 * g.boxes.len();
+        }
+        (s, q)
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    fn white() -> Material {
+        Material::Lambertian { albedo: [0.73; 3] }
+    }
+
+    #[test]
+    fn a_box_is_six_outward_faces_covering_its_corners() {
+        let b = QuadBox { a: [1.0, 2.0, 3.0], b: [0.0, 0.0, 0.0], material: white() };
+        let faces = box_quads(&b);
+        let centre = [0.5, 1.0, 1.5];
+        for (q, u, v) in faces {
+            let n = [u[1] * v[2] - u[2] * v[1], u[2] * v[0] - u[0] * v[2], u[0] * v[1] - u[1] * v[0]];
+            let mid: [f64; 3] = std::array::from_fn(|i| q[i] + 0.5 * (u[i] + v[i]) - centre[i]);
+            assert!(n.iter().zip(mid).map(|(a, b)| a * b).sum::<f64>() > 0.0, "{q:?} faces inwards");
+            for (a, bb) in [(0.0, 0.0), (1.0, 0.0), (0.0, 1.0), (1.0, 1.0)] {
+                let p: [f64; 3] = std::array::from_fn(|i| q[i] + a * u[i] + bb * v[i]);
+                assert!(p.iter().zip([1.0, 2.0, 3.0]).all(|(&x, m)| x == 0.0 || x == m), "{p:?}");
+            }
+        }
+    }
+
+    #[test]
+    fn groups_rotate_then_translate_as_the_book() {
+        let g = Group {
+            rotate_y: 90.0,
+            translate: [10.0, 0.0, 0.0],
+            spheres: vec![Sphere { center: [1.0, 0.0, 0.0], radius: 1.0, material: white() }],
+            ..Group::default()
+        };
+        let t = Transform::of(&g);
+        // x' = cos x + sin z, z' = -sin x + cos z: (1, 0, 0) turns to (0, 0, -1).
+        assert_eq!(t.point([1.0, 0.0, 0.0]), [10.0, 0.0, -1.0]);
+        let mut scene = crate::scene::preset("ch04-sphere").unwrap();
+        scene.groups.push(g);
+        let flat = scene.flatten();
+        assert_eq!(flat.spheres.last().unwrap().center, [10.0, 0.0, -1.0]);
+        assert_eq!(scene.primitive_counts(), (flat.spheres.len(), flat.quads.len()));
+    }
+}
