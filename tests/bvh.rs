@@ -8,6 +8,7 @@ use rtow::internals::geometry::{closest_hit, closest_quad_hit, Bvh, Closest, Qua
 use rtow::internals::material::Kind;
 use rtow::internals::real::Wide;
 use rtow::internals::vec3::V3;
+use rtow::scene::{box_quads, Material, QuadBox};
 use wide::{f32x16, f32x8};
 
 fn spheres(list: &[([f32; 3], f32)]) -> Spheres {
@@ -127,18 +128,11 @@ fn quads(list: &[([f32; 3], [f32; 3], [f32; 3])], extent: f32) -> Quads {
     q
 }
 
-/// The six faces of the box `min..max`, as `box()` builds them.
+/// The six faces of the box `min..max`, built by the library's `box()`.
 fn box_faces(min: [f32; 3], max: [f32; 3]) -> Vec<([f32; 3], [f32; 3], [f32; 3])> {
-    let (dx, dy, dz) = ([max[0] - min[0], 0.0, 0.0], [0.0, max[1] - min[1], 0.0], [0.0, 0.0, max[2] - min[2]]);
-    let neg = |v: [f32; 3]| v.map(|x| -x);
-    vec![
-        ([min[0], min[1], max[2]], dx, dy),
-        ([max[0], min[1], max[2]], neg(dz), dy),
-        ([max[0], min[1], min[2]], neg(dx), dy),
-        ([min[0], min[1], min[2]], dz, dy),
-        ([min[0], max[1], max[2]], dx, neg(dz)),
-        ([min[0], min[1], min[2]], dx, dz),
-    ]
+    let b = QuadBox { a: min, b: max, material: Material::Lambertian { albedo: [0.5; 3] } };
+    let f32s = |v: [f64; 3]| v.map(|x| x as f32);
+    box_quads(&b).iter().map(|&(q, u, v)| (f32s(q), f32s(u), f32s(v))).collect()
 }
 
 /// The quads' tree (scalar walk, packets of 8 and 16), starting from a

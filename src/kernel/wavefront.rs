@@ -237,22 +237,20 @@ fn render_round<W: Wide, P: Probe, S: PathSampler>(
 ) -> u64 {
     let na = ws.active.len();
     let batch = (MAX_PATHS / na).max(1) as u32;
-    // What the camera rays of every sample of a pixel share, once per round.
+    // What the camera rays of every sample of a pixel share, once per round
+    // (and, for probes, the pixel's image index).
     let st = &prep.settings;
     ws.pixel_xy.clear();
     ws.pixel_words.clear();
+    ws.pixel.clear();
     for &l in &ws.active {
         let (x, y) = tile.pixel_of(l as usize);
+        let pixel = y * st.width + x;
         ws.pixel_xy.push([x as f32, y as f32]);
-        ws.pixel_words.push(sampler.pixel_words(st.seed, y as u64 * st.width as u64 + x as u64));
-    }
-    if P::PATHS {
-        let width = prep.settings.width;
-        ws.pixel.clear();
-        ws.pixel.extend(ws.active.iter().map(|&l| {
-            let (x, y) = tile.pixel_of(l as usize);
-            y * width + x
-        }));
+        ws.pixel_words.push(sampler.pixel_words(st.seed, pixel as u64));
+        if P::PATHS {
+            ws.pixel.push(pixel);
+        }
     }
     let mut rays = 0;
     let mut b0 = s0;

@@ -17,7 +17,7 @@ mod validate;
 
 pub use crate::choice::Mode;
 pub use file::{load_scene, save_scene, scene_from_bytes, scene_from_str, scene_to_string, Format};
-pub use flatten::Flat;
+pub use flatten::{box_quads, Flat};
 pub use presets::{final_scene, preset, presets, Preset, PresetGroup};
 pub use render_table::RenderTable;
 pub use source::SceneSource;
