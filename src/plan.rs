@@ -19,6 +19,14 @@ use serde::{Serialize, Serializer};
 pub struct KindSet(u8);
 
 impl KindSet {
+    /// Every kind.
+    pub fn all() -> KindSet {
+        let mut s = KindSet::default();
+        for k in Kind::ALL {
+            s.insert(k);
+        }
+        s
+    }
     pub fn insert(&mut self, k: Kind) {
         self.0 |= 1 << k as u8;
     }

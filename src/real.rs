@@ -101,6 +101,8 @@ pub trait Real:
     fn u_splat(x: u32) -> Self::U32;
     /// `a < b` per lane, as a mask of this width (closest-hit ties: lower index wins).
     fn u_lt(a: Self::U32, b: Self::U32) -> Self::Mask;
+    /// `a == b` per lane, as a mask of this width.
+    fn u_eq(a: Self::U32, b: Self::U32) -> Self::Mask;
     fn u_select(m: Self::Mask, a: Self::U32, b: Self::U32) -> Self::U32;
     /// Lane k as an `f32` (probes and tests; not for the hot path).
     fn lane(self, k: usize) -> f32;
@@ -226,6 +228,10 @@ impl Real for f32 {
     #[inline(always)]
     fn u_lt(a: u32, b: u32) -> bool {
         a < b
+    }
+    #[inline(always)]
+    fn u_eq(a: u32, b: u32) -> bool {
+        a == b
     }
     #[inline(always)]
     fn u_select(m: bool, a: u32, b: u32) -> u32 {
@@ -571,6 +577,10 @@ macro_rules! impl_wide {
             #[inline(always)]
             fn u_lt(a: $u, b: $u) -> $f {
                 bytemuck::cast(a.simd_lt(b))
+            }
+            #[inline(always)]
+            fn u_eq(a: $u, b: $u) -> $f {
+                bytemuck::cast(a.simd_eq(b))
             }
             #[inline(always)]
             fn u_select(m: $f, a: $u, b: $u) -> $u {

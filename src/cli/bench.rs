@@ -54,6 +54,11 @@ pub struct BenchArgs {
     /// with the `phases` feature also splits the render loop by phase.
     #[arg(long, conflicts_with_all = ["by_depth", "gate", "tolerance", "repeat"])]
     instructions: bool,
+    /// With --instructions: also simulate the branch predictor (callgrind's
+    /// --branch-sim=yes) and report branches and mispredictions per ray, by phase
+    /// in a `phases` build (the counted runs take about twice as long).
+    #[arg(long, requires = "instructions")]
+    branch_sim: bool,
     /// The process --instructions counts: render once, print the result.
     #[arg(long, hide = true)]
     instructions_child: bool,
@@ -180,8 +185,17 @@ fn count_instructions(a: &BenchArgs, source: &SceneSource, job: &Job) -> Result<
         job.threads(),
         rtow::isa()
     );
-    let report = instructions::count(job, &source.name, &a.kernels, &program, child_args, |e| {
-        tell!("  {}: {} instructions, {:.2} per ray", e.kernel, e.instructions, e.per_ray)
+    let report = instructions::count(job, &source.name, &a.kernels, &program, a.branch_sim, child_args, |e| match &e
+        .branches
+    {
+        Some(b) => tell!(
+            "  {}: {} instructions, {:.2} per ray; {:.3} mispredicted branches per ray",
+            e.kernel,
+            e.instructions,
+            e.per_ray,
+            b.mispredicts_per_ray
+        ),
+        None => tell!("  {}: {} instructions, {:.2} per ray", e.kernel, e.instructions, e.per_ray),
     })?;
     write_report(&report.table(), &report.to_json(), outputs, ids)?;
     let Some(b) = baseline else { return Ok(true) };

@@ -66,6 +66,69 @@ fn round_in_range(x: f64) -> i64 {
     }
 }
 
+/// Scaled channels below this magnitude (samples below 2^19 = 524,288)
+/// convert by [`Run::try_add`]'s one addition.
+const RUN_SCALED_LIMIT: f64 = (1u64 << 51) as f64;
+/// `1.5 * 2^52`: for `|x| < 2^51`, `x + MAGIC` lies in `[2^52, 2^53)`, where
+/// the f64 spacing is 1, so the addition rounds `x` to the nearest integer,
+/// ties to even (the default rounding mode), and that integer is the
+/// difference of the sum's bits and `MAGIC`'s.
+const MAGIC: f64 = 6_755_399_441_055_744.0;
+
+/// The fixed-point sums of a run of samples of one pixel, for the common
+/// case of samples below 2^19 per channel: each converted channel is below
+/// 2^51, so up to [`Run::MAX`] of them sum inside an `i64`. The three
+/// channels convert and add as one 4-lane vector (one multiply, one
+/// range test, one addition of `1.5 * 2^52` and one integer addition per
+/// sample); the sums are exactly [`to_fixed`]'s. A sample outside the fast
+/// range is left to the caller ([`to_fixed`], which also rejects NaN and Inf).
+#[derive(Clone, Copy, Debug, Default)]
+pub struct Run {
+    /// Per channel (the fourth lane is unused), the sum of the bits of
+    /// `x + MAGIC`, wrapping: `n` times `MAGIC`'s bits more than the sum.
+    bits: wide::u64x4,
+    n: u32,
+}
+
+impl Run {
+    /// Samples a run may hold: `2^12 * 2^51 = 2^63`.
+    pub const MAX: u32 = 1 << 12;
+
+    /// Adds `c` when every channel is in the fast range (and the run has
+    /// room); otherwise adds nothing and returns false.
+    #[inline(always)]
+    pub fn try_add(&mut self, c: [f32; 3]) -> bool {
+        let v = wide::f64x4::from([c[0] as f64, c[1] as f64, c[2] as f64, 0.0]) * wide::f64x4::splat(SCALE);
+        // NaN fails the comparison, so it is left to `to_fixed` too.
+        let small = v.abs().simd_lt(wide::f64x4::splat(RUN_SCALED_LIMIT)).all();
+        if !small || self.n == Self::MAX {
+            return false;
+        }
+        self.bits += bytemuck::cast::<wide::f64x4, wide::u64x4>(v + wide::f64x4::splat(MAGIC));
+        self.n += 1;
+        true
+    }
+
+    /// Samples in the run.
+    #[inline(always)]
+    pub fn len(&self) -> u32 {
+        self.n
+    }
+
+    #[inline(always)]
+    pub fn is_empty(&self) -> bool {
+        self.n == 0
+    }
+
+    /// The run's fixed-point sums, exact: `[to_fixed(c)[k]]` summed over its samples.
+    #[inline(always)]
+    pub fn sums(&self) -> [i64; 3] {
+        let b = self.bits.to_array();
+        let m = MAGIC.to_bits().wrapping_mul(self.n as u64);
+        [0, 1, 2].map(|k| b[k].wrapping_sub(m) as i64)
+    }
+}
+
 /// The value a fixed-point sum stands for, in f64 (rounded once).
 #[inline]
 pub fn to_f64(sum: i128) -> f64 {
@@ -123,6 +186,57 @@ mod tests {
         }
         for x in xs {
             assert_eq!(round_in_range(x), x.round_ties_even() as i64, "{x:e}");
+        }
+    }
+
+    /// The run's sums are exactly the sums of `to_fixed` over every sample
+    /// it takes: ties, both signs, the edges of its range, dark samples, and
+    /// random ones; samples outside its range, NaN and Inf are left out.
+    #[test]
+    fn a_run_sums_exactly_what_to_fixed_converts() {
+        let edge = ((1u64 << 19) as f32).next_down();
+        let mut xs: Vec<f32> = vec![0.0, -0.0, 1.0, -1.0, edge, -edge, 2.0f32.powi(-33), 3.0 * 2.0f32.powi(-33)];
+        xs.extend([-2.0f32.powi(-33), 2.0f32.powi(-34), 5.0 * 2.0f32.powi(-34), f32::MIN_POSITIVE, 1e-40]);
+        let mut r = 0x2545_F491_4F6C_DD1Du64;
+        for _ in 0..100_000 {
+            r ^= r << 13;
+            r ^= r >> 7;
+            r ^= r << 17;
+            // Mostly magnitudes below 2^19 (0x4900_0000), any sign; some of any bits.
+            let b = r as u32;
+            xs.push(f32::from_bits(if b & 7 == 0 { b } else { ((b >> 3) % 0x4900_0000) | (b & 0x8000_0000) }));
+        }
+        let mut run = Run::default();
+        let mut want = [0i64; 3];
+        let mut taken = 0;
+        for c in xs.chunks_exact(3) {
+            let c = [c[0], c[1], c[2]];
+            if run.len() == Run::MAX {
+                assert_eq!(run.sums(), want);
+                (run, want) = (Run::default(), [0; 3]);
+            }
+            let fits = c.iter().all(|x| (x.abs() as f64) < (1u64 << 19) as f64);
+            assert_eq!(run.try_add(c), fits, "{c:?}");
+            if fits {
+                let q = to_fixed(c).unwrap();
+                for k in 0..3 {
+                    want[k] += q[k];
+                }
+                taken += 1;
+            }
+        }
+        assert!(taken > 10_000);
+        assert_eq!(run.sums(), want);
+        // Full: refuses more, and its sums are still exact at the largest values.
+        let mut full = Run::default();
+        for _ in 0..Run::MAX {
+            assert!(full.try_add([edge, -edge, 0.5]));
+        }
+        assert!(!full.try_add([0.5; 3]));
+        let q = to_fixed([edge, -edge, 0.5]).unwrap();
+        assert_eq!(full.sums(), q.map(|x| x * Run::MAX as i64));
+        for bad in [f32::NAN, f32::INFINITY, (1u64 << 19) as f32, -1e9] {
+            assert!(!Run::default().try_add([0.5, bad, 0.5]), "{bad}");
         }
     }
 

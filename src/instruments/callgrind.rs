@@ -13,7 +13,12 @@
 //!
 //! The profile is callgrind's own output format (`callgrind_annotate` reads
 //! the same files): per function, its own cost and the inclusive cost of
-//! each call it makes.
+//! each call it makes. With `--branch-sim=yes` ([`command_line`]'s
+//! `branch_sim`) callgrind also simulates a branch predictor and counts, per
+//! function, the conditional and indirect branches executed (`Bc`, `Bi`) and
+//! mispredicted (`Bcm`, `Bim`): a deterministic stand-in for the
+//! mispredictions a real CPU suffers (its predictor is better, so the counts
+//! rank changes rather than predict cycles).
 
 use crate::error::{Error, Result};
 use serde::{Deserialize, Serialize};
@@ -33,22 +38,91 @@ pub const PHASES: &[(&str, &[&str])] = &[
     ("traversal", &["rtow::plan::Prepared::closest_hits"]),
     ("scatter", &["rtow::kernel::wavefront::scatter"]),
     ("camera rays", &["rtow::kernel::wavefront::generate"]),
-    ("film", &["rtow::film::TileFilm::add"]),
+    ("film", &["rtow::film::TileFilm::add", "rtow::film::TileFilm::add_rounds"]),
     ("compaction", &["rtow::kernel::wavefront::Paths::append"]),
 ];
 
-/// One phase's instructions.
+/// What callgrind counted for a piece of code: instructions and, with the
+/// branch simulation, branches executed and mispredicted (conditional and
+/// indirect together; 0 without it).
+#[derive(Clone, Copy, Debug, Default, PartialEq, Eq, Serialize, Deserialize)]
+pub struct Cost {
+    pub instructions: u64,
+    pub branches: u64,
+    pub mispredicts: u64,
+}
+
+impl std::ops::Add for Cost {
+    type Output = Cost;
+    fn add(self, o: Cost) -> Cost {
+        Cost {
+            instructions: self.instructions + o.instructions,
+            branches: self.branches + o.branches,
+            mispredicts: self.mispredicts + o.mispredicts,
+        }
+    }
+}
+
+impl std::ops::Sub for Cost {
+    type Output = Cost;
+    /// Saturating: a part never costs more than its whole.
+    fn sub(self, o: Cost) -> Cost {
+        Cost {
+            instructions: self.instructions.saturating_sub(o.instructions),
+            branches: self.branches.saturating_sub(o.branches),
+            mispredicts: self.mispredicts.saturating_sub(o.mispredicts),
+        }
+    }
+}
+
+impl std::iter::Sum for Cost {
+    fn sum<I: Iterator<Item = Cost>>(it: I) -> Cost {
+        it.fold(Cost::default(), |a, b| a + b)
+    }
+}
+
+/// One phase's cost.
 #[derive(Clone, Debug, PartialEq, Serialize, Deserialize)]
 pub struct PhaseCount {
     pub phase: String,
-    pub instructions: u64,
+    pub cost: Cost,
 }
 
 /// A function's own cost and the inclusive cost of the calls it makes.
 #[derive(Clone, Debug, Default)]
 struct Function {
-    own: u64,
-    calls: BTreeMap<String, u64>,
+    own: Cost,
+    calls: BTreeMap<String, Cost>,
+}
+
+/// Where each counted event sits on a cost line (after the positions).
+#[derive(Clone, Copy, Debug)]
+struct Events {
+    ir: usize,
+    /// `Bc`, `Bcm`, `Bi`, `Bim`: present with `--branch-sim=yes`.
+    branches: Option<[usize; 4]>,
+}
+
+impl Events {
+    fn parse(line: &str) -> Option<Events> {
+        let names: Vec<&str> = line.split_whitespace().collect();
+        let at = |e: &str| names.iter().position(|&n| n == e);
+        let branches = match (at("Bc"), at("Bcm"), at("Bi"), at("Bim")) {
+            (Some(a), Some(b), Some(c), Some(d)) => Some([a, b, c, d]),
+            _ => None,
+        };
+        Some(Events { ir: at("Ir")?, branches })
+    }
+
+    /// The cost of the numbers `v` (missing trailing numbers are zero).
+    fn cost(&self, v: &[u64]) -> Cost {
+        let get = |i: usize| v.get(i).copied().unwrap_or(0);
+        let (branches, mispredicts) = match self.branches {
+            Some([bc, bcm, bi, bim]) => (get(bc) + get(bi), get(bcm) + get(bim)),
+            None => (0, 0),
+        };
+        Cost { instructions: get(self.ir), branches, mispredicts }
+    }
 }
 
 /// A callgrind profile: the total and the cost of every function.
@@ -56,6 +130,8 @@ struct Function {
 pub struct Profile {
     /// Every instruction of the process.
     pub total: u64,
+    /// Whether the profile has the branch simulation's counts.
+    pub branch_sim: bool,
     functions: BTreeMap<String, Function>,
 }
 
@@ -72,13 +148,13 @@ fn is(name: &str, path: &str) -> bool {
 }
 
 impl Profile {
-    /// Parses callgrind's output format (`events:` with `Ir` first, any
-    /// `positions:`, name compression).
+    /// Parses callgrind's output format (`events:` with `Ir` and, from a
+    /// branch simulation, `Bc Bcm Bi Bim`; any `positions:`, name compression).
     pub fn parse(text: &str) -> std::result::Result<Profile, String> {
         let mut p = Profile::default();
         let mut names: BTreeMap<String, String> = BTreeMap::new();
         let mut positions = 1usize;
-        let mut ir_at: Option<usize> = None;
+        let mut events: Option<Events> = None;
         let mut current = String::new();
         let mut callee: Option<String> = None;
         let mut call_pending = false;
@@ -100,9 +176,10 @@ impl Profile {
             if let Some(v) = line.strip_prefix("positions:") {
                 positions = v.split_whitespace().count().max(1);
             } else if let Some(v) = line.strip_prefix("events:") {
-                ir_at = v.split_whitespace().position(|e| e == "Ir");
-                if ir_at.is_none() {
-                    return Err(bad("no Ir event"));
+                events = Events::parse(v);
+                match events {
+                    None => return Err(bad("no Ir event")),
+                    Some(e) => p.branch_sim = e.branches.is_some(),
                 }
             } else if let Some(v) = line.strip_prefix("fn=") {
                 current = name_of(v);
@@ -112,21 +189,30 @@ impl Profile {
             } else if line.starts_with("calls=") {
                 call_pending = true;
             } else if let Some(v) = line.strip_prefix("summary:").or_else(|| line.strip_prefix("totals:")) {
-                let ir = ir_at.ok_or_else(|| bad("a total before the events line"))?;
-                let t = v.split_whitespace().nth(ir).map_or(Ok(0), |x| x.parse::<u64>()).map_err(|_| bad("total"))?;
+                let e = events.ok_or_else(|| bad("a total before the events line"))?;
+                let v: Vec<u64> = v
+                    .split_whitespace()
+                    .map(|x| x.parse::<u64>())
+                    .collect::<std::result::Result<_, _>>()
+                    .map_err(|_| bad("total"))?;
+                let t = e.cost(&v).instructions;
                 total = Some(total.map_or(t, |s: u64| s.max(t)));
             } else if line.starts_with(|c: char| c.is_ascii_digit() || c == '+' || c == '-' || c == '*') {
-                let ir = ir_at.ok_or_else(|| bad("a cost before the events line"))?;
-                let cost = match line.split_whitespace().nth(positions + ir) {
-                    Some(x) => x.parse::<u64>().map_err(|_| bad("cost"))?,
-                    None => 0,
-                };
+                let e = events.ok_or_else(|| bad("a cost before the events line"))?;
+                let v: Vec<u64> = line
+                    .split_whitespace()
+                    .skip(positions)
+                    .map(|x| x.parse::<u64>())
+                    .collect::<std::result::Result<_, _>>()
+                    .map_err(|_| bad("cost"))?;
+                let cost = e.cost(&v);
                 let f = p.functions.entry(current.clone()).or_default();
                 if call_pending {
-                    *f.calls.entry(callee.clone().unwrap_or_default()).or_default() += cost;
+                    let c = f.calls.entry(callee.clone().unwrap_or_default()).or_default();
+                    *c = *c + cost;
                     call_pending = false;
                 } else {
-                    f.own += cost;
+                    f.own = f.own + cost;
                 }
             } else if let Some(v) = line.strip_prefix("fl=").or_else(|| line.strip_prefix("fi=")) {
                 let _ = v; // file names: not needed (costs are summed per function)
@@ -134,26 +220,26 @@ impl Profile {
         }
         p.total = match total {
             Some(t) => t,
-            None => p.functions.values().map(|f| f.own).sum(),
+            None => p.functions.values().map(|f| f.own.instructions).sum(),
         };
-        if ir_at.is_none() {
+        if events.is_none() {
             return Err("not a callgrind profile (no events line)".into());
         }
         Ok(p)
     }
 
-    /// Instructions of the functions that are `path` and their callees (a
-    /// call between two of them is counted once).
-    pub fn inclusive(&self, path: &str) -> u64 {
+    /// The cost of the functions that are `path` and their callees (a call
+    /// between two of them is counted once).
+    pub fn inclusive(&self, path: &str) -> Cost {
         self.functions
             .iter()
             .filter(|(name, _)| is(name, path))
-            .map(|(_, f)| f.own + f.calls.iter().filter(|(c, _)| !is(c, path)).map(|(_, &x)| x).sum::<u64>())
+            .map(|(_, f)| f.own + f.calls.iter().filter(|(c, _)| !is(c, path)).map(|(_, &x)| x).sum::<Cost>())
             .sum()
     }
 
-    /// The render loop's instructions ([`RENDER_LOOP`]).
-    pub fn render_loop(&self) -> u64 {
+    /// The render loop's cost ([`RENDER_LOOP`]).
+    pub fn render_loop(&self) -> Cost {
         self.inclusive(RENDER_LOOP)
     }
 
@@ -161,14 +247,15 @@ impl Profile {
     /// not out of line in the profile (not a `phases` build, or the scalar kernel).
     pub fn phases(&self) -> Option<Vec<PhaseCount>> {
         let in_phase = |name: &str| PHASES.iter().position(|(_, fs)| fs.iter().any(|f| is(name, f)));
-        let mut counts = vec![0u64; PHASES.len()];
+        let mut counts = vec![Cost::default(); PHASES.len()];
         let mut seen = vec![false; PHASES.len()];
         for (name, f) in &self.functions {
             let Some(i) = in_phase(name) else { continue };
             seen[i] = true;
             // Its own cost and its calls, less calls into another phase's functions.
             let into_other = |c: &str| in_phase(c).is_some_and(|j| j != i);
-            counts[i] += f.own + f.calls.iter().filter(|(c, _)| !into_other(c)).map(|(_, &x)| x).sum::<u64>();
+            counts[i] =
+                counts[i] + f.own + f.calls.iter().filter(|(c, _)| !into_other(c)).map(|(_, &x)| x).sum::<Cost>();
         }
         // The wavefront's phases are out of line only in a phases build; the
         // scalar kernel has its film out of line there, but not its traversal.
@@ -179,10 +266,10 @@ impl Profile {
         let mut rows: Vec<PhaseCount> = PHASES
             .iter()
             .zip(&counts)
-            .map(|((phase, _), &instructions)| PhaseCount { phase: phase.to_string(), instructions })
+            .map(|((phase, _), &cost)| PhaseCount { phase: phase.to_string(), cost })
             .collect();
-        let rest = loop_total.saturating_sub(counts.iter().sum());
-        rows.push(PhaseCount { phase: "rest".to_string(), instructions: rest });
+        let rest = loop_total - counts.iter().copied().sum();
+        rows.push(PhaseCount { phase: "rest".to_string(), cost: rest });
         Some(rows)
     }
 }
@@ -204,9 +291,12 @@ pub fn valgrind_version() -> Result<String> {
 }
 
 /// The callgrind command line that counts `program` with `args`, writing
-/// the profile to `profile`.
-pub fn command_line(program: &Path, args: &[OsString], profile: &Path) -> Vec<OsString> {
+/// the profile to `profile`; `branch_sim` adds the branch predictor's simulation.
+pub fn command_line(program: &Path, args: &[OsString], profile: &Path, branch_sim: bool) -> Vec<OsString> {
     let mut v: Vec<OsString> = vec!["valgrind".into(), "--tool=callgrind".into(), "-q".into(), "--dump-line=no".into()];
+    if branch_sim {
+        v.push("--branch-sim=yes".into());
+    }
     let mut out = OsString::from("--callgrind-out-file=");
     out.push(profile);
     v.push(out);
@@ -215,13 +305,14 @@ pub fn command_line(program: &Path, args: &[OsString], profile: &Path) -> Vec<Os
     v
 }
 
-/// Runs `program args` under callgrind; returns its profile and what it
-/// printed on stdout. A failure of the program or of valgrind is an error
-/// (exit status 1) with the end of what it said.
-pub fn count(program: &Path, args: &[OsString]) -> Result<(Profile, String)> {
+/// Runs `program args` under callgrind (with the branch simulation when
+/// `branch_sim`); returns its profile and what it printed on stdout. A
+/// failure of the program or of valgrind is an error (exit status 1) with
+/// the end of what it said.
+pub fn count(program: &Path, args: &[OsString], branch_sim: bool) -> Result<(Profile, String)> {
     let dir = tempfile::tempdir().map_err(|e| Error::System(format!("cannot make a temporary folder: {e}")))?;
     let profile = dir.path().join("callgrind.out");
-    let cmd = command_line(program, args, &profile);
+    let cmd = command_line(program, args, &profile, branch_sim);
     let out = Command::new(&cmd[0])
         .args(&cmd[1..])
         .output()
@@ -266,12 +357,38 @@ mod tests {
     fn the_render_loop_and_its_phases_from_a_profile() {
         let p = Profile::parse(PROFILE).unwrap();
         assert_eq!(p.total, 1000);
-        assert_eq!(p.render_loop(), 900);
+        assert!(!p.branch_sim);
+        assert_eq!(p.render_loop().instructions, 900);
         let phases = p.phases().unwrap();
-        let get = |name: &str| phases.iter().find(|r| r.phase == name).unwrap().instructions;
+        let get = |name: &str| phases.iter().find(|r| r.phase == name).unwrap().cost.instructions;
         assert_eq!((get("traversal"), get("scatter"), get("compaction")), (560, 250, 50));
         assert_eq!((get("camera rays"), get("film"), get("rest")), (0, 0, 40));
-        assert_eq!(phases.iter().map(|r| r.instructions).sum::<u64>(), 900);
+        assert_eq!(phases.iter().map(|r| r.cost.instructions).sum::<u64>(), 900);
+    }
+
+    /// The same profile with the branch simulation's events, in callgrind's
+    /// order (`Ir Bc Bcm Bi Bim`): the branches and mispredictions follow
+    /// the instructions through the calls and phases.
+    #[test]
+    fn branches_and_mispredictions_from_a_branch_simulation() {
+        let text = "version: 1\npositions: line\nevents: Ir Bc Bcm Bi Bim\nsummary: 1000 200 20 10 1\n\n\
+            fn=(1) main\n1 100 10 1\ncfn=(2) rtow::render::tile_work\ncalls=2 5\n2 900 190 19 10 1\n\n\
+            fn=(2)\n5 40 4 2 1 1\ncfn=(3) rtow::kernel::wavefront::scatter::<wide::f32x8>\ncalls=10 7\n6 300 60 7 9\n\
+            cfn=(4) <rtow::plan::Prepared>::closest_hits\ncalls=10 8\n7 560 126 10\n\n\
+            fn=(3)\n7 300 60 7 9\n\nfn=(4)\n8 560 126 10\n\ntotals: 1000 200 20 10 1\n";
+        let p = Profile::parse(text).unwrap();
+        assert!(p.branch_sim);
+        assert_eq!(p.total, 1000);
+        // The loop's own line (1 of 1 indirect mispredicted, 2 of 4 conditional) and its two calls.
+        assert_eq!(
+            p.render_loop(),
+            Cost { instructions: 900, branches: 4 + 1 + 60 + 9 + 126, mispredicts: 2 + 1 + 7 + 10 }
+        );
+        let phases = p.phases().unwrap();
+        let get = |name: &str| phases.iter().find(|r| r.phase == name).unwrap().cost;
+        assert_eq!(get("traversal"), Cost { instructions: 560, branches: 126, mispredicts: 10 });
+        assert_eq!(get("scatter"), Cost { instructions: 300, branches: 69, mispredicts: 7 });
+        assert_eq!(get("rest"), Cost { instructions: 40, branches: 5, mispredicts: 3 });
     }
 
     #[test]
@@ -286,7 +403,7 @@ mod tests {
         let scalar =
             "events: Ir\nfn=(1) rtow::render::tile_work\n1 10\ncfn=(2) rtow::film::TileFilm::add\ncalls=1 2\n1 5\nfn=(2)\n2 5\n";
         let p = Profile::parse(scalar).unwrap();
-        assert_eq!((p.render_loop(), p.phases()), (15, None));
+        assert_eq!((p.render_loop().instructions, p.phases()), (15, None));
         assert!(Profile::parse("events: Dr\n").is_err());
     }
 }

@@ -9,7 +9,8 @@
 //! without writing an image ([`child_render`]) and prints what it rendered.
 //! Its profile gives the render loop's instructions (every tile through its
 //! kernel), the whole process's, and, in a build with the `phases` feature,
-//! the render loop by phase.
+//! the render loop by phase. With the branch simulation (`--branch-sim`)
+//! each of these also has its branches and mispredictions per ray.
 
 use super::callgrind::{self, PhaseCount};
 use crate::choice::KernelChoice;
@@ -49,6 +50,20 @@ pub struct PhaseRow {
     pub phase: String,
     pub instructions: u64,
     pub per_ray: f64,
+    /// Mispredicted branches per ray (with the branch simulation).
+    #[serde(default, skip_serializing_if = "Option::is_none")]
+    pub mispredicts_per_ray: Option<f64>,
+}
+
+/// The branch simulation's counts of the render loop.
+#[derive(Clone, Debug, PartialEq, Serialize, Deserialize)]
+pub struct Branches {
+    /// Conditional and indirect branches executed.
+    pub branches: u64,
+    pub branches_per_ray: f64,
+    /// Of those, mispredicted by callgrind's simulated predictor.
+    pub mispredicts: u64,
+    pub mispredicts_per_ray: f64,
 }
 
 /// One kernel's instructions.
@@ -68,6 +83,9 @@ pub struct InstructionsEntry {
     pub process_per_ray: f64,
     /// The render loop by phase (a `phases` build's wavefront kernels only).
     pub phases: Option<Vec<PhaseRow>>,
+    /// The render loop's branches and mispredictions (`--branch-sim` only).
+    #[serde(default, skip_serializing_if = "Option::is_none")]
+    pub branches: Option<Branches>,
     /// The command that was counted.
     pub command: Vec<String>,
 }
@@ -88,12 +106,15 @@ pub struct InstructionsReport {
 }
 
 /// Counts `kernels` on `job`: each one's process is `program` run with
-/// `child_args(job with that kernel)`, under callgrind.
+/// `child_args(job with that kernel)`, under callgrind (with its branch
+/// predictor's simulation when `branch_sim`).
+#[allow(clippy::too_many_arguments)]
 pub fn count(
     job: &Job,
     name: &str,
     kernels: &[KernelChoice],
     program: &Path,
+    branch_sim: bool,
     child_args: impl Fn(&Job) -> Vec<OsString>,
     mut on_kernel: impl FnMut(&InstructionsEntry),
 ) -> Result<InstructionsReport> {
@@ -106,7 +127,7 @@ pub fn count(
     for &kernel in kernels {
         let job = job.with_options(&RenderOptions { kernel, ..*job.options() })?;
         let args = child_args(&job);
-        let (profile, stdout) = callgrind::count(program, &args)?;
+        let (profile, stdout) = callgrind::count(program, &args, branch_sim)?;
         let child: ChildRender = stdout
             .lines()
             .rev()
@@ -121,7 +142,8 @@ pub fn count(
             )));
         }
         let rays = child.rays as f64;
-        let instructions = profile.render_loop();
+        let looped = profile.render_loop();
+        let instructions = looped.instructions;
         if instructions == 0 {
             return Err(Error::System(format!(
                 "the profile has no render loop ({} not found: a build without symbols?)",
@@ -130,14 +152,21 @@ pub fn count(
         }
         let phases = profile.phases().map(|rows| {
             rows.into_iter()
-                .map(|PhaseCount { phase, instructions }| PhaseRow {
+                .map(|PhaseCount { phase, cost }| PhaseRow {
                     phase,
-                    instructions,
-                    per_ray: instructions as f64 / rays,
+                    instructions: cost.instructions,
+                    per_ray: cost.instructions as f64 / rays,
+                    mispredicts_per_ray: profile.branch_sim.then(|| cost.mispredicts as f64 / rays),
                 })
                 .collect()
         });
-        let command = callgrind::command_line(program, &args, Path::new("callgrind.out"))
+        let branches = profile.branch_sim.then(|| Branches {
+            branches: looped.branches,
+            branches_per_ray: looped.branches as f64 / rays,
+            mispredicts: looped.mispredicts,
+            mispredicts_per_ray: looped.mispredicts as f64 / rays,
+        });
+        let command = callgrind::command_line(program, &args, Path::new("callgrind.out"), branch_sim)
             .iter()
             .map(|a| a.to_string_lossy().into_owned())
             .collect();
@@ -151,6 +180,7 @@ pub fn count(
             process_instructions: profile.total,
             process_per_ray: profile.total as f64 / rays,
             phases,
+            branches,
             command,
         };
         on_kernel(&entry);
@@ -182,11 +212,31 @@ impl InstructionsReport {
         }
         t += "(instructions: the render loop, every tile through its kernel, counted by callgrind; process/ray: \
               every instruction of the process, start-up, scene and BVH included, per ray)\n";
+        if self.kernels.iter().any(|e| e.branches.is_some()) {
+            t +=
+                &format!("\n{:<7} {:>14} {:>14} {:>12}\n", "kernel", "branches/ray", "mispredicts/ray", "mispredicted");
+            for e in &self.kernels {
+                if let Some(b) = &e.branches {
+                    t += &format!(
+                        "{:<7} {:>14.2} {:>14.3} {:>11.2}%\n",
+                        e.kernel,
+                        b.branches_per_ray,
+                        b.mispredicts_per_ray,
+                        100.0 * b.mispredicts as f64 / b.branches.max(1) as f64
+                    );
+                }
+            }
+            t += "(the render loop's conditional and indirect branches, callgrind's simulated predictor: it ranks \
+                  changes; a real CPU predicts better)\n";
+        }
         let with: Vec<&InstructionsEntry> = self.kernels.iter().filter(|e| e.phases.is_some()).collect();
         if let Some(first) = with.first() {
             t += &format!("\n{:<12}", "phase");
             for e in &with {
                 t += &format!(" {:>16}", format!("{} /ray", e.kernel));
+                if e.branches.is_some() {
+                    t += &format!(" {:>8}", "mispr.");
+                }
             }
             t += "\n";
             for (i, row) in first.phases.as_deref().unwrap_or_default().iter().enumerate() {
@@ -194,12 +244,18 @@ impl InstructionsReport {
                 for e in &with {
                     let r = &e.phases.as_deref().unwrap_or_default()[i];
                     t += &format!(" {:>16}", format!("{:.1} ({:.0}%)", r.per_ray, 100.0 * r.per_ray / e.per_ray));
+                    if let Some(m) = r.mispredicts_per_ray {
+                        t += &format!(" {m:>8.3}");
+                    }
                 }
                 t += "\n";
             }
             t += &format!("{:<12}", "render loop");
             for e in &with {
                 t += &format!(" {:>16}", format!("{:.1}", e.per_ray));
+                if let Some(b) = &e.branches {
+                    t += &format!(" {:>8.3}", b.mispredicts_per_ray);
+                }
             }
             t +=
                 "\n(a `phases` build: the phases are kept out of line, which adds calls; compare phases with phases)\n";

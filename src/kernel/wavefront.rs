@@ -8,8 +8,8 @@
 //! generate camera rays (W at a time)
 //! loop until no path is alive or max_depth rays were traced:
 //!     intersect: W contiguous rays per packet (brute force or the BVH, as planned)
-//!     classify:  each path joins the queue of its hit's material kind, or the miss queue
-//!     miss pass: throughput x background (sky or constant) -> the path's result
+//!     misses:    W contiguous paths at a time, throughput x background (sky or constant) -> results
+//!     classify:  each path that hit joins the queue of its hit's material kind
 //!     light pass (scenes with lights): throughput x emission -> the result; the path ends
 //!     one scatter pass per material kind the scene uses (W paths at a time, gathered)
 //!     compaction: survivors are appended to the next bounce's arrays
@@ -30,9 +30,9 @@ use crate::estimator::{roulette, roulette_applies};
 use crate::film::TileFilm;
 use crate::geometry::{quad_surface, spawn, surface, Shade, Surface, MISS, QUAD_BASE};
 use crate::material::{dielectric, emission, lambertian, metal, Kind};
-use crate::plan::Prepared;
+use crate::plan::{KindSet, Prepared};
 use crate::probe::{PathId, Probe, Stage};
-use crate::real::{Wide, MAX_LANES};
+use crate::real::{U32Lanes, Wide, MAX_LANES};
 use crate::sampling::{layout, PathSampler, Stream};
 use crate::vec3::V3;
 use std::ops::Range;
@@ -61,7 +61,10 @@ fn arr<T: Copy + std::fmt::Debug>(x: T) -> Arr<T> {
     vec![x; CAP].into_boxed_slice().try_into().unwrap()
 }
 
-/// The miss queue's index (after one queue per material kind).
+/// The miss queue's index (after one queue per material kind). Misses are
+/// shaded by their own pass over contiguous paths (`shade_misses`): the
+/// one-path-at-a-time classification of scenes with quads fills this queue
+/// (branch-free) and nothing reads it.
 const MISS_QUEUE: usize = Kind::ALL.len();
 
 /// Path state, structure of arrays.
@@ -266,11 +269,7 @@ fn render_round<W: Wide, P: Probe, S: PathSampler>(
             }
             rays += bounce::<W, P, S>(prep, sampler, ws, depth, probe);
         }
-        for samples in ws.result[..n].chunks_exact(na) {
-            for (&local, &c) in ws.active.iter().zip(samples) {
-                tile.add(local as usize, c);
-            }
-        }
+        tile.add_rounds(&ws.active, &ws.result[..n]);
         b0 = b1;
     }
     rays
@@ -347,7 +346,7 @@ fn index_run<W: Wide>(i: usize) -> W::Idx {
     idx
 }
 
-/// One bounce of every live path: intersect, classify, shade misses, scatter.
+/// One bounce of every live path: intersect and shade misses, classify, scatter.
 /// `depth` counts the rays each path has traced before this bounce (0: camera
 /// rays). Returns the rays traced. (Inlined, as the compiler chose to before
 /// the light pass made it larger.)
@@ -361,18 +360,8 @@ fn bounce<W: Wide, P: Probe, S: PathSampler>(
 ) -> u64 {
     let n = ws.cur.len;
     probe.rays(depth, n as u32);
-    for i in (0..n).step_by(W::LANES) {
-        let live = (n - i).min(W::LANES);
-        let (o, d) = (Paths::v3::<W>(&ws.cur.o, i), Paths::v3::<W>(&ws.cur.d, i));
-        let (hit, t) = prep.closest_hits(o, d, low_bits(live), probe);
-        W::store_u_pow2(hit, &mut ws.hit, i);
-        t.store_pow2(&mut ws.t, i);
-        probe.lanes(Stage::Intersect, live as u32, W::LANES as u32);
-        if P::PATHS {
-            let idx = index_run::<W>(i);
-            probe.traced(ws.ids::<W>(&idx), o, d, hit, t, low_bits(live));
-        }
-    }
+    intersect::<W, P>(prep, ws, n, probe);
+    shade_misses::<W>(prep, ws, n);
     let mut len = [0usize; MISS_QUEUE + 1];
     let mut queues = ws.queue.take().expect("the queues are put back after every bounce");
     // The sphere and quad arrays have a power-of-two length above every hit
@@ -381,13 +370,33 @@ fn bounce<W: Wide, P: Probe, S: PathSampler>(
     let kind_mask = prep.spheres.kind.len().wrapping_sub(1);
     let quad_mask = prep.quads.kind.len().wrapping_sub(1);
     debug_assert!(prep.spheres.kind.len().is_power_of_two() && prep.quads.kind.len().is_power_of_two());
-    // The loop for a scene without quads is book one's own (one test per hit).
+    // A scene without quads classifies W paths at a time: the packet's
+    // material kinds (one lookup per lane), then, per kind the plan has, the
+    // indices of its lanes compressed onto its queue, in path order as one
+    // path at a time would append them. Misses (shaded above) join no queue.
     if prep.quads.is_empty() {
-        for (i, &h) in ws.hit[..n].iter().enumerate() {
-            let q = if h == MISS { MISS_QUEUE } else { prep.spheres.kind[h as usize & kind_mask] as usize };
-            queues[q][len[q] & MASK] = i as u32;
-            len[q] += 1;
+        // The path tracer queues only the kinds it has passes for (the plan's);
+        // the debug modes shade every kind.
+        let kinds = match prep.plan.mode {
+            Mode::Path => prep.plan.kinds,
+            Mode::Flat | Mode::Normals | Mode::Gradient => KindSet::all(),
+        };
+        let iota = W::u_from_fn(|k| k as u32);
+        for i in (0..n).step_by(W::LANES) {
+            let hit = W::load_u_pow2(&ws.hit, i);
+            let hits = W::mask_bits(W::u_lt(hit, W::u_splat(MISS))) & low_bits(n - i);
+            let kind = W::u_from_fn(|k| prep.spheres.kind[W::lane_u(hit, k) as usize & kind_mask] as u32);
+            let idx = iota.wrapping_add(W::u_splat(i as u32));
+            for k in kinds.iter() {
+                let q = k as usize;
+                let keep = W::mask_bits(W::u_eq(kind, W::u_splat(k as u32))) & hits;
+                len[q] += W::compress_store_u_pow2(idx, keep, &mut queues[q], len[q]);
+            }
         }
+        debug_assert!(
+            ws.hit[..n].iter().filter(|&&h| h != MISS).count() == len.iter().sum::<usize>(),
+            "the plan left out a kind that was hit"
+        );
     } else {
         for (i, &h) in ws.hit[..n].iter().enumerate() {
             let q = if h < QUAD_BASE {
@@ -402,10 +411,6 @@ fn bounce<W: Wide, P: Probe, S: PathSampler>(
         }
     }
     ws.next.len = 0;
-    for_packets::<W, P>(&queues[MISS_QUEUE], len[MISS_QUEUE], probe, |idx, active, _| {
-        let c = v3_gather::<W>(&ws.cur.thr, idx).mul_elem(background(&prep.sky, v3_gather::<W>(&ws.cur.d, idx)));
-        write_results(ws, idx, active, c);
-    });
     for kind in Kind::ALL {
         let (q, qlen) = (&queues[kind as usize], len[kind as usize]);
         match prep.plan.mode {
@@ -435,6 +440,43 @@ fn bounce<W: Wide, P: Probe, S: PathSampler>(
     n as u64
 }
 
+/// The closest hits of the first `n` paths, W contiguous rays per packet,
+/// into `ws.hit` and `ws.t`. (Out of line, once per bounce: the traversal's
+/// code then does not depend on what the rest of the bounce inlines.)
+#[cfg_attr(not(feature = "phases"), inline(never))]
+fn intersect<W: Wide, P: Probe>(prep: &Prepared, ws: &mut Workspace, n: usize, probe: &mut P) {
+    for i in (0..n).step_by(W::LANES) {
+        let live = (n - i).min(W::LANES);
+        let (o, d) = (Paths::v3::<W>(&ws.cur.o, i), Paths::v3::<W>(&ws.cur.d, i));
+        let (hit, t) = prep.closest_hits(o, d, low_bits(live), probe);
+        W::store_u_pow2(hit, &mut ws.hit, i);
+        t.store_pow2(&mut ws.t, i);
+        probe.lanes(Stage::Intersect, live as u32, W::LANES as u32);
+        if P::PATHS {
+            let idx = index_run::<W>(i);
+            probe.traced(ws.ids::<W>(&idx), o, d, hit, t, low_bits(live));
+        }
+    }
+}
+
+/// The misses of the first `n` paths end here, W contiguous paths at a time
+/// in path order: their throughput and directions are loaded, not gathered
+/// through a queue. (Out of line: it runs once per bounce, and inlined into
+/// the wavefront's loop it costs the traversal's code registers.)
+#[inline(never)]
+fn shade_misses<W: Wide>(prep: &Prepared, ws: &mut Workspace, n: usize) {
+    for i in (0..n).step_by(W::LANES) {
+        let hit = W::load_u_pow2(&ws.hit, i);
+        let missed = W::mask_bits(!W::u_lt(hit, W::u_splat(MISS))) & low_bits(n - i);
+        if missed != 0 {
+            let d = Paths::v3::<W>(&ws.cur.d, i);
+            let c = Paths::v3::<W>(&ws.cur.thr, i).mul_elem(background(&prep.sky, d));
+            let slot = W::load_u_pow2(&ws.cur.slot, i);
+            write_lanes::<W>(&mut ws.result, slot, missed, c);
+        }
+    }
+}
+
 /// Calls `f` with each packet of W indices of the first `len` entries of
 /// `queue` (the last packet padded by repeating its first index, so every lane
 /// holds a real path) and the number of real lanes. The indices are masked
@@ -461,10 +503,20 @@ fn for_packets<W: Wide, P: Probe>(
 
 #[inline(always)]
 fn write_results<W: Wide>(ws: &mut Workspace, idx: &W::Idx, active: usize, c: V3<W>) {
-    let slot = W::idx_of(W::gather_u_pow2(&ws.cur.slot, idx));
-    for (k, &slot) in slot.as_ref().iter().enumerate().take(active) {
-        debug_assert!((slot as usize) < MAX_PATHS);
-        ws.result[slot as usize & MASK] = [c.x.lane(k), c.y.lane(k), c.z.lane(k)];
+    let slot = W::gather_u_pow2(&ws.cur.slot, idx);
+    write_lanes::<W>(&mut ws.result, slot, low_bits(active), c);
+}
+
+/// `result[slot[k]] = c[k]` for the lanes k set in `lanes`.
+#[inline(always)]
+fn write_lanes<W: Wide>(result: &mut Arr<[f32; 3]>, slot: W::U32, mut lanes: u32, c: V3<W>) {
+    let slot = W::idx_of(slot);
+    while lanes != 0 {
+        let k = lanes.trailing_zeros() as usize;
+        lanes &= lanes - 1;
+        let s = slot.as_ref()[k] as usize;
+        debug_assert!(s < MAX_PATHS);
+        result[s & MASK] = [c.x.lane(k), c.y.lane(k), c.z.lane(k)];
     }
 }
 
