@@ -197,12 +197,12 @@ pub fn noise<R: Real>(p: V3<R>, lattice: &Perlin) -> R {
             let wj = if j == 1 { vv } else { one - vv };
             for k in 0..2usize {
                 let wk = if k == 1 { ww } else { one - ww };
-                let g = |a: usize| {
-                    R::from_fn(|l| {
-                        let h = px[(ci[l] + i) & 255] ^ py[(cj[l] + j) & 255] ^ pz[(ck[l] + k) & 255];
-                        lattice.ranvec[h as usize][a]
-                    })
-                };
+                // The corner's gradient, hashed once per lane, loaded per lane.
+                let mut h = [0usize; crate::real::MAX_LANES];
+                for (l, h) in h.iter_mut().enumerate().take(R::LANES) {
+                    *h = (px[(ci[l] + i) & 255] ^ py[(cj[l] + j) & 255] ^ pz[(ck[l] + k) & 255]) as usize;
+                }
+                let g = |a: usize| R::from_fn(|l| lattice.ranvec[h[l]][a]);
                 let off = V3::new(u - R::splat(i as f32), v - R::splat(j as f32), w - R::splat(k as f32));
                 accum = accum + wi * wj * wk * V3::new(g(0), g(1), g(2)).dot(off);
             }
