@@ -8,7 +8,10 @@
 //! - `render`: one 32x32 tile of the final scene at 2 spp, depth 50, per kernel
 //!   (brute force);
 //! - `accel`: the same tile, brute force against the BVH (packets, and one ray
-//!   at a time), for every kernel.
+//!   at a time), for every kernel;
+//! - `cornell`: one 32x32 tile of The Next Week's Cornell box (`nw-cornell-box`,
+//!   18 quads: two trees' walks, the light pass) at 128x128, 2 spp, depth 50, per
+//!   kernel, with the default accelerator (the BVH).
 //!
 //! Throughput is in rays (criterion's "elements"). Renders run with the probe off (`()`).
 
@@ -98,12 +101,37 @@ fn intersect(c: &mut Criterion) {
     g.finish();
 }
 
+/// The final scene's benchmark tile: 32x32 pixels at (160, 96), among the small spheres.
 fn tile() -> TileFilm {
     TileFilm::new(160, 96, 32, 32)
 }
 
+/// The Cornell box at 128x128, depth 50, seed 1, with the default sampler and accelerator.
+fn cornell_job(spp: u32) -> Job {
+    let scene = rtow::scene::preset("nw-cornell-box").expect("nw-cornell-box is a preset");
+    let s = Settings { width: 128, height: 128, spp, max_depth: 50, seed: 1, ..Settings::default() };
+    Job::new(&scene, &Overrides::from(s), &RenderOptions::default()).unwrap()
+}
+
+/// The Cornell box's benchmark tile: 32x32 pixels at (48, 64) of 128x128, across the
+/// edges of both boxes, their faces and the floor.
+fn cornell_tile() -> TileFilm {
+    TileFilm::new(48, 64, 32, 32)
+}
+
 /// Benchmarks every kernel on the tile; `prefix` names the group's row.
 fn kernels(g: &mut BenchmarkGroup<criterion::measurement::WallTime>, prep: &Prepared, prefix: &str, scalar_too: bool) {
+    kernels_on(g, prep, prefix, scalar_too, tile);
+}
+
+/// Benchmarks every kernel on the tiles `tile` makes.
+fn kernels_on(
+    g: &mut BenchmarkGroup<criterion::measurement::WallTime>,
+    prep: &Prepared,
+    prefix: &str,
+    scalar_too: bool,
+    tile: fn() -> TileFilm,
+) {
     if scalar_too {
         g.bench_function(format!("scalar{prefix}"), |b| {
             b.iter(|| {
@@ -113,11 +141,16 @@ fn kernels(g: &mut BenchmarkGroup<criterion::measurement::WallTime>, prep: &Prep
             })
         });
     }
-    wide_kernel::<f32x8>(g, prep, prefix);
-    wide_kernel::<f32x16>(g, prep, prefix);
+    wide_kernel::<f32x8>(g, prep, prefix, tile);
+    wide_kernel::<f32x16>(g, prep, prefix, tile);
 }
 
-fn wide_kernel<W: Wide>(g: &mut BenchmarkGroup<criterion::measurement::WallTime>, prep: &Prepared, prefix: &str) {
+fn wide_kernel<W: Wide>(
+    g: &mut BenchmarkGroup<criterion::measurement::WallTime>,
+    prep: &Prepared,
+    prefix: &str,
+    tile: fn() -> TileFilm,
+) {
     let mut ws = wavefront::Workspace::default();
     g.bench_function(format!("simd{}{prefix}", W::LANES), |b| {
         b.iter(|| {
@@ -129,7 +162,7 @@ fn wide_kernel<W: Wide>(g: &mut BenchmarkGroup<criterion::measurement::WallTime>
 }
 
 /// Rays one tile traces (the same for every kernel).
-fn tile_rays(prep: &Prepared) -> u64 {
+fn tile_rays(prep: &Prepared, tile: fn() -> TileFilm) -> u64 {
     scalar::render_tile(prep, sobol(prep), &mut tile(), 0..prep.settings.spp, &mut ())
 }
 
@@ -137,7 +170,7 @@ fn render_tile(c: &mut Criterion) {
     let job = job(2, AccelChoice::Brute);
     let prep = job.prepared();
     let mut g = c.benchmark_group("render");
-    g.sample_size(10).measurement_time(Duration::from_secs(6)).throughput(Throughput::Elements(tile_rays(prep)));
+    g.sample_size(10).measurement_time(Duration::from_secs(6)).throughput(Throughput::Elements(tile_rays(prep, tile)));
     kernels(&mut g, prep, "", true);
     g.finish();
 }
@@ -148,12 +181,26 @@ fn accel(c: &mut Criterion) {
     for accel in [AccelChoice::Brute, AccelChoice::Bvh, AccelChoice::BvhRay] {
         let job = job(2, accel);
         let prep = job.prepared();
-        g.sample_size(10).measurement_time(Duration::from_secs(4)).throughput(Throughput::Elements(tile_rays(prep)));
+        g.sample_size(10)
+            .measurement_time(Duration::from_secs(4))
+            .throughput(Throughput::Elements(tile_rays(prep, tile)));
         // The scalar kernel walks the BVH one ray at a time either way.
         kernels(&mut g, prep, &format!("/{}", accel.name()), accel != AccelChoice::BvhRay);
     }
     g.finish();
 }
 
-criterion_group!(benches, intersect, render_tile, accel);
+/// The Cornell box: scalar against both lane widths, on one tile (quads, the light pass).
+fn cornell(c: &mut Criterion) {
+    let job = cornell_job(2);
+    let prep = job.prepared();
+    let mut g = c.benchmark_group("cornell");
+    g.sample_size(10)
+        .measurement_time(Duration::from_secs(6))
+        .throughput(Throughput::Elements(tile_rays(prep, cornell_tile)));
+    kernels_on(&mut g, prep, "", true, cornell_tile);
+    g.finish();
+}
+
+criterion_group!(benches, intersect, render_tile, accel, cornell);
 criterion_main!(benches);
