@@ -75,6 +75,7 @@ mod sampling;
 pub mod scene;
 mod settings;
 pub mod shard;
+mod texture;
 mod vec3;
 
 pub use choice::{AccelChoice, KernelChoice, Mode};
@@ -118,6 +119,9 @@ pub mod internals {
     }
     pub mod sampling {
         pub use crate::sampling::*;
+    }
+    pub mod texture {
+        pub use crate::texture::*;
     }
     pub mod vec3 {
         pub use crate::vec3::*;

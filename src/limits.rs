@@ -55,6 +55,13 @@ pub const MAX_COORD: f32 = 1e6;
 pub const MIN_RADIUS: f32 = 1e-5;
 pub const MAX_RADIUS: f32 = 1e6;
 
+/// A checker's cell size and a noise texture's frequency: a checker's scale
+/// in `[MIN_TEXTURE_SCALE, MAX_TEXTURE_SCALE]` (a cell smaller than the f32
+/// spacing of the coordinates it tiles is noise, not a checker), a noise
+/// scale in `[0, MAX_TEXTURE_SCALE]`.
+pub const MIN_TEXTURE_SCALE: f32 = 1e-5;
+pub const MAX_TEXTURE_SCALE: f32 = 1e6;
+
 /// The focus distance (given, or |look_from - look_at|): the camera's f32
 /// pixel grid is computed relative to the eye at this distance, and its ray
 /// directions are normalized in f32, so it must neither underflow nor overflow.

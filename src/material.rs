@@ -10,6 +10,7 @@
 
 use crate::real::Real;
 use crate::sampling::{unit_vector, Stream};
+use crate::texture::{TexKind, TexRef};
 use crate::vec3::V3;
 
 /// Material kinds, one wavefront queue each.
@@ -38,7 +39,11 @@ impl Kind {
 /// One table per material kind; a sphere's (kind, row) indexes them.
 #[derive(Clone, Debug, Default)]
 pub struct MaterialTables {
+    /// The albedo of a solid lambertian; for a textured one, the colour of
+    /// the debug modes' flat shading (the checker's even colour, grey for noise).
     pub lambertian: Vec<[f32; 3]>,
+    /// Each lambertian row's texture (`Solid`: the albedo above).
+    pub lambertian_tex: Vec<TexRef>,
     /// (albedo, fuzz)
     pub metal: Vec<([f32; 3], f32)>,
     pub dielectric: Vec<f32>,
@@ -60,11 +65,15 @@ impl MaterialTables {
     /// What a shading record holds of material (`kind`, `row`): the albedo
     /// (white for a dielectric, the emitted radiance for a light) and one
     /// parameter (a metal's fuzz, a dielectric's index of refraction, 1 for a
-    /// one-sided light; 0 otherwise).
+    /// one-sided light, 1 for a textured lambertian, whose albedo a texture
+    /// pass writes; 0 otherwise).
     pub fn record(&self, kind: Kind, row: u32) -> ([f32; 3], f32) {
         let row = row as usize;
         match kind {
-            Kind::Lambertian => (self.lambertian[row], 0.0),
+            Kind::Lambertian => {
+                let textured = self.lambertian_tex[row].kind != TexKind::Solid;
+                (self.lambertian[row], if textured { 1.0 } else { 0.0 })
+            }
             Kind::Metal => self.metal[row],
             Kind::Dielectric => ([1.0; 3], self.dielectric[row]),
             Kind::DiffuseLight => (self.light[row].0, if self.light[row].1 { 1.0 } else { 0.0 }),

@@ -11,6 +11,7 @@ use crate::material::{Kind, MaterialTables};
 use crate::probe::Probe;
 use crate::real::Wide;
 use crate::settings::Settings;
+use crate::texture::{TexSet, TextureTables};
 use crate::vec3::V3;
 use serde::{Serialize, Serializer};
 
@@ -83,6 +84,11 @@ pub struct Plan {
     pub mode: Mode,
     /// Material kinds some sphere uses: only these get a queue and a scatter pass.
     pub kinds: KindSet,
+    /// Texture kinds some lambertian uses (path tracing only): each gets a
+    /// pass that writes the albedo before the material passes. Empty for a
+    /// scene without textures, which runs no texture code at all.
+    #[serde(skip_serializing_if = "TexSet::is_empty")]
+    pub textures: TexSet,
     /// Thin-lens sampling (false: pinhole rays, no lens samples drawn).
     pub lens: bool,
     /// Jitter inside the pixel (false at 1 sample per pixel: pixel centres).
@@ -106,8 +112,11 @@ impl Plan {
             Some(_) => "; quads: their own bvh8, one box at a time",
             None => "",
         };
+        let textures: Vec<&str> = self.textures.iter().map(|t| t.name()).collect();
+        let textures =
+            if textures.is_empty() { String::new() } else { format!("; texture passes: {}", textures.join(", ")) };
         format!(
-            "plan: mode {:?}; material passes: {kinds}; camera: {} rays, {}; closest hit: {}{quads}; paths stop at zero throughput",
+            "plan: mode {:?}; material passes: {kinds}{textures}; camera: {} rays, {}; closest hit: {}{quads}; paths stop at zero throughput",
             self.mode,
             if self.lens { "thin-lens" } else { "pinhole" },
             if self.jitter { "jittered in the pixel" } else { "through pixel centres" },
@@ -135,6 +144,8 @@ pub struct Prepared {
     /// The quads (empty for a scene without: padding only).
     pub quads: Quads,
     pub materials: MaterialTables,
+    /// The texture tables (empty for a scene without textures).
+    pub textures: TextureTables,
     pub camera: PreparedCamera,
     pub sky: SkyColours,
     /// Present when the plan chose a BVH.

@@ -130,7 +130,7 @@ fn quads(list: &[([f32; 3], [f32; 3], [f32; 3])], extent: f32) -> Quads {
 
 /// The six faces of the box `min..max`, built by the library's `box()`.
 fn box_faces(min: [f32; 3], max: [f32; 3]) -> Vec<([f32; 3], [f32; 3], [f32; 3])> {
-    let b = QuadBox { a: min, b: max, material: Material::Lambertian { albedo: [0.5; 3] } };
+    let b = QuadBox { a: min, b: max, material: Material::Lambertian { albedo: [0.5; 3].into() } };
     let f32s = |v: [f64; 3]| v.map(|x| x as f32);
     box_quads(&b).iter().map(|&(q, u, v)| (f32s(q), f32s(u), f32s(v))).collect()
 }

@@ -74,7 +74,7 @@ fn different_seeds_give_different_noise() {
 fn arb_material() -> impl Strategy<Value = Material> {
     let col = prop::array::uniform3(0.0f32..1.0);
     prop_oneof![
-        col.clone().prop_map(|albedo| Material::Lambertian { albedo }),
+        col.clone().prop_map(|albedo| Material::Lambertian { albedo: albedo.into() }),
         (col, 0.0f32..=1.0).prop_map(|(albedo, fuzz)| Material::Metal { albedo, fuzz }),
         prop_oneof![Just(1.0f32), Just(1.5f32), 0.3f32..3.0].prop_map(|ior| Material::Dielectric { ior }),
     ]

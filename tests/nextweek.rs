@@ -62,7 +62,7 @@ fn emission_furnace_is_exact() {
         let mut sc = empty_scene(Camera::looking([5.0, 5.0, 1.0], [5.0, 5.0, 9.0], 100.0), [0.0; 3]);
         sc.quads = room(light(l, one_sided));
         sc.spheres =
-            vec![Sphere { center: [5.0, 5.0, 6.0], radius: 1.5, material: Material::Lambertian { albedo: a } }];
+            vec![Sphere { center: [5.0, 5.0, 6.0], radius: 1.5, material: Material::Lambertian { albedo: a.into() } }];
         let al: [f32; 3] = std::array::from_fn(|k| a[k] * l[k]);
         for kernel in [Scalar, Simd8, Simd16] {
             let img = image(&sc, settings(32, 32, 1, 50, 3), kernel);
@@ -91,7 +91,7 @@ fn a_dark_room_shows_its_light_exactly() {
         [(false, true, true), (true, true, true), (false, false, true), (true, false, false)]
     {
         let mut sc = empty_scene(Camera::looking([5.0, 5.0, 1.0], [5.0, 5.0, 9.0], 60.0), [0.0; 3]);
-        sc.quads = room(Material::Lambertian { albedo: [0.0; 3] });
+        sc.quads = room(Material::Lambertian { albedo: [0.0; 3].into() });
         // A 4x4 light at z = 8, its normal u x v towards -z (the camera) when `facing`.
         let (u, v) = if facing { ([0.0, 4.0, 0.0], [4.0, 0.0, 0.0]) } else { ([4.0, 0.0, 0.0], [0.0, 4.0, 0.0]) };
         sc.quads.push(Quad { q: [3.0, 3.0, 8.0], u, v, material: light(l, one_sided) });
@@ -114,7 +114,7 @@ fn white_furnace_with_emitters_converges_to_the_emission() {
     let l = 0.8f32;
     let mut sc = empty_scene(Camera::looking([5.0, 5.0, 1.0], [5.0, 5.0, 9.0], 90.0), [0.0; 3]);
     let walls = room(light([l; 3], true));
-    let white = Material::Lambertian { albedo: [1.0; 3] };
+    let white = Material::Lambertian { albedo: [1.0; 3].into() };
     sc.quads =
         walls.into_iter().enumerate().map(|(i, q)| if i < 2 { Quad { material: white, ..q } } else { q }).collect();
     sc.spheres = vec![Sphere { center: [5.0, 5.0, 6.0], radius: 2.0, material: white }];
@@ -325,7 +325,7 @@ proptest! {
         let g = Group {
             rotate_y: angle,
             translate: [0.0; 3],
-            boxes: vec![QuadBox { a: min, b: max, material: Material::Lambertian { albedo: [0.5; 3] } }],
+            boxes: vec![QuadBox { a: min, b: max, material: Material::Lambertian { albedo: [0.5; 3].into() } }],
             ..Group::default()
         };
         let mut sc = empty_scene(Camera::looking([0.0, 0.0, 1.0], [0.0; 3], 40.0), [0.0; 3]);

@@ -27,7 +27,7 @@ fn one_sphere(material: Material, sky: Sky) -> Scene {
 /// the sphere (shadow acne) would turn a sample black.
 #[test]
 fn white_furnace() {
-    let sc = one_sphere(Material::Lambertian { albedo: [1.0; 3] }, Sky::uniform([1.0; 3]));
+    let sc = one_sphere(Material::Lambertian { albedo: [1.0; 3].into() }, Sky::uniform([1.0; 3]));
     for kernel in KERNELS {
         for depth in [2, 50] {
             let img = image(&sc, settings(48, 32, 8, depth, 1), kernel);

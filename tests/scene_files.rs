@@ -165,7 +165,7 @@ fn colour() -> impl Strategy<Value = [f32; 3]> {
 
 fn material() -> impl Strategy<Value = Material> {
     prop_oneof![
-        colour().prop_map(|albedo| Material::Lambertian { albedo }),
+        colour().prop_map(|albedo| Material::Lambertian { albedo: albedo.into() }),
         (colour(), 0f32..=1.0).prop_map(|(albedo, fuzz)| Material::Metal { albedo, fuzz }),
         (1e-3f32..10.0).prop_map(|ior| Material::Dielectric { ior }),
     ]

@@ -9,8 +9,9 @@ use crate::estimator::Estimator;
 use crate::geometry::{Bvh, QuadBvh, Quads, Spheres, Walk};
 use crate::material::{Kind, MaterialTables};
 use crate::plan::{Accel, KindSet, Plan, Prepared, SkyColours};
-use crate::scene::{Background, Camera, Material, Scene};
+use crate::scene::{Background, Camera, Material, Scene, Texture};
 use crate::settings::Settings;
+use crate::texture::{Checker, Noise, Perlin, TexKind, TexRef, TexSet, TextureTables, PERLIN_SEED};
 use glam::DVec3;
 
 /// With at least this many spheres `auto` builds a BVH. Measured with
@@ -42,6 +43,15 @@ fn kind(m: &Material) -> Kind {
     }
 }
 
+/// The texture kind of a lambertian's albedo.
+fn tex_kind(t: &Texture) -> TexKind {
+    match t {
+        Texture::Solid(_) => TexKind::Solid,
+        Texture::Checker { .. } => TexKind::Checker,
+        Texture::Noise { .. } => TexKind::Noise,
+    }
+}
+
 /// The closest-hit search over `quads` quads (none: no search at all):
 /// brute force below the crossover, a tree of their own above it.
 fn choose_quad_accel(choice: AccelChoice, quads: usize, mode: Mode) -> Option<Accel> {
@@ -60,9 +70,21 @@ pub(super) fn plan(scene: &Scene, settings: &Settings, accel: AccelChoice) -> Pl
         }
         Mode::Gradient | Mode::Flat | Mode::Normals => KindSet::default(),
     };
+    // Texture passes run for path tracing only (the debug modes shade flat colours).
+    let mut textures = TexSet::default();
+    if scene.mode == Mode::Path {
+        for m in flat.spheres.iter().map(|s| &s.material).chain(flat.quads.iter().map(|q| &q.material)) {
+            if let Material::Lambertian { albedo } = m {
+                if tex_kind(albedo) != TexKind::Solid {
+                    textures.insert(tex_kind(albedo));
+                }
+            }
+        }
+    }
     Plan {
         mode: scene.mode,
         kinds,
+        textures,
         lens: scene.camera.lens_radius() > 0.0 && scene.mode != Mode::Gradient,
         jitter: settings.spp > 1,
         accel: choose_accel(accel, flat.spheres.len(), scene.mode),
@@ -86,10 +108,27 @@ pub(super) fn view(c: &Camera) -> View {
 /// Lays a validated scene out for the kernels, as `plan` says.
 pub(super) fn prepare(scene: &Scene, settings: Settings, plan: Plan, estimator: Estimator) -> Prepared {
     let mut materials = MaterialTables::default();
+    let mut textures = TextureTables::default();
     let mut spheres = Spheres::default();
     let flat = scene.flatten();
     let mut row_of = |m: &Material| match *m {
-        Material::Lambertian { albedo } => push(&mut materials.lambertian, albedo),
+        Material::Lambertian { albedo } => {
+            let (flat, tex) = match albedo {
+                Texture::Solid(c) => (c, TexRef::default()),
+                Texture::Checker { scale, even, odd } => {
+                    let c = Checker { inv_scale: (1.0 / scale as f64) as f32, even, odd };
+                    (even, TexRef { kind: TexKind::Checker, row: push(&mut textures.checker, c) })
+                }
+                Texture::Noise { scale } => {
+                    if textures.perlin.is_none() {
+                        textures.perlin = Some(Perlin::new(PERLIN_SEED));
+                    }
+                    ([0.5; 3], TexRef { kind: TexKind::Noise, row: push(&mut textures.noise, Noise { scale }) })
+                }
+            };
+            materials.lambertian_tex.push(tex);
+            push(&mut materials.lambertian, flat)
+        }
         Material::Metal { albedo, fuzz } => push(&mut materials.metal, (albedo, fuzz)),
         Material::Dielectric { ior } => push(&mut materials.dielectric, ior),
         Material::DiffuseLight { emit, one_sided } => push(&mut materials.light, (emit, one_sided)),
@@ -139,6 +178,7 @@ pub(super) fn prepare(scene: &Scene, settings: Settings, plan: Plan, estimator: 
         settings,
         spheres,
         materials,
+        textures,
         camera,
         sky: SkyColours {
             horizon: scene.sky.horizon,

@@ -7,8 +7,9 @@ pub mod scalar;
 pub mod wavefront;
 
 use crate::choice::KernelChoice;
-use crate::plan::SkyColours;
+use crate::plan::{Prepared, SkyColours};
 use crate::real::Real;
+use crate::texture::{checker, marble, TexKind};
 use crate::vec3::V3;
 use serde::Serialize;
 
@@ -108,4 +109,20 @@ pub fn normal_colour<R: Real>(n: V3<R>) -> V3<R> {
 pub fn gradient(x: u32, y: u32, width: u32, height: u32) -> [f32; 3] {
     let j = height - 1 - y;
     [x as f32 / width as f32, j as f32 / height as f32, 0.2]
+}
+
+/// The albedo of texture kind `kind` (not `Solid`) at the hit points `p`;
+/// lane k reads row `row(k)` of the kind's table. One function for the
+/// scalar kernel and the wavefront's texture passes.
+#[inline(always)]
+pub(crate) fn texture_albedo<R: Real>(prep: &Prepared, kind: TexKind, p: V3<R>, row: impl Fn(usize) -> usize) -> V3<R> {
+    let t = &prep.textures;
+    match kind {
+        TexKind::Checker => checker(p, |k| t.checker[row(k)]),
+        TexKind::Noise => {
+            let lattice = t.perlin.as_ref().expect("a scene with noise textures has a Perlin lattice");
+            marble(p, R::from_fn(|k| t.noise[row(k)].scale), lattice)
+        }
+        TexKind::Solid => unreachable!("solid colours have no texture pass"),
+    }
 }

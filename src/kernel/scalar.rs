@@ -1,7 +1,7 @@
 //! The reference path tracer: one path at a time, iterative, straightforward.
 //! Every formula comes from the width-generic modules, instantiated at `f32`.
 
-use super::{background, normal_colour};
+use super::{background, normal_colour, texture_albedo};
 use crate::choice::Mode;
 use crate::estimator::{roulette, roulette_applies};
 use crate::film::TileFilm;
@@ -10,6 +10,7 @@ use crate::material::{dielectric, emission, lambertian, metal, Kind};
 use crate::plan::Prepared;
 use crate::probe::{PathId, Probe};
 use crate::sampling::{layout, PathSampler, Stream};
+use crate::texture::TexKind;
 use crate::vec3::V3;
 use std::ops::Range;
 
@@ -80,7 +81,14 @@ fn scatter(
     let m = &prep.materials;
     rng.seek(layout::scatter(depth));
     Some(match kind {
-        Kind::Lambertian => (lambertian(srf.n, rng), m.lambertian[row]),
+        Kind::Lambertian => {
+            let tex = m.lambertian_tex[row];
+            let albedo = match tex.kind {
+                TexKind::Solid => m.lambertian[row],
+                kind => texture_albedo(prep, kind, srf.p, |_| tex.row as usize).to_array(),
+            };
+            (lambertian(srf.n, rng), albedo)
+        }
         Kind::Metal => {
             let (albedo, fuzz) = m.metal[row];
             let (dir, alive) = metal(d, srf.n, fuzz, rng);

@@ -11,6 +11,8 @@
 //!     misses:    W contiguous paths at a time, throughput x background (sky or constant) -> results
 //!     classify:  each path that hit joins the queue of its hit's material kind
 //!     light pass (scenes with lights): throughput x emission -> the result; the path ends
+//!     texture passes (scenes with textures): one per texture kind, over the
+//!         lambertian hits of that kind, writing each path's albedo
 //!     one scatter pass per material kind the scene uses (W paths at a time, gathered)
 //!     compaction: survivors are appended to the next bounce's arrays
 //! add results to the film in sample order
@@ -24,7 +26,7 @@
 //! closest-hit tie rule is the same.
 //! Memory is bounded: a workspace holds at most `MAX_PATHS` paths.
 
-use super::{background, normal_colour};
+use super::{background, normal_colour, texture_albedo};
 use crate::choice::Mode;
 use crate::estimator::{roulette, roulette_applies};
 use crate::film::TileFilm;
@@ -34,6 +36,7 @@ use crate::plan::{KindSet, Prepared};
 use crate::probe::{PathId, Probe, Stage};
 use crate::real::{U32Lanes, Wide, MAX_LANES};
 use crate::sampling::{layout, PathSampler, Stream};
+use crate::texture::TexKind;
 use crate::vec3::V3;
 use std::ops::Range;
 
@@ -66,6 +69,9 @@ fn arr<T: Copy + std::fmt::Debug>(x: T) -> Arr<T> {
 /// one-path-at-a-time classification of scenes with quads fills this queue
 /// (branch-free) and nothing reads it.
 const MISS_QUEUE: usize = Kind::ALL.len();
+
+/// The texture queues' count: one per texture kind with a pass (`TexKind as usize - 1`).
+const TEX_QUEUES: usize = TexKind::PASSES.len();
 
 /// Path state, structure of arrays.
 struct Paths {
@@ -153,6 +159,11 @@ pub struct Workspace {
     queue: Option<[Arr<u32>; MISS_QUEUE + 1]>,
     /// Each path's colour, by its slot.
     result: Arr<[f32; 3]>,
+    /// Scenes with textures: the albedo of each textured lambertian hit, by
+    /// its index in `cur`, written by the texture passes, read by the
+    /// lambertian pass; and the texture queues.
+    albedo: [Arr<f32>; 3],
+    tex_queue: Option<[Arr<u32>; TEX_QUEUES]>,
     /// The tile's pixels (row-major local indices) that still take samples.
     active: Vec<u32>,
     /// Per active pixel, for the camera rays of a round: its coordinates and
@@ -173,6 +184,8 @@ impl Default for Workspace {
             t: arr(0.0),
             queue: Some(std::array::from_fn(|_| arr(0))),
             result: arr([0.0; 3]),
+            albedo: [arr(0.0), arr(0.0), arr(0.0)],
+            tex_queue: Some(std::array::from_fn(|_| arr(0))),
             active: Vec::with_capacity(MAX_PATHS),
             pixel_xy: Vec::with_capacity(MAX_PATHS),
             pixel_words: Vec::with_capacity(MAX_PATHS),
@@ -422,9 +435,12 @@ fn bounce<W: Wide, P: Probe, S: PathSampler>(
                     write_results(ws, idx, active, c);
                 });
             }
+            Mode::Path if kind == Kind::Lambertian && !prep.plan.textures.is_empty() => {
+                textured_lambertian_pass::<W, P, S>(prep, sampler, ws, q, qlen, depth, probe);
+            }
             Mode::Path if prep.plan.kinds.contains(kind) => {
                 for_packets::<W, P>(q, qlen, probe, |idx, active, probe| {
-                    scatter::<W, P, S>(prep, sampler, ws, kind, depth, idx, active, probe)
+                    scatter::<W, P, S>(prep, sampler, ws, kind, depth, idx, active, false, probe)
                 });
             }
             Mode::Path => debug_assert!(qlen == 0, "the plan left out a kind that was hit"),
@@ -474,6 +490,66 @@ fn shade_misses<W: Wide>(prep: &Prepared, ws: &mut Workspace, n: usize) {
             let slot = W::load_u_pow2(&ws.cur.slot, i);
             write_lanes::<W>(&mut ws.result, slot, missed, c);
         }
+    }
+}
+
+/// The lambertian queue of a scene with textures: the texture passes (one
+/// per texture kind the plan lists, over the lanes that share it: each
+/// writes its paths' albedo), then the lambertian scatter pass, which reads
+/// the written albedo where the hit's material is textured. Out of line, so
+/// that a scene without textures runs the bounce it always ran.
+#[inline(never)]
+#[allow(clippy::too_many_arguments)]
+fn textured_lambertian_pass<W: Wide, P: Probe, S: PathSampler>(
+    prep: &Prepared,
+    sampler: S,
+    ws: &mut Workspace,
+    queue: &Arr<u32>,
+    len: usize,
+    depth: u32,
+    probe: &mut P,
+) {
+    let mut tq = ws.tex_queue.take().expect("the texture queues are put back after every pass");
+    let mut tlen = [0usize; TEX_QUEUES];
+    let m = &prep.materials;
+    for &i in &queue[..len] {
+        let tex = m.lambertian_tex[material_row(prep, ws.hit[i as usize & MASK])].kind;
+        if tex != TexKind::Solid {
+            let q = tex as usize - 1;
+            tq[q][tlen[q] & MASK] = i;
+            tlen[q] += 1;
+        }
+    }
+    for kind in prep.plan.textures.iter() {
+        let q = kind as usize - 1;
+        // The texture passes are not observed by probes: their lanes are the
+        // lambertian pass's, which reports them.
+        for_packets::<W, ()>(&tq[q], tlen[q], &mut (), |idx, active, _| {
+            let Hits { srf, .. } = surfaces::<W, ()>(prep, ws, idx, active, &mut ());
+            let hits = W::gather_u_pow2(&ws.hit, idx);
+            let row = |k: usize| m.lambertian_tex[material_row(prep, W::lane_u(hits, k))].row as usize;
+            let c = texture_albedo(prep, kind, srf.p, row);
+            for (k, &i) in idx.as_ref().iter().enumerate().take(active) {
+                let i = i as usize & MASK;
+                ws.albedo[0][i] = c.x.lane(k);
+                ws.albedo[1][i] = c.y.lane(k);
+                ws.albedo[2][i] = c.z.lane(k);
+            }
+        });
+    }
+    ws.tex_queue = Some(tq);
+    for_packets::<W, P>(queue, len, probe, |idx, active, probe| {
+        scatter::<W, P, S>(prep, sampler, ws, Kind::Lambertian, depth, idx, active, true, probe)
+    });
+}
+
+/// The material row of the primitive of hit index `h` (not `MISS`).
+#[inline(always)]
+fn material_row(prep: &Prepared, h: u32) -> usize {
+    if h < QUAD_BASE {
+        prep.spheres.row[h as usize] as usize
+    } else {
+        prep.quads.row[(h - QUAD_BASE) as usize] as usize
     }
 }
 
@@ -607,9 +683,14 @@ fn scatter<W: Wide, P: Probe, S: PathSampler>(
     depth: u32,
     idx: &W::Idx,
     active: usize,
+    textured: bool,
     probe: &mut P,
 ) {
     let Hits { d, srf, albedo, param } = surfaces::<W, P>(prep, ws, idx, active, probe);
+    // A textured lambertian's record has parameter 1: its albedo is the one
+    // its texture pass wrote.
+    let albedo =
+        if textured { V3::select(param.gt(W::splat(0.0)), v3_gather::<W>(&ws.albedo, idx), albedo) } else { albedo };
     let cur = &ws.cur;
     let mut rng = sampler.lanes::<W>(std::array::from_fn(|w| {
         if w < S::WORDS {

@@ -176,6 +176,39 @@ pub fn opt_vec3<'de, D: Deserializer<'de>>(d: D) -> Result<Option<[f32; 3]>, D::
     Option::<V3>::deserialize(d).map(|o| o.map(|v| v.0))
 }
 
+/// A texture: a colour `[r, g, b]`, or a map with a `type` (see [`super::Texture`]).
+struct TextureVisitor;
+
+impl<'de> Visitor<'de> for TextureVisitor {
+    type Value = super::Texture;
+    fn expecting(&self, f: &mut fmt::Formatter) -> fmt::Result {
+        f.write_str("a colour [r, g, b] or a texture {\"type\": \"checker\" or \"noise\", ...}")
+    }
+    fn visit_seq<A: SeqAccess<'de>>(self, seq: A) -> Result<Self::Value, A::Error> {
+        Vec3Visitor.visit_seq(seq).map(super::Texture::Solid)
+    }
+    fn visit_map<A: MapAccess<'de>>(self, map: A) -> Result<Self::Value, A::Error> {
+        let fields = super::TextureFields::deserialize(de::value::MapAccessDeserializer::new(map))?;
+        super::Texture::try_from(fields).map_err(de::Error::custom)
+    }
+}
+
+pub fn texture<'de, D: Deserializer<'de>>(d: D) -> Result<super::Texture, D::Error> {
+    d.deserialize_any(TextureVisitor)
+}
+
+struct Tex(super::Texture);
+
+impl<'de> de::Deserialize<'de> for Tex {
+    fn deserialize<D: Deserializer<'de>>(d: D) -> Result<Self, D::Error> {
+        texture(d).map(Tex)
+    }
+}
+
+pub fn opt_texture<'de, D: Deserializer<'de>>(d: D) -> Result<Option<super::Texture>, D::Error> {
+    Option::<Tex>::deserialize(d).map(|o| o.map(|t| t.0))
+}
+
 /// A list refused as soon as it holds more than `max` entries (memory is
 /// bounded by the limit, not by the file).
 struct BoundedVisitor<T> {

@@ -141,7 +141,7 @@ mod tests {
     use super::*;
 
     fn white() -> Material {
-        Material::Lambertian { albedo: [0.73; 3] }
+        Material::Lambertian { albedo: [0.73; 3].into() }
     }
 
     #[test]

@@ -30,8 +30,9 @@ use serde::{Deserialize, Serialize};
 #[derive(Serialize, Deserialize, Clone, Copy, Debug, PartialEq)]
 #[serde(tag = "type", rename_all = "lowercase", try_from = "MaterialFields")]
 pub enum Material {
+    /// The albedo is a colour `[r, g, b]` or a texture ([`Texture`]).
     Lambertian {
-        albedo: [f32; 3],
+        albedo: Texture,
     },
     Metal {
         albedo: [f32; 3],
@@ -52,6 +53,111 @@ pub enum Material {
     },
 }
 
+/// A lambertian's albedo: a colour, written `[r, g, b]` (the book's
+/// `solid_color`), or a texture written `{"type": "checker", "scale": s,
+/// "even": [r, g, b], "odd": [r, g, b]}` (the book's 3-D spatial
+/// `checker_texture` of two colours: the parity of the sum of
+/// `floor(p / scale)` over the axes picks `even` or `odd`) or `{"type":
+/// "noise", "scale": s}` (the book's `noise_texture`: Perlin marble,
+/// `0.5 (1 + sin(scale z + 10 turb(p)))`).
+#[derive(Clone, Copy, Debug, PartialEq)]
+pub enum Texture {
+    Solid([f32; 3]),
+    Checker { scale: f32, even: [f32; 3], odd: [f32; 3] },
+    Noise { scale: f32 },
+}
+
+impl From<[f32; 3]> for Texture {
+    fn from(c: [f32; 3]) -> Self {
+        Texture::Solid(c)
+    }
+}
+
+impl Texture {
+    /// The texture's `type`, as scene files write it (`solid` for a colour).
+    pub fn type_name(&self) -> &'static str {
+        match self {
+            Texture::Solid(_) => "solid",
+            Texture::Checker { .. } => "checker",
+            Texture::Noise { .. } => "noise",
+        }
+    }
+}
+
+impl Serialize for Texture {
+    fn serialize<S: serde::Serializer>(&self, s: S) -> std::result::Result<S::Ok, S::Error> {
+        use serde::ser::SerializeStruct;
+        match self {
+            Texture::Solid(c) => c.serialize(s),
+            Texture::Checker { scale, even, odd } => {
+                let mut m = s.serialize_struct("Texture", 4)?;
+                m.serialize_field("type", "checker")?;
+                m.serialize_field("scale", scale)?;
+                m.serialize_field("even", even)?;
+                m.serialize_field("odd", odd)?;
+                m.end()
+            }
+            Texture::Noise { scale } => {
+                let mut m = s.serialize_struct("Texture", 2)?;
+                m.serialize_field("type", "noise")?;
+                m.serialize_field("scale", scale)?;
+                m.end()
+            }
+        }
+    }
+}
+
+impl<'de> Deserialize<'de> for Texture {
+    fn deserialize<D: serde::Deserializer<'de>>(d: D) -> std::result::Result<Self, D::Error> {
+        de::texture(d)
+    }
+}
+
+/// A texture as a file writes it: every field of every kind, checked against
+/// its `type` afterwards.
+#[derive(Deserialize)]
+#[serde(deny_unknown_fields)]
+pub(crate) struct TextureFields {
+    #[serde(rename = "type")]
+    kind: TextureType,
+    #[serde(default, deserialize_with = "de::opt_f32")]
+    scale: Option<f32>,
+    #[serde(default, deserialize_with = "de::opt_vec3")]
+    even: Option<[f32; 3]>,
+    #[serde(default, deserialize_with = "de::opt_vec3")]
+    odd: Option<[f32; 3]>,
+}
+
+/// A texture's `type` as files write it.
+#[derive(Deserialize, Clone, Copy, Debug, PartialEq, Eq)]
+#[serde(rename_all = "snake_case")]
+enum TextureType {
+    Checker,
+    Noise,
+}
+
+impl TryFrom<TextureFields> for Texture {
+    type Error = String;
+    fn try_from(t: TextureFields) -> std::result::Result<Self, String> {
+        let need = |v: Option<[f32; 3]>, f: &str, name: &str| {
+            v.ok_or_else(|| format!("missing field `{f}` for a {name} texture"))
+        };
+        let scale = |name: &str| t.scale.ok_or_else(|| format!("missing field `scale` for a {name} texture"));
+        match t.kind {
+            TextureType::Checker => Ok(Texture::Checker {
+                scale: scale("checker")?,
+                even: need(t.even, "even", "checker")?,
+                odd: need(t.odd, "odd", "checker")?,
+            }),
+            TextureType::Noise => match (t.even.is_some(), t.odd.is_some()) {
+                (false, false) => Ok(Texture::Noise { scale: scale("noise")? }),
+                (true, _) => Err("unknown field `even` for a noise texture, expected `scale`".into()),
+                (_, true) => Err("unknown field `odd` for a noise texture, expected `scale`".into()),
+            },
+        }
+    }
+}
+
 fn is_false(b: &bool) -> bool {
     !*b
 }
@@ -63,8 +169,8 @@ fn is_false(b: &bool) -> bool {
 struct MaterialFields {
     #[serde(rename = "type")]
     kind: MaterialType,
-    #[serde(default, deserialize_with = "de::opt_vec3")]
-    albedo: Option<[f32; 3]>,
+    #[serde(default, deserialize_with = "de::opt_texture")]
+    albedo: Option<Texture>,
     #[serde(default, deserialize_with = "de::opt_f32")]
     fuzz: Option<f32>,
     #[serde(default, deserialize_with = "de::opt_f32")]
@@ -94,7 +200,18 @@ impl TryFrom<MaterialFields> for Material {
                 (Material::Lambertian { albedo: need(m.albedo, "albedo", name)? }, &["albedo"][..])
             }
             MaterialType::Metal => (
-                Material::Metal { albedo: need(m.albedo, "albedo", name)?, fuzz: need(m.fuzz, "fuzz", name)? },
+                Material::Metal {
+                    albedo: match need(m.albedo, "albedo", name)? {
+                        Texture::Solid(c) => c,
+                        t => {
+                            return Err(format!(
+                                "a metal's `albedo` must be a colour [r, g, b], got a {} texture (textures are for lambertian materials)",
+                                t.type_name()
+                            ))
+                        }
+                    },
+                    fuzz: need(m.fuzz, "fuzz", name)?,
+                },
                 &["albedo", "fuzz"][..],
             ),
             MaterialType::Dielectric => (Material::Dielectric { ior: need(m.ior, "ior", name)? }, &["ior"][..]),

@@ -1,6 +1,6 @@
 //! A preset for every image of the seed (SEED-NOTES.md), with the book's physics.
 
-use super::{Background, Camera, Group, Material, Mode, Quad, QuadBox, RenderTable, Scene, Sky, Sphere};
+use super::{Background, Camera, Group, Material, Mode, Quad, QuadBox, RenderTable, Scene, Sky, Sphere, Texture};
 use crate::real::Real;
 use rand_core::{Rng, SeedableRng};
 use rand_xoshiro::Xoshiro128Plus;
@@ -40,6 +40,9 @@ impl PresetGroup {
 }
 
 const fn lam(albedo: [f32; 3]) -> Material {
+    Material::Lambertian { albedo: Texture::Solid(albedo) }
+}
+const fn lam_tex(albedo: Texture) -> Material {
     Material::Lambertian { albedo }
 }
 const fn metal(albedo: [f32; 3], fuzz: f32) -> Material {
@@ -257,16 +260,42 @@ fn nw_quads() -> Scene {
     s
 }
 
-/// The Next Week, `simple_light()`, with grey Lambertian spheres in place of
-/// the Perlin-noise texture (textures come with part 2).
+/// The Next Week's camera of its sphere scenes: vfov 20 from (13, 2, 3) to
+/// the origin, no defocus, 16:9 at 400 wide, 100 spp, depth 50, daylight.
+fn nw_daylight_spheres() -> Scene {
+    next_week(Camera::looking([13.0, 2.0, 3.0], [0.0; 3], 20.0), NW_DAYLIGHT, settings(400, 225, 100, 50))
+}
+
+/// The Next Week, `checkered_spheres()`: two spheres of radius 10 at y = +-10
+/// under the book's 3-D checker (scale 0.32, v4 `dev`).
+fn nw_checkered_spheres() -> Scene {
+    let mut s = nw_daylight_spheres();
+    let checker = lam_tex(Texture::Checker { scale: 0.32, even: [0.2, 0.3, 0.1], odd: [0.9, 0.9, 0.9] });
+    s.spheres = vec![sphere([0.0, -10.0, 0.0], 10.0, checker), sphere([0.0, 10.0, 0.0], 10.0, checker)];
+    s
+}
+
+/// The two marble spheres of `perlin_spheres()` and `simple_light()`: the
+/// book's `noise_texture(4)`.
+fn perlin_spheres() -> Vec<Sphere> {
+    let marble = lam_tex(Texture::Noise { scale: 4.0 });
+    vec![sphere([0.0, -1000.0, 0.0], 1000.0, marble), sphere([0.0, 2.0, 0.0], 2.0, marble)]
+}
+
+/// The Next Week, `perlin_spheres()`: a ground and a sphere of Perlin marble.
+fn nw_perlin_spheres() -> Scene {
+    let mut s = nw_daylight_spheres();
+    s.spheres = perlin_spheres();
+    s
+}
+
+/// The Next Week, `simple_light()`: the Perlin spheres lit by a sphere light
+/// and a quad light, on black.
 fn nw_simple_light() -> Scene {
     let mut s =
         next_week(Camera::looking([26.0, 3.0, 6.0], [0.0, 2.0, 0.0], 20.0), [0.0; 3], settings(400, 225, 100, 50));
-    s.spheres = vec![
-        sphere([0.0, -1000.0, 0.0], 1000.0, lam([0.5, 0.5, 0.5])),
-        sphere([0.0, 2.0, 0.0], 2.0, lam([0.5, 0.5, 0.5])),
-        sphere([0.0, 7.0, 0.0], 2.0, light([4.0; 3])),
-    ];
+    s.spheres = perlin_spheres();
+    s.spheres.push(sphere([0.0, 7.0, 0.0], 2.0, light([4.0; 3])));
     s.quads = vec![quad([3.0, 1.0, -2.0], [2.0, 0.0, 0.0], [0.0, 2.0, 0.0], light([4.0; 3]))];
     s
 }
@@ -436,6 +465,18 @@ static PRESETS: &[Preset] = &[
         build: final_scene,
     },
     Preset {
+        name: "nw-checkered-spheres",
+        description: "The Next Week: two spheres under the 3-D checker texture (scale 0.32)",
+        group: PresetGroup::NextWeek,
+        build: nw_checkered_spheres,
+    },
+    Preset {
+        name: "nw-perlin-spheres",
+        description: "The Next Week: a ground and a sphere of Perlin marble (noise scale 4)",
+        group: PresetGroup::NextWeek,
+        build: nw_perlin_spheres,
+    },
+    Preset {
         name: "nw-quads",
         description: "The Next Week: five coloured quads (400x400, 100 spp)",
         group: PresetGroup::NextWeek,
@@ -443,7 +484,7 @@ static PRESETS: &[Preset] = &[
     },
     Preset {
         name: "nw-simple-light",
-        description: "The Next Week: a sphere light and a quad light over two spheres, grey (the book's Perlin texture comes with part 2)",
+        description: "The Next Week: a sphere light and a quad light over the two Perlin marble spheres, on black",
         group: PresetGroup::NextWeek,
         build: nw_simple_light,
     },

@@ -3,7 +3,7 @@
 //! an error names the field. The kernels' own check (that the f32 camera is
 //! computable at every image size) is the job module's, which runs both once.
 
-use super::{Background, Camera, Group, Material, Mode, Quad, QuadBox, Scene, Sphere};
+use super::{Background, Camera, Group, Material, Mode, Quad, QuadBox, Scene, Sphere, Texture};
 use crate::error::{Error, Result};
 use crate::limits::{self, MAX_QUADS, MAX_SPHERES};
 
@@ -312,10 +312,32 @@ impl Sphere {
     }
 }
 
+impl Texture {
+    fn validate(&self, field: &str) -> Result<()> {
+        let scale_in = |scale: f32, lo: f32, hi: f32| {
+            let f = format!("{field}.scale");
+            finite(&f, scale)?;
+            if !(lo..=hi).contains(&scale) {
+                return Err(Error::invalid(f, format!("must be in [{lo:e}, {hi:e}], got {scale}")));
+            }
+            Ok(())
+        };
+        match *self {
+            Texture::Solid(c) => colour(field, c),
+            Texture::Checker { scale, even, odd } => {
+                scale_in(scale, limits::MIN_TEXTURE_SCALE, limits::MAX_TEXTURE_SCALE)?;
+                colour(&format!("{field}.even"), even)?;
+                colour(&format!("{field}.odd"), odd)
+            }
+            Texture::Noise { scale } => scale_in(scale, 0.0, limits::MAX_TEXTURE_SCALE),
+        }
+    }
+}
+
 impl Material {
     fn validate(&self, field: &dyn Fn(&str) -> String) -> Result<()> {
         match *self {
-            Material::Lambertian { albedo } => colour(&field("albedo"), albedo),
+            Material::Lambertian { albedo } => albedo.validate(&field("albedo")),
             Material::Metal { albedo, fuzz } => {
                 colour(&field("albedo"), albedo)?;
                 finite(&field("fuzz"), fuzz)?;

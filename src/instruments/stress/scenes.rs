@@ -18,7 +18,7 @@ use crate::plan::Prepared;
 use crate::probe::{PathId, Probe};
 use crate::real::Real;
 use crate::render::{render, render_probed, Rendered};
-use crate::scene::{self, Material, Scene};
+use crate::scene::{self, Material, Scene, Texture};
 use crate::vec3::V3;
 use glam::DVec3;
 use std::collections::HashMap;
@@ -326,7 +326,7 @@ pub(super) fn render_with(
 pub(super) fn horizon_check(scene: &Scene, prep: &Prepared, img: &Image) -> Result<(f64, usize, [f64; 3], [f64; 3])> {
     let sph = scene.spheres.first().ok_or_else(|| Error::Input("stress-horizon has no sphere".into()))?;
     let albedo = match sph.material {
-        Material::Lambertian { albedo } => albedo,
+        Material::Lambertian { albedo: Texture::Solid(albedo) } => albedo,
         _ => return Err(Error::Input("stress-horizon's ground must be lambertian".into())),
     };
     let c = DVec3::from_array(sph.center.map(f64::from));
