@@ -125,27 +125,26 @@ impl TileFilm {
             let mut i = j;
             while let Some(&c) = samples.get(i) {
                 i += na;
-                if MOMENTS {
-                    // Every accepted sample, in sample order (a rejected one
-                    // has a NaN, Inf or huge channel: left out).
-                    if c.iter().all(|x| (x.abs() as f64) < accum::SAMPLE_LIMIT) {
-                        for k in 0..3 {
-                            let v = c[k] as f64;
-                            sq[k] += v * v;
+                let accepted = run.try_add(c)
+                    || match accum::to_fixed(c) {
+                        Some(q) => {
+                            for k in 0..3 {
+                                sum[k] += q[k] as i128;
+                            }
+                            n += 1;
+                            true
                         }
-                    }
-                }
-                if run.try_add(c) {
-                    continue;
-                }
-                match accum::to_fixed(c) {
-                    Some(q) => {
-                        for k in 0..3 {
-                            sum[k] += q[k] as i128;
+                        None => {
+                            rejected += 1;
+                            false
                         }
-                        n += 1;
+                    };
+                // Every accepted sample's squares, in sample order.
+                if MOMENTS && accepted {
+                    for k in 0..3 {
+                        let v = c[k] as f64;
+                        sq[k] += v * v;
                     }
-                    None => rejected += 1,
                 }
             }
             let r = run.sums();
