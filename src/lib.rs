@@ -82,7 +82,7 @@ pub use choice::{AccelChoice, KernelChoice, Mode};
 pub use error::{Error, Result};
 pub use estimator::{Adaptive, Roulette, ADAPTIVE_MIN_SPP, ROULETTE_AFTER_RAYS};
 pub use film::Image;
-pub use job::{Job, Overrides, RenderOptions, DEFAULT_TILE};
+pub use job::{Job, Overrides, RenderOptions, DEFAULT_TILE, IMAGES_ENV};
 pub use kernel::{build_description, isa, Kernel, HAS_SIMD16};
 pub use render::{render, render_counted, render_probed, Progress, Rendered, Stats};
 pub use sampling::Sampler;

@@ -44,6 +44,17 @@ pub const MAX_QUADS: usize = 1 << 20;
 /// The most groups (instances) a scene file may hold.
 pub const MAX_GROUPS: usize = 1 << 16;
 
+/// The longest image file name a scene may give (bytes).
+pub const MAX_PATH_BYTES: usize = 4096;
+/// The most distinct image files a scene may name.
+pub const MAX_IMAGE_TEXTURES: usize = 64;
+/// Largest image texture file read (bytes).
+pub const MAX_TEXTURE_FILE_BYTES: u64 = 64 << 20;
+/// Most texels an image texture may have: 2^24 (a 4096 x 4096 map; the
+/// book's earth is 1024 x 512). Each texel takes 12 bytes prepared (linear
+/// f32 RGB), 192 MiB at the limit; the decoder is held to the same bound.
+pub const MAX_TEXELS: u64 = 1 << 24;
+
 /// The world-length range where the kernels' intersection error bounds hold,
 /// the range `rtow stress` measures (radius and distance 1e-4 .. 1e6; its
 /// `stress-tiny` preset has a hollow sphere of radius 9e-5): every

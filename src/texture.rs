@@ -22,8 +22,14 @@
 //!   `random_double()` in the order its program happens to call it, which
 //!   cannot be reproduced (and need not be: the pattern is the same
 //!   process, not the same picture).
+//! * **Image**: the book's `image_texture`, the nearest texel at the hit's
+//!   (u, v): a sphere's from its outward normal (`u = (atan2(-z, x) + π) /
+//!   2π`, `v = acos(-y) / π`), a quad's its (alpha, beta); u and v clamped to
+//!   [0, 1], v flipped (row 0 is the image's top). Texels are linearized as
+//!   the book's fixed v4.0.x pipeline does, one table entry per byte value
+//!   ([`linear_byte`]).
 
-use crate::math::sin;
+use crate::math::{acos, atan2, sin};
 use crate::real::Real;
 use crate::vec3::V3;
 use rand_core::{Rng, SeedableRng};
@@ -39,16 +45,18 @@ pub enum TexKind {
     Solid = 0,
     Checker = 1,
     Noise = 2,
+    Image = 3,
 }
 
 impl TexKind {
     /// The kinds that have a pass, in pass order.
-    pub const PASSES: [TexKind; 2] = [TexKind::Checker, TexKind::Noise];
+    pub const PASSES: [TexKind; 3] = [TexKind::Checker, TexKind::Noise, TexKind::Image];
     pub fn name(self) -> &'static str {
         match self {
             TexKind::Solid => "solid",
             TexKind::Checker => "checker",
             TexKind::Noise => "noise",
+            TexKind::Image => "image",
         }
     }
 }
@@ -146,6 +154,49 @@ impl Perlin {
     }
 }
 
+/// An image texture's texels, linear RGB, row 0 the image's top row.
+#[derive(Clone, Debug, PartialEq)]
+pub struct ImageTex {
+    pub width: u32,
+    pub height: u32,
+    /// `width * height` texels, row by row.
+    pub texels: Vec<[f32; 3]>,
+}
+
+impl ImageTex {
+    /// The texture of 8-bit RGB `bytes` (`3 width height` of them, row by
+    /// row from the top), each byte linearized by [`linear_byte`].
+    /// `None` when the sizes disagree or the image is empty.
+    pub fn from_rgb8(width: u32, height: u32, bytes: &[u8]) -> Option<ImageTex> {
+        let n = (width as usize).checked_mul(height as usize)?;
+        if n == 0 || bytes.len() != n.checked_mul(3)? {
+            return None;
+        }
+        let lut: [f32; 256] = std::array::from_fn(|b| linear_byte(b as u8));
+        let texels =
+            bytes.chunks_exact(3).map(|c| [lut[c[0] as usize], lut[c[1] as usize], lut[c[2] as usize]]).collect();
+        Some(ImageTex { width, height, texels })
+    }
+}
+
+/// The book's linear value of an 8-bit component `b` (its fixed v4.0.x
+/// pipeline): stb_image's `(b / 255)^2.2` as a float, back to a byte as
+/// `rtw_image::float_to_byte` does (`<= 0`: 0, `>= 1`: 255, else the
+/// truncation of `256 v`), divided by 255. So 255 stays 1 (the March-2024
+/// code, without the clamp, turned it into 256, out of a byte's range: the
+/// book's bug on pure white), and the texels take the book's 256 values.
+pub fn linear_byte(b: u8) -> f32 {
+    let v = (b as f32 / 255.0).powf(2.2);
+    let byte = if v <= 0.0 {
+        0.0
+    } else if v >= 1.0 {
+        255.0
+    } else {
+        (256.0 * v as f64).floor()
+    };
+    (byte / 255.0) as f32
+}
+
 /// Every texture table a scene needs (empty ones for a scene without textures).
 #[derive(Clone, Debug, Default)]
 pub struct TextureTables {
@@ -153,6 +204,8 @@ pub struct TextureTables {
     pub noise: Vec<Noise>,
     /// Present when some material uses a noise texture.
     pub perlin: Option<Perlin>,
+    /// Each image texture row's image (rows naming one file share it).
+    pub image: Vec<std::sync::Arc<ImageTex>>,
 }
 
 /// The checker's colour at `p`; lane k reads its parameters from `row(k)`.
@@ -165,6 +218,48 @@ pub fn checker<R: Real>(p: V3<R>, row: impl Fn(usize) -> Checker) -> V3<R> {
         V3::new(R::from_fn(|k| f(&row(k))[0]), R::from_fn(|k| f(&row(k))[1]), R::from_fn(|k| f(&row(k))[2]))
     };
     V3::select(even, col(|c| c.even), col(|c| c.odd))
+}
+
+/// The nearest texel of `img(k)` at (`u`, `v`) for each lane k (the book's
+/// `image_texture::value`): u and v clamped to [0, 1], v flipped,
+/// `i = floor(u W)` and `j = floor((1 - v) H)` clamped to the last column
+/// and row (u = 1 would be one past it).
+#[inline(always)]
+pub fn image_texel<'a, R: Real>(u: R, v: R, img: impl Fn(usize) -> &'a ImageTex) -> V3<R> {
+    let (zero, one) = (R::splat(0.0), R::splat(1.0));
+    let u = u.max(zero).min(one);
+    let v = one - v.max(zero).min(one);
+    let x = u * R::from_fn(|k| img(k).width as f32);
+    let y = v * R::from_fn(|k| img(k).height as f32);
+    let mut c = [[0.0f32; 3]; crate::real::MAX_LANES];
+    for (k, c) in c.iter_mut().enumerate().take(R::LANES) {
+        let t = img(k);
+        // `as` saturates (and takes NaN to 0); `min` keeps the index in the image.
+        let i = (x.lane(k) as usize).min(t.width as usize - 1);
+        let j = (y.lane(k) as usize).min(t.height as usize - 1);
+        *c = t.texels[j * t.width as usize + i];
+    }
+    V3::new(R::from_fn(|k| c[k][0]), R::from_fn(|k| c[k][1]), R::from_fn(|k| c[k][2]))
+}
+
+/// A sphere's texture coordinates (the book's `get_sphere_uv`) at the
+/// outward unit normal `n`: `u = (atan2(-z, x) + π) / 2π`, `v = acos(-y) / π`
+/// (y clamped to [-1, 1], which rounding can leave).
+#[inline(always)]
+pub fn sphere_uv<R: Real>(n: V3<R>) -> (R, R) {
+    use std::f32::consts::PI;
+    let one = R::splat(1.0);
+    let phi = atan2(-n.z, n.x) + R::splat(PI);
+    let theta = acos((-n.y).max(-one).min(one));
+    (phi * R::splat(0.5 / PI), theta * R::splat(1.0 / PI))
+}
+
+/// A quad's texture coordinates (the book's (alpha, beta)) at `p`:
+/// `alpha = w . ((p - q) x v)`, `beta = w . (u x (p - q))`, `w = n / (n . n)`.
+#[inline(always)]
+pub fn quad_uv<R: Real>(p: V3<R>, q: V3<R>, u: V3<R>, v: V3<R>, w: V3<R>) -> (R, R) {
+    let pq = p - q;
+    (w.dot(pq.cross(v)), w.dot(u.cross(pq)))
 }
 
 /// The lattice integer of each lane of `f` (a floor), wrapped to 0..256 as

@@ -6,7 +6,7 @@
 mod bad_input;
 mod common;
 
-use common::{failure, listing, rtow, Run};
+use common::{failure, listing, rtow, rtow_env, self_contained, test_images, Run};
 use rtow::scene;
 use rtow::{Image, Job, KernelChoice, Overrides, RenderOptions};
 
@@ -465,14 +465,16 @@ fn exported_presets_render_the_identical_image() {
     let cli_render = |spec: &str, kernel: &str| -> (Vec<u8>, serde_json::Value) {
         let mut args = vec!["render", spec, "--kernel", kernel, "-o", "cli.png", "--stats-json", "cli.json"];
         args.extend_from_slice(&SMALL);
-        success(&rtow(d, &args), &format!("render {spec} --kernel {kernel}"));
+        // Presets that name image files read them from RTOW_IMAGES (generated maps).
+        let images = test_images().to_str().unwrap();
+        success(&rtow_env(d, &args, &[("RTOW_IMAGES", images)]), &format!("render {spec} --kernel {kernel}"));
         let stats = serde_json::from_str(&std::fs::read_to_string(d.join("cli.json")).unwrap()).unwrap();
         (std::fs::read(d.join("cli.png")).unwrap(), stats)
     };
     for p in scene::presets() {
         let preset = (p.build)();
         let s = small_settings();
-        let want: Vec<Image> = kernels.iter().map(|&(k, _)| render_lib(&preset, s, k).image).collect();
+        let want: Vec<Image> = kernels.iter().map(|&(k, _)| render_lib(&self_contained(&preset), s, k).image).collect();
         let want_cli: Vec<_> = kernels.iter().map(|&(_, k)| cli_render(p.name, k)).collect();
         for ext in ["json", "toml"] {
             let file = format!("{}.{ext}", p.name);
@@ -482,7 +484,7 @@ fn exported_presets_render_the_identical_image() {
             let loaded = scene::load_scene(&d.join(&file)).unwrap_or_else(|e| panic!("{file}: {e}"));
             assert_eq!(loaded, preset, "{file}");
             for (i, &(kernel, name)) in kernels.iter().enumerate() {
-                let got = render_lib(&loaded, small_settings(), kernel).image;
+                let got = render_lib(&self_contained(&loaded), small_settings(), kernel).image;
                 assert!(got == want[i], "{file}: {name} kernel renders a different image");
                 let (png, stats) = cli_render(&file, name);
                 assert!(png == want_cli[i].0, "{file}: {name}: the binary writes a different PNG");

@@ -33,7 +33,7 @@ fn simd_is_the_widest_kernel_of_the_build() {
 #[test]
 fn every_preset_is_bit_identical_across_kernels() {
     for p in scene::presets() {
-        let sc = (p.build)();
+        let sc = self_contained(&(p.build)());
         let d = scene_settings(&sc);
         // Small images, the preset's own depth and a few samples (jitter on).
         let s = settings(40, 24, 3, d.max_depth, 11);

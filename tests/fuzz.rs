@@ -29,6 +29,7 @@
 //! A failure prints the seed and the input, and writes it to
 //! `target/tmp/fuzz-failure.<ext>` to be replayed with `rtow render`.
 
+mod common;
 use rtow::scene::{self, Format};
 use rtow::{Job, KernelChoice, Overrides, RenderOptions};
 use std::path::Path;
@@ -122,7 +123,8 @@ const TOKENS: &[&str] = &[
 fn corpus() -> Vec<(Vec<u8>, Format)> {
     let mut v = Vec::new();
     for p in scene::presets() {
-        let s = (p.build)();
+        // Image textures read the generated map by its absolute name.
+        let s = common::self_contained(&(p.build)());
         for f in [Format::Json, Format::Toml] {
             v.push((scene::scene_to_string(&s, f).into_bytes(), f));
         }

@@ -47,7 +47,7 @@ fn room(material: Material) -> Vec<Quad> {
         ([0.0, 0.0, 0.0], [s, 0.0, 0.0], [0.0, s, 0.0]), // z = 0, +z
         ([0.0, 0.0, s], [0.0, s, 0.0], [s, 0.0, 0.0]),   // z = 10, -z
     ];
-    faces.iter().map(|&(q, u, v)| Quad { q, u, v, material }).collect()
+    faces.iter().map(|&(q, u, v)| Quad { q, u, v, material: material.clone() }).collect()
 }
 
 /// Inside a closed room of lights of radiance L with a diffuse sphere of
@@ -115,8 +115,11 @@ fn white_furnace_with_emitters_converges_to_the_emission() {
     let mut sc = empty_scene(Camera::looking([5.0, 5.0, 1.0], [5.0, 5.0, 9.0], 90.0), [0.0; 3]);
     let walls = room(light([l; 3], true));
     let white = Material::Lambertian { albedo: [1.0; 3].into() };
-    sc.quads =
-        walls.into_iter().enumerate().map(|(i, q)| if i < 2 { Quad { material: white, ..q } } else { q }).collect();
+    sc.quads = walls
+        .into_iter()
+        .enumerate()
+        .map(|(i, q)| if i < 2 { Quad { material: white.clone(), ..q } } else { q })
+        .collect();
     sc.spheres = vec![Sphere { center: [5.0, 5.0, 6.0], radius: 2.0, material: white }];
     let img = image(&sc, settings(32, 32, 64, 50, 9), Simd8);
     let mean: f64 = img.data.iter().flatten().map(|&x| x as f64).sum::<f64>() / (img.data.len() * 3) as f64;
@@ -150,7 +153,7 @@ fn the_cornell_box_is_bit_identical_across_kernels() {
 #[test]
 fn next_week_presets_survive_export() {
     for p in scene::presets().iter().filter(|p| p.name.starts_with("nw-")) {
-        let sc = (p.build)();
+        let sc = self_contained(&(p.build)());
         let s = settings(20, 20, 2, 8, 4);
         let want = image(&sc, s, Simd8).hash();
         for format in [Format::Json, Format::Toml] {

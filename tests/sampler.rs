@@ -35,7 +35,7 @@ fn kernels() -> Vec<KernelChoice> {
 #[test]
 fn sobol_renders_are_bit_identical_across_kernels() {
     for p in scene::presets() {
-        let sc = (p.build)();
+        let sc = self_contained(&(p.build)());
         let d = scene_settings(&sc);
         let s = settings(40, 24, 5, d.max_depth, 11);
         for sampler in [Sampler::SOBOL, Sampler::parse("sobol-lens").unwrap()] {

@@ -2,6 +2,8 @@
 //! oracle of `rtow::instruments::stress`, the ray offset, NaN-free films, and the quick form of
 //! `rtow stress` (sweeps, stress scenes, image comparisons) with both kernels.
 
+mod common;
+use common::self_contained;
 use glam::DVec3;
 use proptest::prelude::*;
 use rtow::instruments::stress::{self, check_group, Group, GroupResult};
@@ -147,7 +149,7 @@ fn the_offset_is_needed_and_sufficient_on_the_sweep() {
 #[test]
 fn no_preset_produces_nan_or_inf() {
     for p in scene::presets() {
-        let sc = (p.build)();
+        let sc = self_contained(&(p.build)());
         let st = rtow::Overrides { width: Some(24), height: Some(16), spp: Some(2), ..Default::default() };
         for kernel in [KernelChoice::Scalar, KernelChoice::Simd] {
             let opts = RenderOptions { kernel, threads: Some(2), tile: 16, ..RenderOptions::default() };

@@ -16,7 +16,11 @@
 //! the kernels the first time a render asks for it ([`Job::prepared`]), so a
 //! caller can check its outputs between resolving and rendering.
 
+mod images;
 mod prepare;
+
+pub(crate) use images::Images;
+pub use images::IMAGES_ENV;
 
 use crate::camera::PreparedCamera;
 use crate::choice::{AccelChoice, KernelChoice, Mode};
@@ -30,7 +34,7 @@ use crate::sampling::Sampler;
 use crate::scene::{RenderTable, Scene, SceneSource};
 use crate::settings::Settings;
 use std::path::Path;
-use std::sync::OnceLock;
+use std::sync::{Arc, OnceLock};
 use std::time::Instant;
 
 /// Tile edge in pixels by default (tiles are the unit of parallel work).
@@ -181,6 +185,8 @@ pub struct Job {
     warnings: Vec<Error>,
     kernel: Kernel,
     plan: Plan,
+    /// The image textures' files, read when the job was resolved.
+    images: Arc<Images>,
     prepared: OnceLock<(Prepared, f64)>,
 }
 
@@ -201,15 +207,32 @@ impl Job {
     /// The same scene and options with other overrides (the instruments vary
     /// the sample count, the seed or the sampler).
     pub fn with_overrides(&self, overrides: &Overrides) -> Result<Job> {
-        Job::new(&self.scene, overrides, &self.requested)
+        self.with(overrides, &self.requested)
     }
 
     /// The same scene and settings with other options (another kernel, say).
     pub fn with_options(&self, options: &RenderOptions) -> Result<Job> {
-        Job::new(&self.scene, &Overrides::from(self.settings), options)
+        self.with(&Overrides::from(self.settings), options)
+    }
+
+    /// The same scene (and its images, read once) with other overrides and options.
+    pub fn with(&self, overrides: &Overrides, options: &RenderOptions) -> Result<Job> {
+        Job::resolve_with(&self.scene, None, Some(self.images.clone()), overrides, options)
     }
 
     fn resolve(scene: &Scene, origin: Option<&Path>, overrides: &Overrides, options: &RenderOptions) -> Result<Job> {
+        Job::resolve_with(scene, origin, None, overrides, options)
+    }
+
+    /// Resolves the job; reads the scene's images (beside `origin`, else in
+    /// `RTOW_IMAGES`) unless `images` already holds them.
+    fn resolve_with(
+        scene: &Scene,
+        origin: Option<&Path>,
+        images: Option<Arc<Images>>,
+        overrides: &Overrides,
+        options: &RenderOptions,
+    ) -> Result<Job> {
         let in_file = |e: Error| match origin {
             Some(path) => Error::InFile { path: path.to_path_buf(), error: Box::new(e) },
             None => e,
@@ -225,6 +248,10 @@ impl Job {
         let requested = *options;
         let (options, warnings) = options.effective(&settings);
         let plan = prepare::plan(scene, &settings, options.accel);
+        let images = match images {
+            Some(i) => i,
+            None => Arc::new(Images::load(scene, origin).map_err(in_file)?),
+        };
         let mut hash = Fnv1a::default();
         // Writing into a hash cannot fail, and every scene value serializes.
         serde_json::to_writer(&mut hash, scene).expect("a scene serializes");
@@ -237,6 +264,7 @@ impl Job {
             warnings,
             kernel: Kernel::resolve(options.kernel),
             plan,
+            images,
             prepared: OnceLock::new(),
         })
     }
@@ -333,7 +361,7 @@ impl Job {
     fn prepared_timed(&self) -> &(Prepared, f64) {
         self.prepared.get_or_init(|| {
             let t = Instant::now();
-            let p = prepare::prepare(&self.scene, self.settings, self.plan.clone(), self.estimator());
+            let p = prepare::prepare(&self.scene, &self.images, self.settings, self.plan.clone(), self.estimator());
             (p, t.elapsed().as_secs_f64())
         })
     }
@@ -357,6 +385,11 @@ impl Job {
         set("sampler", s.sampler.name().to_string());
         set("russian_roulette", Roulette::describe(self.options.roulette));
         set("adaptive", Adaptive::describe(self.options.adaptive));
+        // The bytes of the image textures (the scene names only their files).
+        if !self.images.list.is_empty() {
+            let list: Vec<String> = self.images.list.iter().map(|i| format!("{:016x} {}", i.hash, i.name)).collect();
+            set("images", list.join(", "));
+        }
         Identity { scene_hash: self.scene_hash, width: s.width, height: s.height, settings: map }
     }
 }

@@ -3,6 +3,7 @@
 //! the plan chose it, the BVH. The scene's types are read here and nowhere
 //! on the kernel side.
 
+use super::Images;
 use crate::camera::{PreparedCamera, View};
 use crate::choice::{AccelChoice, Mode};
 use crate::estimator::Estimator;
@@ -49,6 +50,7 @@ fn tex_kind(t: &Texture) -> TexKind {
         Texture::Solid(_) => TexKind::Solid,
         Texture::Checker { .. } => TexKind::Checker,
         Texture::Noise { .. } => TexKind::Noise,
+        Texture::Image { .. } => TexKind::Image,
     }
 }
 
@@ -106,14 +108,20 @@ pub(super) fn view(c: &Camera) -> View {
 }
 
 /// Lays a validated scene out for the kernels, as `plan` says.
-pub(super) fn prepare(scene: &Scene, settings: Settings, plan: Plan, estimator: Estimator) -> Prepared {
+pub(super) fn prepare(
+    scene: &Scene,
+    images: &Images,
+    settings: Settings,
+    plan: Plan,
+    estimator: Estimator,
+) -> Prepared {
     let mut materials = MaterialTables::default();
     let mut textures = TextureTables::default();
     let mut spheres = Spheres::default();
     let flat = scene.flatten();
     let mut row_of = |m: &Material| match *m {
-        Material::Lambertian { albedo } => {
-            let (flat, tex) = match albedo {
+        Material::Lambertian { ref albedo } => {
+            let (flat, tex) = match *albedo {
                 Texture::Solid(c) => (c, TexRef::default()),
                 Texture::Checker { scale, even, odd } => {
                     let c = Checker { inv_scale: (1.0 / scale as f64) as f32, even, odd };
@@ -124,6 +132,11 @@ pub(super) fn prepare(scene: &Scene, settings: Settings, plan: Plan, estimator: 
                         textures.perlin = Some(Perlin::new(PERLIN_SEED));
                     }
                     ([0.5; 3], TexRef { kind: TexKind::Noise, row: push(&mut textures.noise, Noise { scale }) })
+                }
+                Texture::Image { ref file } => {
+                    let img = images.get(file).expect("a job reads every image its scene names").clone();
+                    // The flat colour (debug modes): the image's first texel.
+                    (img.texels[0], TexRef { kind: TexKind::Image, row: push(&mut textures.image, img) })
                 }
             };
             materials.lambertian_tex.push(tex);

@@ -7,9 +7,10 @@ pub mod scalar;
 pub mod wavefront;
 
 use crate::choice::KernelChoice;
+use crate::geometry::{QuadRec, QUAD_BASE};
 use crate::plan::{Prepared, SkyColours};
 use crate::real::Real;
-use crate::texture::{checker, marble, TexKind};
+use crate::texture::{checker, image_texel, marble, quad_uv, sphere_uv, TexKind};
 use crate::vec3::V3;
 use serde::Serialize;
 
@@ -112,10 +113,17 @@ pub fn gradient(x: u32, y: u32, width: u32, height: u32) -> [f32; 3] {
 }
 
 /// The albedo of texture kind `kind` (not `Solid`) at the hit points `p`;
-/// lane k reads row `row(k)` of the kind's table. One function for the
+/// lane k hit primitive `hit(k)` (a sphere index, or `QUAD_BASE` plus a
+/// quad's) and reads row `row(k)` of the kind's table. One function for the
 /// scalar kernel and the wavefront's texture passes.
 #[inline(always)]
-pub(crate) fn texture_albedo<R: Real>(prep: &Prepared, kind: TexKind, p: V3<R>, row: impl Fn(usize) -> usize) -> V3<R> {
+pub(crate) fn texture_albedo<R: Real>(
+    prep: &Prepared,
+    kind: TexKind,
+    p: V3<R>,
+    hit: impl Fn(usize) -> u32,
+    row: impl Fn(usize) -> usize,
+) -> V3<R> {
     let t = &prep.textures;
     match kind {
         TexKind::Checker => checker(p, |k| t.checker[row(k)]),
@@ -123,6 +131,39 @@ pub(crate) fn texture_albedo<R: Real>(prep: &Prepared, kind: TexKind, p: V3<R>, 
             let lattice = t.perlin.as_ref().expect("a scene with noise textures has a Perlin lattice");
             marble(p, R::from_fn(|k| t.noise[row(k)].scale), lattice)
         }
+        TexKind::Image => {
+            let (u, v) = surface_uv(prep, p, hit);
+            image_texel(u, v, |k| &*t.image[row(k)])
+        }
         TexKind::Solid => unreachable!("solid colours have no texture pass"),
     }
+}
+
+/// The texture coordinates of the hits at `p` (lane k on primitive
+/// `hit(k)`): a sphere's from its outward normal `(p - c) / r`, a quad's
+/// (alpha, beta). Both are computed for every lane, each from its lane's
+/// primitive where it is of that kind, and one is chosen per lane.
+#[inline(always)]
+fn surface_uv<R: Real>(prep: &Prepared, p: V3<R>, hit: impl Fn(usize) -> u32) -> (R, R) {
+    let (sp, qs) = (&prep.spheres, &prep.quads);
+    let sphere = |k: usize| (hit(k) < QUAD_BASE).then(|| hit(k) as usize);
+    let quad = |k: usize| (hit(k) >= QUAD_BASE).then(|| &qs.rec[(hit(k) - QUAD_BASE) as usize]);
+    let is_sphere = R::from_fn(|k| if sphere(k).is_some() { 1.0 } else { 0.0 }).gt(R::splat(0.5));
+    let (su, sv) = if sp.len > 0 {
+        let at = |a: &[f32], dflt: f32| R::from_fn(|k| sphere(k).map_or(dflt, |i| a[i]));
+        let c = V3::new(at(&sp.cx, 0.0), at(&sp.cy, 0.0), at(&sp.cz, 0.0));
+        sphere_uv((p - c) * (R::splat(1.0) / at(&sp.r, 1.0)))
+    } else {
+        (R::splat(0.0), R::splat(0.0))
+    };
+    let (qu, qv) = if qs.len > 0 {
+        let v3 = |f: fn(&QuadRec) -> [f32; 3]| {
+            let c = |a: usize| R::from_fn(|k| quad(k).map_or(0.0, |q| f(q)[a]));
+            V3::new(c(0), c(1), c(2))
+        };
+        quad_uv(p, v3(|q| q.q), v3(|q| q.u), v3(|q| q.v), v3(|q| q.w))
+    } else {
+        (R::splat(0.0), R::splat(0.0))
+    };
+    (R::select(is_sphere, su, qu), R::select(is_sphere, sv, qv))
 }

@@ -69,8 +69,10 @@ fn closest_hit<P: Probe>(prep: &Prepared, o: V3<f32>, d: V3<f32>, probe: &mut P)
 /// `phases` builds).
 #[cfg_attr(not(feature = "phases"), inline(always))]
 #[cfg_attr(feature = "phases", inline(never))]
+#[allow(clippy::too_many_arguments)]
 fn scatter(
     prep: &Prepared,
+    hit: u32,
     kind: Kind,
     row: usize,
     d: V3<f32>,
@@ -85,7 +87,7 @@ fn scatter(
             let tex = m.lambertian_tex[row];
             let albedo = match tex.kind {
                 TexKind::Solid => m.lambertian[row],
-                kind => texture_albedo(prep, kind, srf.p, |_| tex.row as usize).to_array(),
+                kind => texture_albedo(prep, kind, srf.p, |_| hit, |_| tex.row as usize).to_array(),
             };
             (lambertian(srf.n, rng), albedo)
         }
@@ -152,7 +154,7 @@ pub fn trace<P: Probe>(
                 let e = emission(V3::from_array(emit), one_sided, srf.front);
                 return (thr.mul_elem(e).to_array(), rays);
             }
-            Mode::Path => match scatter(prep, kind, row, d, &srf, depth, rng) {
+            Mode::Path => match scatter(prep, hit, kind, row, d, &srf, depth, rng) {
                 Some(s) => s,
                 None => return ([0.0; 3], rays),
             },

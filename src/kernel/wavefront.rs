@@ -528,7 +528,7 @@ fn textured_lambertian_pass<W: Wide, P: Probe, S: PathSampler>(
             let Hits { srf, .. } = surfaces::<W, ()>(prep, ws, idx, active, &mut ());
             let hits = W::gather_u_pow2(&ws.hit, idx);
             let row = |k: usize| m.lambertian_tex[material_row(prep, W::lane_u(hits, k))].row as usize;
-            let c = texture_albedo(prep, kind, srf.p, row);
+            let c = texture_albedo(prep, kind, srf.p, |k| W::lane_u(hits, k), row);
             for (k, &i) in idx.as_ref().iter().enumerate().take(active) {
                 let i = i as usize & MASK;
                 ws.albedo[0][i] = c.x.lane(k);

@@ -92,14 +92,18 @@ pub fn box_quads(b: &QuadBox) -> [([f64; 3], [f64; 3], [f64; 3]); 6] {
 impl Flat {
     fn add(&mut self, t: &Transform, spheres: &[Sphere], quads: &[Quad], boxes: &[QuadBox]) {
         for s in spheres {
-            self.spheres.push(Sphere { center: f32s(t.point(f64s(s.center))), ..*s });
+            self.spheres.push(Sphere {
+                center: f32s(t.point(f64s(s.center))),
+                radius: s.radius,
+                material: s.material.clone(),
+            });
         }
         for q in quads {
-            self.quads.push(quad(t, f64s(q.q), f64s(q.u), f64s(q.v), q.material));
+            self.quads.push(quad(t, f64s(q.q), f64s(q.u), f64s(q.v), q.material.clone()));
         }
         for b in boxes {
             for (q, u, v) in box_quads(b) {
-                self.quads.push(quad(t, q, u, v, b.material));
+                self.quads.push(quad(t, q, u, v, b.material.clone()));
             }
         }
     }
@@ -122,6 +126,28 @@ impl Scene {
             flat.add(&Transform::of(g), &g.spheres, &g.quads, &g.boxes);
         }
         flat
+    }
+
+    /// The image files the scene's textures name, each once, in the order
+    /// the scene first names them.
+    pub fn image_files(&self) -> Vec<&str> {
+        let mut names: Vec<&str> = Vec::new();
+        let mut seen = std::collections::HashSet::new();
+        let materials = self.spheres.iter().map(|s| &s.material);
+        let materials = materials.chain(self.quads.iter().map(|q| &q.material));
+        let materials = materials.chain(self.boxes.iter().map(|b| &b.material));
+        let groups = self.groups.iter().flat_map(|g| {
+            let m = g.spheres.iter().map(|s| &s.material).chain(g.quads.iter().map(|q| &q.material));
+            m.chain(g.boxes.iter().map(|b| &b.material))
+        });
+        for m in materials.chain(groups) {
+            if let Material::Lambertian { albedo: super::Texture::Image { file } } = m {
+                if seen.insert(file.as_str()) {
+                    names.push(file);
+                }
+            }
+        }
+        names
     }
 
     /// The number of spheres and of quads [`Scene::flatten`] gives (without flattening).

@@ -27,7 +27,7 @@ use serde::{Deserialize, Serialize};
 /// Written as `{"type": "<kind>", ...fields}`. Read through `MaterialFields`:
 /// serde reads an internally tagged enum through a buffer, and errors inside it
 /// (`"ior": "abc"`) would name neither the field nor its position.
-#[derive(Serialize, Deserialize, Clone, Copy, Debug, PartialEq)]
+#[derive(Serialize, Deserialize, Clone, Debug, PartialEq)]
 #[serde(tag = "type", rename_all = "lowercase", try_from = "MaterialFields")]
 pub enum Material {
     /// The albedo is a colour `[r, g, b]` or a texture ([`Texture`]).
@@ -59,12 +59,17 @@ pub enum Material {
 /// `checker_texture` of two colours: the parity of the sum of
 /// `floor(p / scale)` over the axes picks `even` or `odd`) or `{"type":
 /// "noise", "scale": s}` (the book's `noise_texture`: Perlin marble,
-/// `0.5 (1 + sin(scale z + 10 turb(p)))`).
-#[derive(Clone, Copy, Debug, PartialEq)]
+/// `0.5 (1 + sin(scale z + 10 turb(p)))`) or `{"type": "image", "file":
+/// "earthmap.jpg"}` (the book's `image_texture`: a PNG or JPEG file, its
+/// nearest texel at the hit's (u, v), linearized as the book does; a
+/// relative name is found beside the scene file, else in the folder
+/// `RTOW_IMAGES` names: `crate::job::images`).
+#[derive(Clone, Debug, PartialEq)]
 pub enum Texture {
     Solid([f32; 3]),
     Checker { scale: f32, even: [f32; 3], odd: [f32; 3] },
     Noise { scale: f32 },
+    Image { file: String },
 }
 
 impl From<[f32; 3]> for Texture {
@@ -80,6 +85,7 @@ impl Texture {
             Texture::Solid(_) => "solid",
             Texture::Checker { .. } => "checker",
             Texture::Noise { .. } => "noise",
+            Texture::Image { .. } => "image",
         }
     }
 }
@@ -101,6 +107,12 @@ impl Serialize for Texture {
                 let mut m = s.serialize_struct("Texture", 2)?;
                 m.serialize_field("type", "noise")?;
                 m.serialize_field("scale", scale)?;
+                m.end()
+            }
+            Texture::Image { file } => {
+                let mut m = s.serialize_struct("Texture", 2)?;
+                m.serialize_field("type", "image")?;
+                m.serialize_field("file", file)?;
                 m.end()
             }
         }
@@ -126,6 +138,8 @@ pub(crate) struct TextureFields {
     even: Option<[f32; 3]>,
     #[serde(default, deserialize_with = "de::opt_vec3")]
     odd: Option<[f32; 3]>,
+    #[serde(default)]
+    file: Option<String>,
 }
 
 /// A texture's `type` as files write it.
@@ -134,6 +148,7 @@ pub(crate) struct TextureFields {
 enum TextureType {
     Checker,
     Noise,
+    Image,
 }
 
 impl TryFrom<TextureFields> for Texture {
@@ -143,7 +158,20 @@ impl TryFrom<TextureFields> for Texture {
             v.ok_or_else(|| format!("missing field `{f}` for a {name} texture"))
         };
         let scale = |name: &str| t.scale.ok_or_else(|| format!("missing field `scale` for a {name} texture"));
+        let kind = match t.kind {
+            TextureType::Checker => "a checker",
+            TextureType::Noise => "a noise",
+            TextureType::Image => "an image",
+        };
+        let unknown =
+            |f: &str, expected: &str| Err(format!("unknown field `{f}` for {kind} texture, expected {expected}"));
         match t.kind {
+            TextureType::Image => match (t.scale.is_some(), t.even.is_some() || t.odd.is_some()) {
+                (true, _) => unknown("scale", "`file`"),
+                (_, true) => unknown(if t.even.is_some() { "even" } else { "odd" }, "`file`"),
+                _ => Ok(Texture::Image { file: t.file.ok_or("missing field `file` for an image texture")? }),
+            },
+            _ if t.file.is_some() => unknown("file", "`scale`"),
             TextureType::Checker => Ok(Texture::Checker {
                 scale: scale("checker")?,
                 even: need(t.even, "even", "checker")?,
@@ -263,7 +291,7 @@ impl Material {
     }
 }
 
-#[derive(Serialize, Deserialize, Clone, Copy, Debug, PartialEq)]
+#[derive(Serialize, Deserialize, Clone, Debug, PartialEq)]
 #[serde(deny_unknown_fields)]
 pub struct Sphere {
     #[serde(deserialize_with = "de::vec3")]
@@ -276,7 +304,7 @@ pub struct Sphere {
 
 /// A parallelogram (The Next Week's `quad`): the points `q + a u + b v` for
 /// `a, b` in [0, 1]. Its normal, and so its front face, is `u x v`.
-#[derive(Serialize, Deserialize, Clone, Copy, Debug, PartialEq)]
+#[derive(Serialize, Deserialize, Clone, Debug, PartialEq)]
 #[serde(deny_unknown_fields)]
 pub struct Quad {
     #[serde(deserialize_with = "de::vec3")]
@@ -290,7 +318,7 @@ pub struct Quad {
 
 /// The Next Week's `box(a, b)`: the axis-aligned box with opposite corners
 /// `a` and `b`, as its six quads (faces outwards, in the book's order).
-#[derive(Serialize, Deserialize, Clone, Copy, Debug, PartialEq)]
+#[derive(Serialize, Deserialize, Clone, Debug, PartialEq)]
 #[serde(deny_unknown_fields)]
 pub struct QuadBox {
     #[serde(deserialize_with = "de::vec3")]

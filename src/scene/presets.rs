@@ -114,7 +114,7 @@ fn ch06() -> Scene {
 }
 fn ch07() -> Scene {
     let grey = lam([0.5, 0.5, 0.5]);
-    let spheres = vec![sphere([0.0, 0.0, -1.0], 0.5, grey), sphere([0.0, -100.5, -1.0], 100.0, grey)];
+    let spheres = vec![sphere([0.0, 0.0, -1.0], 0.5, grey.clone()), sphere([0.0, -100.5, -1.0], 100.0, grey)];
     scene(Mode::Path, origin_camera(), spheres, settings(400, 225, 100, 50))
 }
 fn metals(center: [f32; 3], fuzz_left: f32, fuzz_right: f32) -> Vec<Sphere> {
@@ -271,7 +271,17 @@ fn nw_daylight_spheres() -> Scene {
 fn nw_checkered_spheres() -> Scene {
     let mut s = nw_daylight_spheres();
     let checker = lam_tex(Texture::Checker { scale: 0.32, even: [0.2, 0.3, 0.1], odd: [0.9, 0.9, 0.9] });
-    s.spheres = vec![sphere([0.0, -10.0, 0.0], 10.0, checker), sphere([0.0, 10.0, 0.0], 10.0, checker)];
+    s.spheres = vec![sphere([0.0, -10.0, 0.0], 10.0, checker.clone()), sphere([0.0, 10.0, 0.0], 10.0, checker)];
+    s
+}
+
+/// The Next Week, `earth()`: a globe of radius 2 under the book's
+/// `image_texture("earthmap.jpg")`, seen from (0, 0, 12). The map is not part
+/// of rtow: the render reads `earthmap.jpg` from the folder `RTOW_IMAGES`
+/// names (`crate::job`), and says how to get it when it is not there.
+fn nw_earth() -> Scene {
+    let mut s = next_week(Camera::looking([0.0, 0.0, 12.0], [0.0; 3], 20.0), NW_DAYLIGHT, settings(400, 225, 100, 50));
+    s.spheres = vec![sphere([0.0; 3], 2.0, lam_tex(Texture::Image { file: "earthmap.jpg".into() }))];
     s
 }
 
@@ -279,7 +289,7 @@ fn nw_checkered_spheres() -> Scene {
 /// book's `noise_texture(4)`.
 fn perlin_spheres() -> Vec<Sphere> {
     let marble = lam_tex(Texture::Noise { scale: 4.0 });
-    vec![sphere([0.0, -1000.0, 0.0], 1000.0, marble), sphere([0.0, 2.0, 0.0], 2.0, marble)]
+    vec![sphere([0.0, -1000.0, 0.0], 1000.0, marble.clone()), sphere([0.0, 2.0, 0.0], 2.0, marble)]
 }
 
 /// The Next Week, `perlin_spheres()`: a ground and a sphere of Perlin marble.
@@ -469,6 +479,12 @@ static PRESETS: &[Preset] = &[
         description: "The Next Week: two spheres under the 3-D checker texture (scale 0.32)",
         group: PresetGroup::NextWeek,
         build: nw_checkered_spheres,
+    },
+    Preset {
+        name: "nw-earth",
+        description: "The Next Week: the globe under the book's earthmap.jpg (read from RTOW_IMAGES)",
+        group: PresetGroup::NextWeek,
+        build: nw_earth,
     },
     Preset {
         name: "nw-perlin-spheres",

@@ -330,6 +330,22 @@ impl Texture {
                 colour(&format!("{field}.odd"), odd)
             }
             Texture::Noise { scale } => scale_in(scale, 0.0, limits::MAX_TEXTURE_SCALE),
+            Texture::Image { ref file } => {
+                let f = format!("{field}.file");
+                if file.is_empty() {
+                    return Err(Error::invalid(f, "must name an image file (PNG or JPEG), got an empty name"));
+                }
+                if file.len() > limits::MAX_PATH_BYTES || file.contains('\0') {
+                    return Err(Error::invalid(
+                        f,
+                        format!(
+                            "must be a file name of at most {} bytes without NUL characters",
+                            limits::MAX_PATH_BYTES
+                        ),
+                    ));
+                }
+                Ok(())
+            }
         }
     }
 }
@@ -337,7 +353,7 @@ impl Texture {
 impl Material {
     fn validate(&self, field: &dyn Fn(&str) -> String) -> Result<()> {
         match *self {
-            Material::Lambertian { albedo } => albedo.validate(&field("albedo")),
+            Material::Lambertian { ref albedo } => albedo.validate(&field("albedo")),
             Material::Metal { albedo, fuzz } => {
                 colour(&field("albedo"), albedo)?;
                 finite(&field("fuzz"), fuzz)?;

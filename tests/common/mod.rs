@@ -4,9 +4,47 @@
 
 pub mod stats;
 
+use rtow::scene::{Material, Texture};
 use rtow::{render, AccelChoice, Image, Job, KernelChoice, Overrides, RenderOptions, Rendered, Scene, Settings};
-use std::path::Path;
+use std::path::{Path, PathBuf};
 use std::process::{Command, Output};
+use std::sync::OnceLock;
+
+/// A folder of image textures generated for the tests (rtow ships none):
+/// `earthmap.jpg`, a 64 x 32 JPEG of gradients, the name the `nw-earth`
+/// preset reads from `RTOW_IMAGES`. One per test process.
+pub fn test_images() -> &'static Path {
+    static DIR: OnceLock<PathBuf> = OnceLock::new();
+    DIR.get_or_init(|| {
+        let dir = std::env::temp_dir().join(format!("rtow-test-images-{}", std::process::id()));
+        std::fs::create_dir_all(&dir).expect("a temporary folder");
+        let map =
+            image::RgbImage::from_fn(64, 32, |x, y| image::Rgb([(x * 4) as u8, (y * 8) as u8, ((x ^ y) * 7) as u8]));
+        map.save(dir.join("earthmap.jpg")).expect("the test map is written");
+        dir
+    })
+}
+
+/// `scene` with every image texture reading the generated map
+/// ([`test_images`]) by its absolute name, so that it renders anywhere.
+pub fn self_contained(scene: &Scene) -> Scene {
+    let file = test_images().join("earthmap.jpg").to_string_lossy().into_owned();
+    let mut s = scene.clone();
+    let fix = |m: &mut Material| {
+        if let Material::Lambertian { albedo: Texture::Image { file: f } } = m {
+            f.clone_from(&file);
+        }
+    };
+    s.spheres.iter_mut().for_each(|x| fix(&mut x.material));
+    s.quads.iter_mut().for_each(|x| fix(&mut x.material));
+    s.boxes.iter_mut().for_each(|x| fix(&mut x.material));
+    for g in &mut s.groups {
+        g.spheres.iter_mut().for_each(|x| fix(&mut x.material));
+        g.quads.iter_mut().for_each(|x| fix(&mut x.material));
+        g.boxes.iter_mut().for_each(|x| fix(&mut x.material));
+    }
+    s
+}
 
 /// Exactly these settings (Sobol sampler, rtow's default).
 pub fn settings(width: u32, height: u32, spp: u32, max_depth: u32, seed: u64) -> Settings {
