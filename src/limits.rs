@@ -43,6 +43,10 @@ pub const MAX_SPHERES: usize = 1 << 20;
 pub const MAX_QUADS: usize = 1 << 20;
 /// The most groups (instances) a scene file may hold.
 pub const MAX_GROUPS: usize = 1 << 16;
+/// The most constant media a scene may hold (its own and its groups'): each
+/// costs every ray of the scene a chord test and a draw per bounce (media
+/// are not in a BVH), and takes its own sampler dimensions.
+pub const MAX_MEDIA: usize = 64;
 
 /// The world-length range where the kernels' intersection error bounds hold,
 /// the range `rtow stress` measures (radius and distance 1e-4 .. 1e6; its
