@@ -158,6 +158,9 @@ pub fn trace<P: Probe>(
     ([0.0; 3], prep.settings.max_depth)
 }
 
+/// A scattered path: its new direction, the attenuation, the surface it leaves.
+type Scattered = (V3<f32>, [f32; 3], Surface<f32>);
+
 /// The surface hit `hit` at `t` along `o + t d`: the scattered direction, the
 /// attenuation and the surface, or the path's final colour (a light, a debug
 /// shading, an absorbed path).
@@ -174,7 +177,7 @@ fn shade<P: Probe>(
     thr: V3<f32>,
     rng: &mut impl Stream<f32>,
     probe: &mut P,
-) -> Result<(V3<f32>, [f32; 3], Surface<f32>), [f32; 3]> {
+) -> Result<Scattered, [f32; 3]> {
     let sp = &prep.spheres;
     let (srf, kind, row) = if hit < QUAD_BASE {
         let i = hit as usize;
