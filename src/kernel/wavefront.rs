@@ -416,14 +416,16 @@ fn bounce<W: Wide, P: Probe, S: PathSampler>(
         );
     } else {
         for (i, &h) in ws.hit[..n].iter().enumerate() {
+            // Hit indices in order: spheres, quads, media, MISS (two tests for
+            // a sphere or a quad, as before media existed).
             let q = if h < QUAD_BASE {
                 prep.spheres.kind[h as usize & kind_mask] as usize
+            } else if h < MEDIUM_BASE {
+                prep.quads.kind[(h - QUAD_BASE) as usize & quad_mask] as usize
             } else if h == MISS {
                 MISS_QUEUE
-            } else if h >= MEDIUM_BASE {
-                Kind::Isotropic as usize
             } else {
-                prep.quads.kind[(h - QUAD_BASE) as usize & quad_mask] as usize
+                Kind::Isotropic as usize
             };
             queues[q][len[q] & MASK] = i as u32;
             len[q] += 1;
