@@ -43,6 +43,10 @@ pub const MAX_SPHERES: usize = 1 << 20;
 pub const MAX_QUADS: usize = 1 << 20;
 /// The most groups (instances) a scene file may hold.
 pub const MAX_GROUPS: usize = 1 << 16;
+/// The most constant media a scene may hold (its own and its groups'): each
+/// costs every ray of the scene a chord test and a draw per bounce (media
+/// are not in a BVH), and takes its own sampler dimensions.
+pub const MAX_MEDIA: usize = 64;
 
 /// The longest image file name a scene may give (bytes).
 pub const MAX_PATH_BYTES: usize = 4096;

@@ -22,16 +22,23 @@ pub enum Kind {
     Dielectric = 2,
     /// The Next Week's `diffuse_light`: emission, and the path ends (no scatter).
     DiffuseLight = 3,
+    /// The Next Week's `isotropic`: a path that stopped inside a constant
+    /// medium scatters to a uniform direction, attenuated by the medium's
+    /// albedo. Media are not primitives: no sphere or quad has this kind.
+    Isotropic = 4,
 }
 
 impl Kind {
-    pub const ALL: [Kind; 4] = [Kind::Lambertian, Kind::Metal, Kind::Dielectric, Kind::DiffuseLight];
+    pub const ALL: [Kind; 5] = [Kind::Lambertian, Kind::Metal, Kind::Dielectric, Kind::DiffuseLight, Kind::Isotropic];
+    /// The kinds a sphere or a quad can have (all but `Isotropic`).
+    pub const SURFACES: [Kind; 4] = [Kind::Lambertian, Kind::Metal, Kind::Dielectric, Kind::DiffuseLight];
     pub fn name(self) -> &'static str {
         match self {
             Kind::Lambertian => "lambertian",
             Kind::Metal => "metal",
             Kind::Dielectric => "dielectric",
             Kind::DiffuseLight => "diffuse_light",
+            Kind::Isotropic => "isotropic",
         }
     }
 }
@@ -59,6 +66,8 @@ impl MaterialTables {
             Kind::Metal => self.metal[row as usize].0,
             Kind::Dielectric => [1.0, 1.0, 1.0],
             Kind::DiffuseLight => self.light[row as usize].0,
+            // No primitive has this kind (media are not shaded in the debug modes).
+            Kind::Isotropic => [1.0; 3],
         }
     }
 
@@ -77,6 +86,7 @@ impl MaterialTables {
             Kind::Metal => self.metal[row],
             Kind::Dielectric => ([1.0; 3], self.dielectric[row]),
             Kind::DiffuseLight => (self.light[row].0, if self.light[row].1 { 1.0 } else { 0.0 }),
+            Kind::Isotropic => ([1.0; 3], 0.0),
         }
     }
 }

@@ -6,7 +6,7 @@
 use crate::camera::PreparedCamera;
 use crate::choice::Mode;
 use crate::estimator::Estimator;
-use crate::geometry::{self, Bvh, Closest, QuadBvh, Quads, Spheres, QUAD_BASE};
+use crate::geometry::{self, Bvh, Closest, Media, QuadBvh, Quads, Spheres, QUAD_BASE};
 use crate::material::{Kind, MaterialTables};
 use crate::probe::Probe;
 use crate::real::Wide;
@@ -36,6 +36,10 @@ impl KindSet {
     }
     pub fn iter(self) -> impl Iterator<Item = Kind> {
         Kind::ALL.into_iter().filter(move |&k| self.contains(k))
+    }
+    /// The surface kinds of the set ([`Kind::SURFACES`]).
+    pub fn surfaces(self) -> impl Iterator<Item = Kind> {
+        Kind::SURFACES.into_iter().filter(move |&k| self.contains(k))
     }
     pub fn is_empty(self) -> bool {
         self.0 == 0
@@ -115,8 +119,13 @@ impl Plan {
         let textures: Vec<&str> = self.textures.iter().map(|t| t.name()).collect();
         let textures =
             if textures.is_empty() { String::new() } else { format!("; texture passes: {}", textures.join(", ")) };
+        let media = if self.kinds.contains(Kind::Isotropic) {
+            "; media: a free-flight pass after the closest hit (analytic chords)"
+        } else {
+            ""
+        };
         format!(
-            "plan: mode {:?}; material passes: {kinds}{textures}; camera: {} rays, {}; closest hit: {}{quads}; paths stop at zero throughput",
+            "plan: mode {:?}; material passes: {kinds}{textures}; camera: {} rays, {}; closest hit: {}{quads}{media}; paths stop at zero throughput",
             self.mode,
             if self.lens { "thin-lens" } else { "pinhole" },
             if self.jitter { "jittered in the pixel" } else { "through pixel centres" },
@@ -143,6 +152,8 @@ pub struct Prepared {
     pub spheres: Spheres,
     /// The quads (empty for a scene without: padding only).
     pub quads: Quads,
+    /// The constant media (empty for a scene without, and in the debug modes).
+    pub media: Media,
     pub materials: MaterialTables,
     /// The texture tables (empty for a scene without textures).
     pub textures: TextureTables,

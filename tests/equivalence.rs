@@ -106,6 +106,7 @@ fn arb_scene() -> impl Strategy<Value = Scene> {
                 quads: vec![],
                 boxes: vec![],
                 groups: vec![],
+                media: vec![],
                 sky: Sky::default(),
                 background: Default::default(),
                 render: Default::default(),
@@ -175,6 +176,7 @@ fn arb_group() -> impl Strategy<Value = Group> {
             boxes,
             spheres,
             quads: vec![],
+            media: vec![],
         })
 }
 
@@ -200,6 +202,7 @@ fn arb_mixed_scene() -> impl Strategy<Value = Scene> {
             quads,
             boxes: vec![],
             groups,
+            media: vec![],
             sky: Sky::default(),
             background,
             render: Default::default(),

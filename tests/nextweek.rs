@@ -25,6 +25,7 @@ fn empty_scene(camera: Camera, background: [f32; 3]) -> Scene {
         quads: vec![],
         boxes: vec![],
         groups: vec![],
+        media: vec![],
         sky: Sky::default(),
         background: Background::Constant(background),
         render: Default::default(),

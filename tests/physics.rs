@@ -16,6 +16,7 @@ fn one_sphere(material: Material, sky: Sky) -> Scene {
         quads: vec![],
         boxes: vec![],
         groups: vec![],
+        media: vec![],
         sky,
         background: Default::default(),
         render: Default::default(),

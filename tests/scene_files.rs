@@ -200,6 +200,7 @@ fn scene_strategy() -> impl Strategy<Value = Scene> {
             quads: vec![],
             boxes: vec![],
             groups: vec![],
+            media: vec![],
             sky: Sky { horizon, zenith },
             background: Default::default(),
             render: RenderTable { width: w, seed, ..Default::default() },

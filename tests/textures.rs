@@ -240,6 +240,7 @@ fn textured_scene() -> Scene {
         ],
         boxes: vec![],
         groups: vec![],
+        media: vec![],
         sky: Sky::default(),
         background: Background::Sky,
         render: Default::default(),

@@ -7,10 +7,10 @@ use super::Images;
 use crate::camera::{PreparedCamera, View};
 use crate::choice::{AccelChoice, Mode};
 use crate::estimator::Estimator;
-use crate::geometry::{Bvh, QuadBvh, Quads, Spheres, Walk};
+use crate::geometry::{Boundary, Bvh, Media, QuadBvh, Quads, Spheres, Walk};
 use crate::material::{Kind, MaterialTables};
 use crate::plan::{Accel, KindSet, Plan, Prepared, SkyColours};
-use crate::scene::{Background, Camera, Material, Scene, Texture};
+use crate::scene::{Background, Camera, FlatBoundary, Material, Scene, Texture};
 use crate::settings::Settings;
 use crate::texture::{Checker, Noise, Perlin, TexKind, TexRef, TexSet, TextureTables, PERLIN_SEED};
 use glam::DVec3;
@@ -68,7 +68,13 @@ pub(super) fn plan(scene: &Scene, settings: &Settings, accel: AccelChoice) -> Pl
     let flat = scene.flatten();
     let kinds: KindSet = match scene.mode {
         Mode::Path => {
-            flat.spheres.iter().map(|s| kind(&s.material)).chain(flat.quads.iter().map(|q| kind(&q.material))).collect()
+            let media = (!flat.media.is_empty()).then_some(Kind::Isotropic);
+            flat.spheres
+                .iter()
+                .map(|s| kind(&s.material))
+                .chain(flat.quads.iter().map(|q| kind(&q.material)))
+                .chain(media)
+                .collect()
         }
         Mode::Gradient | Mode::Flat | Mode::Normals => KindSet::default(),
     };
@@ -156,6 +162,27 @@ pub(super) fn prepare(
     for s in &flat.spheres {
         extent = extent.max(s.center.iter().fold(0.0f32, |m, x| m.max(x.abs())) + s.radius.abs());
     }
+    // Media only where paths are traced (the debug modes shade surfaces):
+    // their scattering points are ray origins anywhere inside them (none for
+    // a density of 0, which then changes nothing, not even the extent).
+    let mut media = Media::default();
+    if plan.kinds.contains(Kind::Isotropic) {
+        let f = |v: [f64; 3]| v.map(|x| x as f32);
+        for m in &flat.media {
+            if m.density > 0.0 {
+                extent = extent.max(m.boundary.reach() as f32);
+            }
+            let boundary = match m.boundary {
+                FlatBoundary::Sphere { center, radius } => {
+                    Boundary::Sphere { c: f(center), r2: (radius as f32) * (radius as f32) }
+                }
+                FlatBoundary::Box { center, axes, half } => {
+                    Boundary::Box { c: f(center), axes: axes.map(f), half: f(half) }
+                }
+            };
+            media.push(boundary, m.density as f64, m.albedo);
+        }
+    }
     for q in &flat.quads {
         for (a, b) in [(0.0, 0.0), (1.0, 0.0), (0.0, 1.0), (1.0, 1.0)] {
             for k in 0..3 {
@@ -202,6 +229,7 @@ pub(super) fn prepare(
             },
         },
         quads,
+        media,
         bvh,
         quad_bvh,
         estimator,

@@ -5,11 +5,11 @@ use super::{background, normal_colour, texture_albedo};
 use crate::choice::Mode;
 use crate::estimator::{roulette, roulette_applies};
 use crate::film::TileFilm;
-use crate::geometry::{quad_surface, spawn, surface, Surface, MISS, QUAD_BASE};
+use crate::geometry::{quad_surface, sample_media, spawn, surface, Surface, MEDIUM_BASE, MISS, QUAD_BASE};
 use crate::material::{dielectric, emission, lambertian, metal, Kind};
 use crate::plan::Prepared;
 use crate::probe::{PathId, Probe};
-use crate::sampling::{layout, PathSampler, Stream};
+use crate::sampling::{layout, unit_vector, PathSampler, Stream};
 use crate::texture::TexKind;
 use crate::vec3::V3;
 use std::ops::Range;
@@ -100,8 +100,8 @@ fn scatter(
             (dir, albedo)
         }
         Kind::Dielectric => (dielectric(d, srf.n, srf.front, m.dielectric[row], rng), [1.0; 3]),
-        // Lights end the path before scattering (`trace`).
-        Kind::DiffuseLight => return None,
+        // Lights end the path before scattering (`trace`); media scatter in `trace`.
+        Kind::DiffuseLight | Kind::Isotropic => return None,
     })
 }
 
@@ -114,7 +114,6 @@ pub fn trace<P: Probe>(
     rng: &mut impl Stream<f32>,
     probe: &mut P,
 ) -> ([f32; 3], u32) {
-    let sp = &prep.spheres;
     let (o, mut d) = camera_ray(prep, x, y, rng);
     let mut o = if P::PATHS { probe.camera(id, o, d, 1) } else { o };
     let mut thr = V3::new(1.0f32, 1.0, 1.0);
@@ -125,39 +124,23 @@ pub fn trace<P: Probe>(
         if P::PATHS {
             probe.traced(id, o, d, hit, t, 1);
         }
+        // Scenes with media: the nearest of the surface and a free-flight sample per medium.
+        let (hit, t) =
+            if prep.media.is_empty() { (hit, t) } else { sample_media(&prep.media, o, d, hit, t, depth, rng) };
         if hit == MISS {
             return (thr.mul_elem(background(&prep.sky, d)).to_array(), rays);
         }
-        let (srf, kind, row) = if hit < QUAD_BASE {
-            let i = hit as usize;
-            let srf = surface(o, d, t, V3::new(sp.cx[i], sp.cy[i], sp.cz[i]), sp.r[i]);
-            if P::PATHS {
-                probe.shaded(id, hit, sp.r[i], srf.n, srf.front, 1);
-            }
-            (srf, sp.kind[i], sp.row[i] as usize)
+        let (next_o, dir, atten) = if hit >= MEDIUM_BASE {
+            // Isotropic scattering inside medium k: a uniform direction.
+            rng.seek(layout::scatter(depth));
+            let dir = unit_vector(rng);
+            (o + d * t, dir, prep.media.albedo[(hit - MEDIUM_BASE) as usize])
         } else {
-            let qs = &prep.quads;
-            let i = (hit - QUAD_BASE) as usize;
-            let [nx, ny, nz, dn, ..] = qs.shade[i].0;
-            let srf = quad_surface(o, d, t, V3::new(nx, ny, nz), dn);
-            if P::PATHS {
-                probe.shaded(id, hit, 0.0, srf.n, srf.front, 1);
-            }
-            (srf, qs.kind[i], qs.row[i] as usize)
-        };
-        let m = &prep.materials;
-        let (dir, atten) = match prep.plan.mode {
-            Mode::Normals => return (normal_colour(srf.n).to_array(), rays),
-            Mode::Flat | Mode::Gradient => return (m.flat_colour(kind, row as u32), rays),
-            Mode::Path if kind == Kind::DiffuseLight => {
-                let (emit, one_sided) = m.light[row];
-                let e = emission(V3::from_array(emit), one_sided, srf.front);
-                return (thr.mul_elem(e).to_array(), rays);
-            }
-            Mode::Path => match scatter(prep, hit, kind, row, d, &srf, depth, rng) {
-                Some(s) => s,
-                None => return ([0.0; 3], rays),
-            },
+            let (dir, atten, srf) = match shade(prep, o, d, t, hit, id, depth, thr, rng, probe) {
+                Ok(s) => s,
+                Err(c) => return (c, rays),
+            };
+            (spawn(&srf, dir), dir, atten)
         };
         thr = thr.mul_elem(V3::from_array(atten));
         if thr.x == 0.0 && thr.y == 0.0 && thr.z == 0.0 {
@@ -171,8 +154,63 @@ pub fn trace<P: Probe>(
             }
             thr = t;
         }
-        o = spawn(&srf, dir);
+        o = next_o;
         d = dir;
     }
     ([0.0; 3], prep.settings.max_depth)
+}
+
+/// A scattered path: its new direction, the attenuation, the surface it leaves.
+type Scattered = (V3<f32>, [f32; 3], Surface<f32>);
+
+/// The surface hit `hit` at `t` along `o + t d`: the scattered direction, the
+/// attenuation and the surface, or the path's final colour (a light, a debug
+/// shading, an absorbed path).
+#[inline(always)]
+#[allow(clippy::too_many_arguments)]
+fn shade<P: Probe>(
+    prep: &Prepared,
+    o: V3<f32>,
+    d: V3<f32>,
+    t: f32,
+    hit: u32,
+    id: PathId<f32>,
+    depth: u32,
+    thr: V3<f32>,
+    rng: &mut impl Stream<f32>,
+    probe: &mut P,
+) -> Result<Scattered, [f32; 3]> {
+    let sp = &prep.spheres;
+    let (srf, kind, row) = if hit < QUAD_BASE {
+        let i = hit as usize;
+        let srf = surface(o, d, t, V3::new(sp.cx[i], sp.cy[i], sp.cz[i]), sp.r[i]);
+        if P::PATHS {
+            probe.shaded(id, hit, sp.r[i], srf.n, srf.front, 1);
+        }
+        (srf, sp.kind[i], sp.row[i] as usize)
+    } else {
+        let qs = &prep.quads;
+        let i = (hit - QUAD_BASE) as usize;
+        let [nx, ny, nz, dn, ..] = qs.shade[i].0;
+        let srf = quad_surface(o, d, t, V3::new(nx, ny, nz), dn);
+        if P::PATHS {
+            probe.shaded(id, hit, 0.0, srf.n, srf.front, 1);
+        }
+        (srf, qs.kind[i], qs.row[i] as usize)
+    };
+    let m = &prep.materials;
+    let (dir, atten) = match prep.plan.mode {
+        Mode::Normals => return Err(normal_colour(srf.n).to_array()),
+        Mode::Flat | Mode::Gradient => return Err(m.flat_colour(kind, row as u32)),
+        Mode::Path if kind == Kind::DiffuseLight => {
+            let (emit, one_sided) = m.light[row];
+            let e = emission(V3::from_array(emit), one_sided, srf.front);
+            return Err(thr.mul_elem(e).to_array());
+        }
+        Mode::Path => match scatter(prep, hit, kind, row, d, &srf, depth, rng) {
+            Some(s) => s,
+            None => return Err([0.0; 3]),
+        },
+    };
+    Ok((dir, atten, srf))
 }

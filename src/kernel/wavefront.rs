@@ -30,12 +30,12 @@ use super::{background, normal_colour, texture_albedo};
 use crate::choice::Mode;
 use crate::estimator::{roulette, roulette_applies};
 use crate::film::TileFilm;
-use crate::geometry::{quad_surface, spawn, surface, Shade, Surface, MISS, QUAD_BASE};
+use crate::geometry::{quad_surface, sample_media, spawn, surface, Shade, Surface, MEDIUM_BASE, MISS, QUAD_BASE};
 use crate::material::{dielectric, emission, lambertian, metal, Kind};
 use crate::plan::{KindSet, Prepared};
 use crate::probe::{PathId, Probe, Stage};
 use crate::real::{U32Lanes, Wide, MAX_LANES};
-use crate::sampling::{layout, PathSampler, Stream};
+use crate::sampling::{layout, unit_vector, PathSampler, Stream};
 use crate::texture::TexKind;
 use crate::vec3::V3;
 use std::ops::Range;
@@ -374,6 +374,9 @@ fn bounce<W: Wide, P: Probe, S: PathSampler>(
     let n = ws.cur.len;
     probe.rays(depth, n as u32);
     intersect::<W, P>(prep, ws, n, probe);
+    if !prep.media.is_empty() {
+        medium_pass::<W, S>(prep, sampler, ws, n, depth);
+    }
     shade_misses::<W>(prep, ws, n);
     let mut len = [0usize; MISS_QUEUE + 1];
     let mut queues = ws.queue.take().expect("the queues are put back after every bounce");
@@ -387,7 +390,7 @@ fn bounce<W: Wide, P: Probe, S: PathSampler>(
     // material kinds (one lookup per lane), then, per kind the plan has, the
     // indices of its lanes compressed onto its queue, in path order as one
     // path at a time would append them. Misses (shaded above) join no queue.
-    if prep.quads.is_empty() {
+    if prep.quads.is_empty() && prep.media.is_empty() {
         // The path tracer queues only the kinds it has passes for (the plan's);
         // the debug modes shade every kind.
         let kinds = match prep.plan.mode {
@@ -400,7 +403,8 @@ fn bounce<W: Wide, P: Probe, S: PathSampler>(
             let hits = W::mask_bits(W::u_lt(hit, W::u_splat(MISS))) & low_bits(n - i);
             let kind = W::u_from_fn(|k| prep.spheres.kind[W::lane_u(hit, k) as usize & kind_mask] as u32);
             let idx = iota.wrapping_add(W::u_splat(i as u32));
-            for k in kinds.iter() {
+            // (No medium here: the scene has none.)
+            for k in kinds.surfaces() {
                 let q = k as usize;
                 let keep = W::mask_bits(W::u_eq(kind, W::u_splat(k as u32))) & hits;
                 len[q] += W::compress_store_u_pow2(idx, keep, &mut queues[q], len[q]);
@@ -412,12 +416,16 @@ fn bounce<W: Wide, P: Probe, S: PathSampler>(
         );
     } else {
         for (i, &h) in ws.hit[..n].iter().enumerate() {
+            // Hit indices in order: spheres, quads, media, MISS (two tests for
+            // a sphere or a quad, as before media existed).
             let q = if h < QUAD_BASE {
                 prep.spheres.kind[h as usize & kind_mask] as usize
+            } else if h < MEDIUM_BASE {
+                prep.quads.kind[(h - QUAD_BASE) as usize & quad_mask] as usize
             } else if h == MISS {
                 MISS_QUEUE
             } else {
-                prep.quads.kind[(h - QUAD_BASE) as usize & quad_mask] as usize
+                Kind::Isotropic as usize
             };
             queues[q][len[q] & MASK] = i as u32;
             len[q] += 1;
@@ -434,6 +442,9 @@ fn bounce<W: Wide, P: Probe, S: PathSampler>(
                     let c = v3_gather::<W>(&ws.cur.thr, idx).mul_elem(emission(emit, one_sided, srf.front));
                     write_results(ws, idx, active, c);
                 });
+            }
+            Mode::Path if kind == Kind::Isotropic && prep.plan.kinds.contains(kind) => {
+                isotropic_pass::<W, P, S>(prep, sampler, ws, q, qlen, depth, probe);
             }
             Mode::Path if kind == Kind::Lambertian && !prep.plan.textures.is_empty() => {
                 textured_lambertian_pass::<W, P, S>(prep, sampler, ws, q, qlen, depth, probe);
@@ -473,6 +484,83 @@ fn intersect<W: Wide, P: Probe>(prep: &Prepared, ws: &mut Workspace, n: usize, p
             probe.traced(ws.ids::<W>(&idx), o, d, hit, t, low_bits(live));
         }
     }
+}
+
+/// Scenes with media: the first `n` paths' closest hits become the nearest
+/// of the surface and a free-flight sample per medium
+/// ([`crate::geometry::media`]), W contiguous paths at a time. Every path
+/// draws (its sampler state is stored back), as the scalar kernel's does.
+#[inline(never)]
+fn medium_pass<W: Wide, S: PathSampler>(prep: &Prepared, sampler: S, ws: &mut Workspace, n: usize, depth: u32) {
+    for i in (0..n).step_by(W::LANES) {
+        let p = &mut ws.cur;
+        let mut rng = sampler.lanes::<W>(std::array::from_fn(|w| {
+            if w < S::WORDS {
+                W::load_u_pow2(&p.rng[w], i)
+            } else {
+                W::u_splat(0)
+            }
+        }));
+        let (o, d) = (Paths::v3::<W>(&p.o, i), Paths::v3::<W>(&p.d, i));
+        let (hit, t) = (W::load_u_pow2(&ws.hit, i), W::load_pow2(&ws.t, i));
+        let (hit, t) = sample_media(&prep.media, o, d, hit, t, depth, &mut rng);
+        W::store_u_pow2(hit, &mut ws.hit, i);
+        t.store_pow2(&mut ws.t, i);
+        for (w, words) in S::lane_words::<W>(&rng).into_iter().enumerate().take(S::WORDS) {
+            W::store_u_pow2(words, &mut p.rng[w], i);
+        }
+    }
+}
+
+/// The isotropic queue (paths that stopped inside a medium): a uniform
+/// direction from the bounce's two scattering dimensions, the throughput
+/// times the medium's albedo, and the new ray from the stopping point
+/// `o + t d` (inside the medium: no surface, no offset).
+#[inline(never)]
+#[allow(clippy::too_many_arguments)]
+fn isotropic_pass<W: Wide, P: Probe, S: PathSampler>(
+    prep: &Prepared,
+    sampler: S,
+    ws: &mut Workspace,
+    queue: &Arr<u32>,
+    len: usize,
+    depth: u32,
+    probe: &mut P,
+) {
+    let m = &prep.media;
+    for_packets::<W, P>(queue, len, probe, |idx, active, _| {
+        let cur = &ws.cur;
+        let hit = W::gather_u_pow2(&ws.hit, idx);
+        let k = |j: usize| W::lane_u(hit, j).wrapping_sub(MEDIUM_BASE) as usize;
+        let albedo = V3::new(
+            W::from_fn(|j| m.albedo[k(j)][0]),
+            W::from_fn(|j| m.albedo[k(j)][1]),
+            W::from_fn(|j| m.albedo[k(j)][2]),
+        );
+        let d = v3_gather::<W>(&cur.d, idx);
+        let p = v3_gather::<W>(&cur.o, idx) + d * W::gather_pow2(&ws.t, idx);
+        let mut rng = sampler.lanes::<W>(std::array::from_fn(|w| {
+            if w < S::WORDS {
+                W::gather_u_pow2(&cur.rng[w], idx)
+            } else {
+                W::u_splat(0)
+            }
+        }));
+        rng.seek(layout::scatter(depth));
+        let dir = unit_vector(&mut rng);
+        let mut thr = v3_gather::<W>(&cur.thr, idx).mul_elem(albedo);
+        let zero = W::splat(0.0);
+        let mut alive = !(thr.x.eq(zero) & thr.y.eq(zero) & thr.z.eq(zero));
+        if roulette_applies(&prep.estimator, depth + 1) {
+            rng.seek(layout::roulette(depth));
+            let (t, survives) = roulette(thr, &mut rng);
+            thr = t;
+            alive = alive & survives;
+        }
+        let alive = W::mask_bits(alive) & low_bits(active);
+        let slot = W::gather_u_pow2(&cur.slot, idx);
+        ws.next.append::<W, S>(alive, p, dir, thr, S::lane_words::<W>(&rng), slot);
+    });
 }
 
 /// The misses of the first `n` paths end here, W contiguous paths at a time
@@ -707,8 +795,8 @@ fn scatter<W: Wide, P: Probe, S: PathSampler>(
         Kind::Lambertian => (lambertian(srf.n, &mut rng), all),
         Kind::Metal => metal(d, srf.n, param, &mut rng),
         Kind::Dielectric => (dielectric(d, srf.n, srf.front, param, &mut rng), all),
-        // Lights have their own pass (`bounce`) and never scatter.
-        Kind::DiffuseLight => (d, !all),
+        // Lights and media have their own passes (`bounce`).
+        Kind::DiffuseLight | Kind::Isotropic => (d, !all),
     };
     let zero = W::splat(0.0);
     let dark = thr.x.eq(zero) & thr.y.eq(zero) & thr.z.eq(zero);

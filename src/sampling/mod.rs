@@ -261,6 +261,7 @@ impl PathSampler for Sobol {
 /// | 2, 3 | lens (radius, angle), when the camera has a lens |
 /// | 4 + 3 depth, +1 | scattering: two for a lambertian or metal direction (z, angle); a dielectric's reflect-or-refract choice takes the first |
 /// | 4 + 3 depth + 2 | the Russian-roulette decision after that bounce |
+/// | 0x4000_1000 + k 2^22 + depth | scenes with media: the free-flight distance of medium k at that bounce ([`layout::free_flight`]; padding, not Sobol) |
 ///
 /// Bounces 0 to 39 take Sobol dimensions (4 to 123, [`sobol::SOBOL_DIMS`] in
 /// all); from bounce 40 on the dimensions are padding (independent hashed
@@ -284,6 +285,26 @@ pub mod layout {
     #[inline(always)]
     pub const fn roulette(depth: u32) -> u32 {
         scatter(depth).wrapping_add(2)
+    }
+
+    /// The first free-flight dimension (constant media).
+    pub const FREE_FLIGHT: u32 = 0x4000_1000;
+    /// The stride between the free-flight dimensions of two media: paths of
+    /// up to 2^22 bounces never share one.
+    pub const FREE_FLIGHT_STRIDE: u32 = 1 << 22;
+
+    /// The free-flight dimension of medium `k` (the scene's k-th, at most
+    /// `limits::MAX_MEDIA`) at bounce `depth`: `0x4000_1000 + k 2^22 + depth`.
+    ///
+    /// Padding under Sobol (independent hashed values), not Sobol points: the
+    /// low dimensions belong to the pixel, the lens and the bounces, in the
+    /// order every documented image hash was rendered with, and a
+    /// medium's draw at every bounce would otherwise shift them. Each path
+    /// draws these at every bounce, whether its ray meets the medium or not,
+    /// so the layout stays independent of the data.
+    #[inline(always)]
+    pub const fn free_flight(depth: u32, k: u32) -> u32 {
+        FREE_FLIGHT.wrapping_add(k.wrapping_mul(FREE_FLIGHT_STRIDE)).wrapping_add(depth)
     }
 }
 

@@ -7,7 +7,7 @@
 //! sphere list stops at [`MAX_SPHERES`] while it is read (memory is bounded
 //! by the limit, not by the file).
 
-use crate::limits::{MAX_GROUPS, MAX_QUADS, MAX_SPHERES};
+use crate::limits::{MAX_GROUPS, MAX_MEDIA, MAX_QUADS, MAX_SPHERES};
 use serde::de::{self, Deserializer, IgnoredAny, MapAccess, SeqAccess, Unexpected, Visitor};
 use std::fmt;
 use std::marker::PhantomData;
@@ -269,6 +269,11 @@ pub fn boxes<'de, D: Deserializer<'de>>(d: D) -> Result<Vec<super::QuadBox>, D::
 /// The group list, refused beyond [`MAX_GROUPS`].
 pub fn groups<'de, D: Deserializer<'de>>(d: D) -> Result<Vec<super::Group>, D::Error> {
     bounded(d, MAX_GROUPS, "groups", "limits::MAX_GROUPS")
+}
+
+/// A media list, refused beyond [`MAX_MEDIA`].
+pub fn media<'de, D: Deserializer<'de>>(d: D) -> Result<Vec<super::Medium>, D::Error> {
+    bounded(d, MAX_MEDIA, "media", "limits::MAX_MEDIA")
 }
 
 struct BackgroundVisitor;

@@ -9,7 +9,7 @@
 //! bounding box of a rotated box is that of its world-space quads, each
 //! covering its four corners (#749, #1402).
 
-use super::{Group, Material, Quad, QuadBox, Scene, Sphere};
+use super::{Group, Material, Medium, MediumBoundary, Quad, QuadBox, Scene, Sphere};
 
 /// A scene's primitives in world space, in the one global order the
 /// closest-hit tie rule uses: spheres (the scene's, then each group's), then
@@ -18,6 +18,38 @@ use super::{Group, Material, Quad, QuadBox, Scene, Sphere};
 pub struct Flat {
     pub spheres: Vec<Sphere>,
     pub quads: Vec<Quad>,
+    /// The media (the scene's, then each group's), in the order of their
+    /// hit indices and sampler dimensions.
+    pub media: Vec<FlatMedium>,
+}
+
+/// A medium in world space; its boundary in f64 (the kernel side rounds it once).
+#[derive(Clone, Copy, Debug, PartialEq)]
+pub struct FlatMedium {
+    pub boundary: FlatBoundary,
+    pub density: f32,
+    pub albedo: [f32; 3],
+}
+
+/// A medium's boundary in world space: a sphere, or a box in its own frame
+/// (its centre, its three unit axes in world space and its half sizes along
+/// them), so that its chord is an exact slab test in that frame.
+#[derive(Clone, Copy, Debug, PartialEq)]
+pub enum FlatBoundary {
+    Sphere { center: [f64; 3], radius: f64 },
+    Box { center: [f64; 3], axes: [[f64; 3]; 3], half: [f64; 3] },
+}
+
+impl FlatBoundary {
+    /// The largest absolute coordinate of a point of the boundary (at most; for extents).
+    pub fn reach(&self) -> f64 {
+        match self {
+            FlatBoundary::Sphere { center, radius } => center.iter().fold(0.0f64, |m, x| m.max(x.abs())) + radius.abs(),
+            FlatBoundary::Box { center, half, .. } => {
+                center.iter().fold(0.0f64, |m, x| m.max(x.abs())) + half.iter().map(|h| h.abs()).sum::<f64>()
+            }
+        }
+    }
 }
 
 /// `rotate_y` (degrees) then `translate`, in f64.
@@ -89,7 +121,28 @@ pub fn box_quads(b: &QuadBox) -> [([f64; 3], [f64; 3], [f64; 3]); 6] {
     ]
 }
 
+/// A medium under transform `t`.
+fn medium(t: &Transform, m: &Medium) -> FlatMedium {
+    let boundary = match m.boundary {
+        MediumBoundary::Sphere { center, radius } => {
+            FlatBoundary::Sphere { center: t.point(f64s(center)), radius: radius as f64 }
+        }
+        MediumBoundary::Box { a, b } => {
+            let (a, b) = (f64s(a), f64s(b));
+            let centre: [f64; 3] = std::array::from_fn(|i| 0.5 * (a[i] + b[i]));
+            let half: [f64; 3] = std::array::from_fn(|i| 0.5 * (a[i] - b[i]).abs());
+            let axis = |i: usize| t.vector(std::array::from_fn(|j| if i == j { 1.0 } else { 0.0 }));
+            FlatBoundary::Box { center: t.point(centre), axes: [axis(0), axis(1), axis(2)], half }
+        }
+    };
+    FlatMedium { boundary, density: m.density, albedo: m.albedo }
+}
+
 impl Flat {
+    fn add_media(&mut self, t: &Transform, media: &[Medium]) {
+        self.media.extend(media.iter().map(|m| medium(t, m)));
+    }
+
     fn add(&mut self, t: &Transform, spheres: &[Sphere], quads: &[Quad], boxes: &[QuadBox]) {
         for s in spheres {
             self.spheres.push(Sphere {
@@ -113,6 +166,7 @@ impl Flat {
 pub(super) fn group(g: &Group) -> Flat {
     let mut flat = Flat::default();
     flat.add(&Transform::of(g), &g.spheres, &g.quads, &g.boxes);
+    flat.add_media(&Transform::of(g), &g.media);
     flat
 }
 
@@ -124,6 +178,10 @@ impl Scene {
         flat.add(&Transform::IDENTITY, &self.spheres, &self.quads, &self.boxes);
         for g in &self.groups {
             flat.add(&Transform::of(g), &g.spheres, &g.quads, &g.boxes);
+        }
+        flat.add_media(&Transform::IDENTITY, &self.media);
+        for g in &self.groups {
+            flat.add_media(&Transform::of(g), &g.media);
         }
         flat
     }
@@ -148,6 +206,11 @@ impl Scene {
             }
         }
         names
+    }
+
+    /// The number of media [`Scene::flatten`] gives (the scene's and its groups').
+    pub fn media_count(&self) -> usize {
+        self.media.len() + self.groups.iter().map(|g| g.media.len()).sum::<usize>()
     }
 
     /// The number of spheres and of quads [`Scene::flatten`] gives (without flattening).

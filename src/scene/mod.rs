@@ -17,7 +17,7 @@ mod validate;
 
 pub use crate::choice::Mode;
 pub use file::{load_scene, save_scene, scene_from_bytes, scene_from_str, scene_to_string, Format};
-pub use flatten::{box_quads, Flat};
+pub use flatten::{box_quads, Flat, FlatBoundary, FlatMedium};
 pub use presets::{final_scene, preset, presets, Preset, PresetGroup};
 pub use render_table::RenderTable;
 pub use source::SceneSource;
@@ -328,6 +328,41 @@ pub struct QuadBox {
     pub material: Material,
 }
 
+/// The Next Week's `constant_medium`: a convex boundary filled with a medium
+/// of constant `density` (per unit length) that scatters isotropically with
+/// attenuation `albedo`. The boundary is no surface: it is invisible unless a
+/// primitive is placed on it too (the book's subsurface sphere is a glass
+/// sphere and a medium with the same boundary).
+#[derive(Serialize, Deserialize, Clone, Copy, Debug, PartialEq)]
+#[serde(deny_unknown_fields)]
+pub struct Medium {
+    pub boundary: MediumBoundary,
+    #[serde(deserialize_with = "de::f32")]
+    pub density: f32,
+    #[serde(deserialize_with = "de::vec3")]
+    pub albedo: [f32; 3],
+}
+
+/// A medium's boundary, written `{"sphere": {"center": [x, y, z], "radius":
+/// r}}` or `{"box": {"a": [x, y, z], "b": [x, y, z]}}` (the axis-aligned box of
+/// corners `a`, `b`, turned and moved with its group).
+#[derive(Serialize, Deserialize, Clone, Copy, Debug, PartialEq)]
+#[serde(rename_all = "lowercase", deny_unknown_fields)]
+pub enum MediumBoundary {
+    Sphere {
+        #[serde(deserialize_with = "de::vec3")]
+        center: [f32; 3],
+        #[serde(deserialize_with = "de::f32")]
+        radius: f32,
+    },
+    Box {
+        #[serde(deserialize_with = "de::vec3")]
+        a: [f32; 3],
+        #[serde(deserialize_with = "de::vec3")]
+        b: [f32; 3],
+    },
+}
+
 /// Primitives under one transform, the book's instance order: first
 /// `rotate_y` (degrees, about the y axis through the origin), then
 /// `translate`. Flattened into world-space primitives when a render job is
@@ -345,6 +380,9 @@ pub struct Group {
     pub quads: Vec<Quad>,
     #[serde(default, skip_serializing_if = "Vec::is_empty", deserialize_with = "de::boxes")]
     pub boxes: Vec<QuadBox>,
+    /// Constant media, their boundaries turned and moved with the group.
+    #[serde(default, skip_serializing_if = "Vec::is_empty", deserialize_with = "de::media")]
+    pub media: Vec<Medium>,
 }
 
 fn is_zero(x: &f32) -> bool {
@@ -482,6 +520,9 @@ pub struct Scene {
     /// Instances: primitives under `rotate_y` then `translate`.
     #[serde(default, skip_serializing_if = "Vec::is_empty", deserialize_with = "de::groups")]
     pub groups: Vec<Group>,
+    /// The Next Week's constant media (world space).
+    #[serde(default, skip_serializing_if = "Vec::is_empty", deserialize_with = "de::media")]
+    pub media: Vec<Medium>,
     #[serde(default)]
     pub sky: Sky,
     /// What rays that leave the scene see (default: the sky gradient).

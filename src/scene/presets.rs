@@ -1,6 +1,9 @@
 //! A preset for every image of the seed (SEED-NOTES.md), with the book's physics.
 
-use super::{Background, Camera, Group, Material, Mode, Quad, QuadBox, RenderTable, Scene, Sky, Sphere, Texture};
+use super::{
+    Background, Camera, Group, Material, Medium, MediumBoundary, Mode, Quad, QuadBox, RenderTable, Scene, Sky, Sphere,
+    Texture,
+};
 use crate::real::Real;
 use rand_core::{Rng, SeedableRng};
 use rand_xoshiro::Xoshiro128Plus;
@@ -80,6 +83,7 @@ fn scene(mode: Mode, camera: Camera, spheres: Vec<Sphere>, render: RenderTable) 
         quads: vec![],
         boxes: vec![],
         groups: vec![],
+        media: vec![],
         sky: Sky::default(),
         background: Background::Sky,
         render,
@@ -348,6 +352,35 @@ fn nw_cornell_box() -> Scene {
     s
 }
 
+/// The Next Week's `cornell_smoke()`: the room of [`nw_cornell_box`] with a
+/// larger, dimmer light, `diffuse_light(7)` at (113, 554, 127) + (330, 0, 0),
+/// (0, 0, 305), and its two boxes, turned and moved as there, as constant
+/// media of density 0.01: the tall one black, the short one white.
+fn nw_cornell_smoke() -> Scene {
+    let mut s = nw_cornell_box_empty();
+    s.quads[2] = quad([113.0, 554.0, 127.0], [330.0, 0.0, 0.0], [0.0, 0.0, 305.0], light([7.0; 3]));
+    let smoke = |b: [f32; 3], albedo: [f32; 3]| Medium {
+        boundary: MediumBoundary::Box { a: [0.0; 3], b },
+        density: 0.01,
+        albedo,
+    };
+    s.groups = vec![
+        Group {
+            rotate_y: 15.0,
+            translate: [265.0, 0.0, 295.0],
+            media: vec![smoke([165.0, 330.0, 165.0], [0.0; 3])],
+            ..Group::default()
+        },
+        Group {
+            rotate_y: -18.0,
+            translate: [130.0, 0.0, 65.0],
+            media: vec![smoke([165.0; 3], [1.0; 3])],
+            ..Group::default()
+        },
+    ];
+    s
+}
+
 /// The Next Week's image 20: the two boxes axis-aligned, not yet rotated.
 fn nw_cornell_box_unrotated() -> Scene {
     let mut s = nw_cornell_box_empty();
@@ -509,6 +542,12 @@ static PRESETS: &[Preset] = &[
         description: "The Next Week: the Cornell box, two rotated boxes (600x600, 200 spp)",
         group: PresetGroup::NextWeek,
         build: nw_cornell_box,
+    },
+    Preset {
+        name: "nw-cornell-smoke",
+        description: "The Next Week: the Cornell box's two boxes as smoke, one black, one white (600x600, 200 spp)",
+        group: PresetGroup::NextWeek,
+        build: nw_cornell_smoke,
     },
     Preset {
         name: "nw-cornell-box-empty",

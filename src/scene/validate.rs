@@ -3,9 +3,9 @@
 //! an error names the field. The kernels' own check (that the f32 camera is
 //! computable at every image size) is the job module's, which runs both once.
 
-use super::{Background, Camera, Group, Material, Mode, Quad, QuadBox, Scene, Sphere, Texture};
+use super::{Background, Camera, Group, Material, Medium, MediumBoundary, Mode, Quad, QuadBox, Scene, Sphere, Texture};
 use crate::error::{Error, Result};
-use crate::limits::{self, MAX_QUADS, MAX_SPHERES};
+use crate::limits::{self, MAX_MEDIA, MAX_QUADS, MAX_SPHERES};
 
 /// What a non-finite value is: a number that overflowed f32 reads as an
 /// infinity (JSON has no infinity literal, so there it always is one).
@@ -85,7 +85,14 @@ impl Scene {
                 format!("at most {MAX_QUADS} quads (six per box, groups' included), got {quads}"),
             ));
         }
+        let media = self.media_count();
+        if media > MAX_MEDIA {
+            return Err(Error::invalid("media", format!("at most {MAX_MEDIA} media (groups' included), got {media}")));
+        }
         members("", &self.spheres, &self.quads, &self.boxes)?;
+        for (i, m) in self.media.iter().enumerate() {
+            m.validate(&|name: &str| format!("media[{i}].{name}"))?;
+        }
         for (i, g) in self.groups.iter().enumerate() {
             g.validate(&format!("groups[{i}]"))?;
         }
@@ -114,9 +121,24 @@ impl Group {
         finite(&format!("{field}.rotate_y"), self.rotate_y)?;
         point(&format!("{field}.translate"), self.translate)?;
         members(&format!("{field}."), &self.spheres, &self.quads, &self.boxes)?;
+        for (i, m) in self.media.iter().enumerate() {
+            m.validate(&|name: &str| format!("{field}.media[{i}].{name}"))?;
+        }
         let flat = super::flatten::group(self);
         for s in &flat.spheres {
             point(&format!("{field}.translate"), s.center)?;
+        }
+        for m in &flat.media {
+            if m.boundary.reach() > limits::MAX_COORD as f64 {
+                return Err(Error::invalid(
+                    format!("{field}.translate"),
+                    format!(
+                        "a medium once moved reaches {:e}, outside [-{m:e}, {m:e}] (the range rtow's f32 kernels are verified in)",
+                        m.boundary.reach(),
+                        m = limits::MAX_COORD
+                    ),
+                ));
+            }
         }
         for q in &flat.quads {
             q.validate(&|name: &str| format!("{field} (a quad once moved).{name}"))?;
@@ -188,6 +210,61 @@ impl QuadBox {
             }
         }
         self.material.validate(&|name: &str| field(&format!("material.{name}")))
+    }
+}
+
+impl Medium {
+    /// The boundary (a sphere of positive radius, or a box of positive size,
+    /// in range), a finite density `>= 0` and a colour.
+    fn validate(&self, field: &dyn Fn(&str) -> String) -> Result<()> {
+        match self.boundary {
+            MediumBoundary::Sphere { center, radius } => {
+                point(&field("boundary.sphere.center"), center)?;
+                finite(&field("boundary.sphere.radius"), radius)?;
+                if !(limits::MIN_RADIUS..=limits::MAX_RADIUS).contains(&radius) {
+                    return Err(Error::invalid(
+                        field("boundary.sphere.radius"),
+                        format!(
+                            "a medium's sphere must have a radius in [{:e}, {:e}], got {radius:e}",
+                            limits::MIN_RADIUS,
+                            limits::MAX_RADIUS
+                        ),
+                    ));
+                }
+                let reach = center.iter().fold(0.0f64, |m, &x| m.max((x as f64).abs())) + radius as f64;
+                if reach > limits::MAX_COORD as f64 {
+                    return Err(Error::invalid(
+                        field("boundary.sphere.radius"),
+                        format!(
+                            "the sphere reaches {reach:e}, outside [-{m:e}, {m:e}] (the range rtow's f32 kernels are verified in)",
+                            m = limits::MAX_COORD
+                        ),
+                    ));
+                }
+            }
+            MediumBoundary::Box { a, b } => {
+                point(&field("boundary.box.a"), a)?;
+                point(&field("boundary.box.b"), b)?;
+                for axis in 0..3 {
+                    let size = (a[axis] as f64 - b[axis] as f64).abs();
+                    if size < limits::MIN_RADIUS as f64 {
+                        return Err(Error::invalid(
+                            field("boundary.box.b"),
+                            format!(
+                                "a medium's box must be at least {:e} in size along each axis, got {size:e} along {}",
+                                limits::MIN_RADIUS,
+                                ["x", "y", "z"][axis]
+                            ),
+                        ));
+                    }
+                }
+            }
+        }
+        finite(&field("density"), self.density)?;
+        if self.density < 0.0 {
+            return Err(Error::invalid(field("density"), format!("must be >= 0, got {}", self.density)));
+        }
+        colour(&field("albedo"), self.albedo)
     }
 }
 

@@ -36,6 +36,11 @@ fn json_render(render: &str) -> String {
     format!("{{\n  {CAMERA_JSON},\n  \"render\": {{{render}}}\n}}\n")
 }
 
+/// A JSON scene: the default camera and one medium with `medium` as its body.
+fn json_media(medium: &str) -> String {
+    format!("{{\n  {CAMERA_JSON},\n  \"media\": [\n    {{{medium}}}\n  ]\n}}\n")
+}
+
 fn case(file: &'static str, text: String, names: &'static str, at: Option<&'static str>) -> Case {
     Case { file, text, names, at }
 }
@@ -286,6 +291,33 @@ pub fn cases() -> Vec<Case> {
             format!("{CAMERA_TOML}[render]\nwidth = 5000000000\n"),
             "render.width",
             Some("5000000000"),
+        ),
+        // Constant media.
+        case(
+            "medium_negative_density.json",
+            json_media(r#""boundary": {"sphere": {"center": [0, 0, -1], "radius": 0.5}}, "density": -1, "albedo": [1, 1, 1]"#),
+            "media[0].density",
+            None,
+        ),
+        case(
+            "medium_unknown_boundary.json",
+            json_media(r#""boundary": {"cone": {"a": [0, 0, 0]}}, "density": 1, "albedo": [1, 1, 1]"#),
+            "media[0].boundary",
+            Some(r#""cone""#),
+        ),
+        case(
+            "medium_flat_box.toml",
+            format!(
+                "{CAMERA_TOML}\n[[media]]\ndensity = 0.5\nalbedo = [1, 1, 1]\nboundary = {{ box = {{ a = [0, 0, 0], b = [1, 0, 1] }} }}\n"
+            ),
+            "media[0].boundary.box.b",
+            None,
+        ),
+        case(
+            "medium_zero_radius.json",
+            json_media(r#""boundary": {"sphere": {"center": [0, 0, -1], "radius": 0}}, "density": 1, "albedo": [1, 1, 1]"#),
+            "media[0].boundary.sphere.radius",
+            None,
         ),
     ]
 }
