@@ -61,8 +61,12 @@ fn emission_furnace_is_exact() {
     for one_sided in [false, true] {
         let mut sc = empty_scene(Camera::looking([5.0, 5.0, 1.0], [5.0, 5.0, 9.0], 100.0), [0.0; 3]);
         sc.quads = room(light(l, one_sided));
-        sc.spheres =
-            vec![Sphere { center: [5.0, 5.0, 6.0], radius: 1.5, material: Material::Lambertian { albedo: a.into() } }];
+        sc.spheres = vec![Sphere {
+            center: [5.0, 5.0, 6.0],
+            center1: None,
+            radius: 1.5,
+            material: Material::Lambertian { albedo: a.into() },
+        }];
         let al: [f32; 3] = std::array::from_fn(|k| a[k] * l[k]);
         for kernel in [Scalar, Simd8, Simd16] {
             let img = image(&sc, settings(32, 32, 1, 50, 3), kernel);
@@ -117,7 +121,7 @@ fn white_furnace_with_emitters_converges_to_the_emission() {
     let white = Material::Lambertian { albedo: [1.0; 3].into() };
     sc.quads =
         walls.into_iter().enumerate().map(|(i, q)| if i < 2 { Quad { material: white, ..q } } else { q }).collect();
-    sc.spheres = vec![Sphere { center: [5.0, 5.0, 6.0], radius: 2.0, material: white }];
+    sc.spheres = vec![Sphere { center: [5.0, 5.0, 6.0], center1: None, radius: 2.0, material: white }];
     let img = image(&sc, settings(32, 32, 64, 50, 9), Simd8);
     let mean: f64 = img.data.iter().flatten().map(|&x| x as f64).sum::<f64>() / (img.data.len() * 3) as f64;
     assert!((mean - l as f64).abs() < 0.01 * l as f64, "mean {mean}, expected {l}");

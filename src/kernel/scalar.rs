@@ -5,7 +5,7 @@ use super::{background, normal_colour, texture_albedo};
 use crate::choice::Mode;
 use crate::estimator::{roulette, roulette_applies};
 use crate::film::TileFilm;
-use crate::geometry::{quad_surface, spawn, surface, Surface, MISS, QUAD_BASE};
+use crate::geometry::{quad_surface, spawn, surface, Surface, MISS, MOVING_BASE, QUAD_BASE};
 use crate::material::{dielectric, emission, lambertian, metal, Kind};
 use crate::plan::Prepared;
 use crate::probe::{PathId, Probe};
@@ -60,8 +60,8 @@ fn camera_ray(prep: &Prepared, x: u32, y: u32, rng: &mut impl Stream<f32>) -> (V
 /// The closest hit of one ray (out of line in `phases` builds).
 #[cfg_attr(not(feature = "phases"), inline(always))]
 #[cfg_attr(feature = "phases", inline(never))]
-fn closest_hit<P: Probe>(prep: &Prepared, o: V3<f32>, d: V3<f32>, probe: &mut P) -> (u32, f32) {
-    prep.closest_hit(o, d, probe)
+fn closest_hit<P: Probe>(prep: &Prepared, o: V3<f32>, d: V3<f32>, time: f32, probe: &mut P) -> (u32, f32) {
+    prep.closest_hit(o, d, time, probe)
 }
 
 /// The scattered direction and attenuation of a path that hit material
@@ -115,11 +115,19 @@ pub fn trace<P: Probe>(
     let sp = &prep.spheres;
     let (o, mut d) = camera_ray(prep, x, y, rng);
     let mut o = if P::PATHS { probe.camera(id, o, d, 1) } else { o };
+    // The path's time (scenes with moving spheres only), inherited by every
+    // ray it scatters.
+    let time = if prep.moving.is_empty() {
+        0.0
+    } else {
+        rng.seek(layout::TIME);
+        rng.next()
+    };
     let mut thr = V3::new(1.0f32, 1.0, 1.0);
     for depth in 0..prep.settings.max_depth {
         let rays = depth + 1;
         probe.rays(depth, 1);
-        let (hit, t) = closest_hit(prep, o, d, probe);
+        let (hit, t) = closest_hit(prep, o, d, time, probe);
         if P::PATHS {
             probe.traced(id, o, d, hit, t, 1);
         }
@@ -133,6 +141,14 @@ pub fn trace<P: Probe>(
                 probe.shaded(id, hit, sp.r[i], srf.n, srf.front, 1);
             }
             (srf, sp.kind[i], sp.row[i] as usize)
+        } else if hit >= MOVING_BASE {
+            let (m, i) = (&prep.moving, (hit - MOVING_BASE) as usize);
+            let r = m.s.r[i];
+            let srf = surface(o, d, t, m.centre(i, time), r);
+            if P::PATHS {
+                probe.shaded(id, hit, r, srf.n, srf.front, 1);
+            }
+            (srf, m.s.kind[i], m.s.row[i] as usize)
         } else {
             let qs = &prep.quads;
             let i = (hit - QUAD_BASE) as usize;

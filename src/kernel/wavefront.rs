@@ -30,7 +30,7 @@ use super::{background, normal_colour, texture_albedo};
 use crate::choice::Mode;
 use crate::estimator::{roulette, roulette_applies};
 use crate::film::TileFilm;
-use crate::geometry::{quad_surface, spawn, surface, Shade, Surface, MISS, QUAD_BASE};
+use crate::geometry::{centre_at, quad_surface, spawn, surface, Shade, Surface, MISS, MOVING_BASE, QUAD_BASE};
 use crate::material::{dielectric, emission, lambertian, metal, Kind};
 use crate::plan::{KindSet, Prepared};
 use crate::probe::{PathId, Probe, Stage};
@@ -81,6 +81,9 @@ struct Paths {
     rng: [Arr<u32>; 4],
     /// Index of the path's result: `sample_in_batch * active_pixels + active_index`.
     slot: Arr<u32>,
+    /// The path's time (motion blur): written and read only for a scene
+    /// with moving spheres.
+    time: Arr<f32>,
     len: usize,
 }
 
@@ -94,13 +97,16 @@ impl Paths {
             thr: [f(), f(), f()],
             rng: [u(), u(), u(), u()],
             slot: u(),
+            time: f(),
             len: 0,
         }
     }
 
-    /// Appends the lanes of `alive` (a bitmask) of a packet: SIMD stream compaction.
+    /// Appends the lanes of `alive` (a bitmask) of a packet: SIMD stream
+    /// compaction. `time`: the paths' times, for a scene with moving spheres.
     #[cfg_attr(not(feature = "phases"), inline(always))]
     #[cfg_attr(feature = "phases", inline(never))]
+    #[allow(clippy::too_many_arguments)]
     fn append<W: Wide, S: PathSampler>(
         &mut self,
         alive: u32,
@@ -109,6 +115,7 @@ impl Paths {
         thr: V3<W>,
         rng: [W::U; 4],
         slot: W::U,
+        time: Option<W>,
     ) {
         let at = self.len;
         debug_assert!(at <= MAX_PATHS);
@@ -123,6 +130,9 @@ impl Paths {
         }
         for (w, words) in rng.into_iter().enumerate().take(S::WORDS) {
             W::compress_store_u_pow2(words, alive, &mut self.rng[w], at);
+        }
+        if let Some(t) = time {
+            put(&mut self.time, t);
         }
         self.len = at + W::compress_store_u_pow2(slot, alive, &mut self.slot, at);
     }
@@ -330,6 +340,12 @@ fn generate<W: Wide, P: Probe, S: PathSampler>(
             }
         }));
         let (o, d) = prep.camera.ray(W::load_pow2(&p.thr[0], i), W::load_pow2(&p.thr[1], i), &mut rng);
+        if !prep.moving.is_empty() {
+            // The path's time, after its camera ray, as the scalar kernel draws it.
+            rng.seek(layout::TIME);
+            let time: W = rng.next();
+            time.store_pow2(&mut ws.cur.time, i);
+        }
         let o = if P::PATHS {
             let idx: W::Idx = index_run::<W>(i);
             let id = ws.ids::<W>(&idx);
@@ -382,12 +398,13 @@ fn bounce<W: Wide, P: Probe, S: PathSampler>(
     // `QUAD_BASE + i`, above every sphere's and below `MISS`.
     let kind_mask = prep.spheres.kind.len().wrapping_sub(1);
     let quad_mask = prep.quads.kind.len().wrapping_sub(1);
+    let moving_mask = prep.moving.s.kind.len().wrapping_sub(1);
     debug_assert!(prep.spheres.kind.len().is_power_of_two() && prep.quads.kind.len().is_power_of_two());
     // A scene without quads classifies W paths at a time: the packet's
     // material kinds (one lookup per lane), then, per kind the plan has, the
     // indices of its lanes compressed onto its queue, in path order as one
     // path at a time would append them. Misses (shaded above) join no queue.
-    if prep.quads.is_empty() {
+    if prep.spheres_only {
         // The path tracer queues only the kinds it has passes for (the plan's);
         // the debug modes shade every kind.
         let kinds = match prep.plan.mode {
@@ -416,8 +433,10 @@ fn bounce<W: Wide, P: Probe, S: PathSampler>(
                 prep.spheres.kind[h as usize & kind_mask] as usize
             } else if h == MISS {
                 MISS_QUEUE
-            } else {
+            } else if h < MOVING_BASE {
                 prep.quads.kind[(h - QUAD_BASE) as usize & quad_mask] as usize
+            } else {
+                prep.moving.s.kind[(h - MOVING_BASE) as usize & moving_mask] as usize
             };
             queues[q][len[q] & MASK] = i as u32;
             len[q] += 1;
@@ -464,7 +483,8 @@ fn intersect<W: Wide, P: Probe>(prep: &Prepared, ws: &mut Workspace, n: usize, p
     for i in (0..n).step_by(W::LANES) {
         let live = (n - i).min(W::LANES);
         let (o, d) = (Paths::v3::<W>(&ws.cur.o, i), Paths::v3::<W>(&ws.cur.d, i));
-        let (hit, t) = prep.closest_hits(o, d, low_bits(live), probe);
+        let time = &ws.cur.time;
+        let (hit, t) = prep.closest_hits(o, d, low_bits(live), || W::load_pow2(time, i), probe);
         W::store_u_pow2(hit, &mut ws.hit, i);
         t.store_pow2(&mut ws.t, i);
         probe.lanes(Stage::Intersect, live as u32, W::LANES as u32);
@@ -548,8 +568,10 @@ fn textured_lambertian_pass<W: Wide, P: Probe, S: PathSampler>(
 fn material_row(prep: &Prepared, h: u32) -> usize {
     if h < QUAD_BASE {
         prep.spheres.row[h as usize] as usize
-    } else {
+    } else if h < MOVING_BASE {
         prep.quads.row[(h - QUAD_BASE) as usize] as usize
+    } else {
+        prep.moving.s.row[(h - MOVING_BASE) as usize] as usize
     }
 }
 
@@ -613,7 +635,7 @@ struct Hits<W: Wide> {
 #[inline(always)]
 fn surfaces<W: Wide, P: Probe>(prep: &Prepared, ws: &Workspace, idx: &W::Idx, active: usize, probe: &mut P) -> Hits<W> {
     let sph = W::gather_u_pow2(&ws.hit, idx);
-    if prep.quads.is_empty() {
+    if prep.spheres_only {
         // Book one's surfaces, as they were.
         let rec = W::gather_rows8(&prep.spheres.shade, &W::idx_of(sph));
         let c = V3::new(rec[Shade::CX], rec[Shade::CY], rec[Shade::CZ]);
@@ -635,6 +657,11 @@ fn surfaces<W: Wide, P: Probe>(prep: &Prepared, ws: &Workspace, idx: &W::Idx, ac
         let q_mask = W::u_splat(prep.quads.shade.len() as u32 - 1);
         let srec = W::gather_rows8(&prep.spheres.shade, &W::idx_of(sph & s_mask));
         let qrec = W::gather_rows8(&prep.quads.shade, &W::idx_of(sph & q_mask));
+        let (is_sphere, srec) = if prep.moving.is_empty() {
+            (is_sphere, srec)
+        } else {
+            moving_records::<W>(prep, ws, idx, sph, is_sphere, srec)
+        };
         let c = V3::new(srec[Shade::CX], srec[Shade::CY], srec[Shade::CZ]);
         let r = W::select(is_sphere, srec[Shade::R], W::splat(0.0));
         let s_srf = surface(o, d, t, c, srec[Shade::R]);
@@ -652,6 +679,32 @@ fn surfaces<W: Wide, P: Probe>(prep: &Prepared, ws: &Workspace, idx: &W::Idx, ac
     };
     let a = Shade::ALBEDO;
     Hits { d, srf, albedo: V3::new(rec[a], rec[a + 1], rec[a + 2]), param: rec[Shade::PARAM] }
+}
+
+/// A packet's sphere records where some lanes may have hit a moving sphere:
+/// in those lanes the moving sphere's record with its centre at the path's
+/// time ([`centre_at`], the scalar kernel's formula), and the lanes counted
+/// as spheres.
+#[inline(never)]
+fn moving_records<W: Wide>(
+    prep: &Prepared,
+    ws: &Workspace,
+    idx: &W::Idx,
+    hit: W::U32,
+    is_sphere: W,
+    srec: [W; 8],
+) -> (W, [W; 8]) {
+    let m = &prep.moving;
+    let is_moving = !W::u_lt(hit, W::u_splat(MOVING_BASE));
+    let m_mask = W::u_splat(m.s.shade.len() as u32 - 1);
+    let midx = W::idx_of(hit & m_mask);
+    let mut mrec = W::gather_rows8(&m.s.shade, &midx);
+    let vel = W::gather_rows8(&m.vel, &midx);
+    let time = W::gather_pow2(&ws.cur.time, idx);
+    let c =
+        centre_at(V3::new(mrec[Shade::CX], mrec[Shade::CY], mrec[Shade::CZ]), V3::new(vel[0], vel[1], vel[2]), time);
+    (mrec[Shade::CX], mrec[Shade::CY], mrec[Shade::CZ]) = (c.x, c.y, c.z);
+    (is_sphere | is_moving, std::array::from_fn(|k| W::select(is_moving, mrec[k], srec[k])))
 }
 
 fn debug_shade<W: Wide, P: Probe>(
@@ -724,5 +777,7 @@ fn scatter<W: Wide, P: Probe, S: PathSampler>(
     }
     let alive = W::mask_bits(alive) & low_bits(active);
     let slot = W::gather_u_pow2(&cur.slot, idx);
-    ws.next.append::<W, S>(alive, spawn(&srf, dir), dir, thr, S::lane_words::<W>(&rng), slot);
+    // Scattered rays keep their path's time.
+    let time = if prep.moving.is_empty() { None } else { Some(W::gather_pow2(&cur.time, idx)) };
+    ws.next.append::<W, S>(alive, spawn(&srf, dir), dir, thr, S::lane_words::<W>(&rng), slot, time);
 }

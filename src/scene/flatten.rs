@@ -92,7 +92,8 @@ pub fn box_quads(b: &QuadBox) -> [([f64; 3], [f64; 3], [f64; 3]); 6] {
 impl Flat {
     fn add(&mut self, t: &Transform, spheres: &[Sphere], quads: &[Quad], boxes: &[QuadBox]) {
         for s in spheres {
-            self.spheres.push(Sphere { center: f32s(t.point(f64s(s.center))), ..*s });
+            let center1 = s.center1.map(|c| f32s(t.point(f64s(c))));
+            self.spheres.push(Sphere { center: f32s(t.point(f64s(s.center))), center1, ..*s });
         }
         for q in quads {
             self.quads.push(quad(t, f64s(q.q), f64s(q.u), f64s(q.v), q.material));
@@ -165,7 +166,7 @@ mod tests {
         let g = Group {
             rotate_y: 90.0,
             translate: [10.0, 0.0, 0.0],
-            spheres: vec![Sphere { center: [1.0, 0.0, 0.0], radius: 1.0, material: white() }],
+            spheres: vec![Sphere { center: [1.0, 0.0, 0.0], center1: None, radius: 1.0, material: white() }],
             ..Group::default()
         };
         let t = Transform::of(&g);

@@ -266,8 +266,14 @@ impl Material {
 #[derive(Serialize, Deserialize, Clone, Copy, Debug, PartialEq)]
 #[serde(deny_unknown_fields)]
 pub struct Sphere {
+    /// The centre (at time 0, for a moving sphere).
     #[serde(deserialize_with = "de::vec3")]
     pub center: [f32; 3],
+    /// A moving sphere's centre at time 1 (The Next Week's
+    /// `sphere(center1, center2, r, mat)`): the centre at time `t` in [0, 1)
+    /// is `center + t (center1 - center)`. Absent for a static sphere.
+    #[serde(default, skip_serializing_if = "Option::is_none", deserialize_with = "de::opt_vec3")]
+    pub center1: Option<[f32; 3]>,
     /// Signed: a negative radius is the book's hollow sphere (normal flipped inwards).
     #[serde(deserialize_with = "de::f32")]
     pub radius: f32,

@@ -52,7 +52,7 @@ const fn glass(ior: f32) -> Material {
     Material::Dielectric { ior }
 }
 const fn sphere(center: [f32; 3], radius: f32, material: Material) -> Sphere {
-    Sphere { center, radius, material }
+    Sphere { center, center1: None, radius, material }
 }
 
 fn settings(width: u32, height: u32, spp: u32, depth: u32) -> RenderTable {
@@ -206,6 +206,7 @@ pub fn final_scene() -> Scene {
 fn scaled(mut s: Scene, k: f32) -> Scene {
     for sp in &mut s.spheres {
         sp.center = sp.center.map(|x| x * k);
+        sp.center1 = sp.center1.map(|c| c.map(|x| x * k));
         sp.radius *= k;
     }
     let c = &mut s.camera;
@@ -264,6 +265,50 @@ fn nw_quads() -> Scene {
 /// the origin, no defocus, 16:9 at 400 wide, 100 spp, depth 50, daylight.
 fn nw_daylight_spheres() -> Scene {
     next_week(Camera::looking([13.0, 2.0, 3.0], [0.0; 3], 20.0), NW_DAYLIGHT, settings(400, 225, 100, 50))
+}
+
+/// The Next Week, `bouncing_spheres()` (v4 `dev`): book one's final scene
+/// on the 3-D checker ground (scale 0.32), its lambertian spheres moving up
+/// by `U[0, 0.5]` over the shutter (the book's `center2 = center + (0,
+/// random_double(0, .5), 0)`, drawn after the albedo as the book does), the
+/// book's camera (vfov 20 from (13, 2, 3), defocus angle 0.02 degrees, focus
+/// distance 10, as its code has it), daylight, 400x225, 100 spp, depth 50.
+/// The layout comes from rtow's generator with the final scene's seed.
+fn nw_bouncing_spheres() -> Scene {
+    let mut rng = Xoshiro128Plus::seed_from_u64(FINAL_LAYOUT_SEED);
+    let mut rnd = || f32::unit_from_bits(rng.next_u32());
+    let checker = lam_tex(Texture::Checker { scale: 0.32, even: [0.2, 0.3, 0.1], odd: [0.9, 0.9, 0.9] });
+    let mut spheres = vec![sphere([0.0, -1000.0, 0.0], 1000.0, checker)];
+    for a in -11..11 {
+        for b in -11..11 {
+            let choose = rnd();
+            let center = [a as f32 + 0.9 * rnd(), 0.2, b as f32 + 0.9 * rnd()];
+            let d = [center[0] - 4.0, center[1] - 0.2, center[2]];
+            if (d[0] * d[0] + d[1] * d[1] + d[2] * d[2]).sqrt() <= 0.9 {
+                continue;
+            }
+            if choose < 0.8 {
+                let a: [f32; 3] = std::array::from_fn(|_| rnd());
+                let b: [f32; 3] = std::array::from_fn(|_| rnd());
+                let material = lam(std::array::from_fn(|i| a[i] * b[i]));
+                let center1 = Some([center[0], center[1] + 0.5 * rnd(), center[2]]);
+                spheres.push(Sphere { center1, ..sphere(center, 0.2, material) });
+            } else if choose < 0.95 {
+                let albedo = std::array::from_fn(|_| 0.5 + 0.5 * rnd());
+                spheres.push(sphere(center, 0.2, metal(albedo, 0.5 * rnd())));
+            } else {
+                spheres.push(sphere(center, 0.2, glass(1.5)));
+            }
+        }
+    }
+    spheres.push(sphere([0.0, 1.0, 0.0], 1.0, glass(1.5)));
+    spheres.push(sphere([-4.0, 1.0, 0.0], 1.0, lam([0.4, 0.2, 0.1])));
+    spheres.push(sphere([4.0, 1.0, 0.0], 1.0, metal([0.7, 0.6, 0.5], 0.0)));
+    let mut s = nw_daylight_spheres();
+    s.camera.defocus_angle_deg = Some(0.02);
+    s.camera.focus_dist = Some(10.0);
+    s.spheres = spheres;
+    s
 }
 
 /// The Next Week, `checkered_spheres()`: two spheres of radius 10 at y = +-10
@@ -463,6 +508,12 @@ static PRESETS: &[Preset] = &[
         description: "ch. 12: the book's random spheres (486 spheres, thin lens)",
         group: PresetGroup::Weekend,
         build: final_scene,
+    },
+    Preset {
+        name: "nw-bouncing-spheres",
+        description: "The Next Week: the random spheres on a checker, lambertians moving (motion blur)",
+        group: PresetGroup::NextWeek,
+        build: nw_bouncing_spheres,
     },
     Preset {
         name: "nw-checkered-spheres",

@@ -117,6 +117,9 @@ impl Group {
         let flat = super::flatten::group(self);
         for s in &flat.spheres {
             point(&format!("{field}.translate"), s.center)?;
+            if let Some(c1) = s.center1 {
+                point(&format!("{field}.translate"), c1)?;
+            }
         }
         for q in &flat.quads {
             q.validate(&|name: &str| format!("{field} (a quad once moved).{name}"))?;
@@ -294,6 +297,9 @@ impl Sphere {
     /// The sphere's values; `field` names one of them (`spheres[i].<name>`).
     fn validate(&self, field: &dyn Fn(&str) -> String) -> Result<()> {
         point(&field("center"), self.center)?;
+        if let Some(c1) = self.center1 {
+            point(&field("center1"), c1)?;
+        }
         finite(&field("radius"), self.radius)?;
         if self.radius == 0.0 {
             return Err(Error::invalid(field("radius"), "must not be 0"));
