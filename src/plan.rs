@@ -167,33 +167,31 @@ pub struct Prepared {
     pub moving: MovingSpheres,
     /// Their tree, when the plan chose one for them.
     pub moving_bvh: Option<MovingBvh>,
-    /// The scene has static spheres only (no quads, no moving spheres): the
-    /// kernels run book one's closest hit, classification and surfaces.
-    pub spheres_only: bool,
     /// Russian roulette and adaptive sampling (off unless the render options say so).
     pub estimator: Estimator,
 }
 
 impl Prepared {
     /// The closest hit of one ray at time `time` (scalar kernel): the BVH one
-    /// box at a time, or brute force.
+    /// box at a time, or brute force. `M`: the scene has moving spheres
+    /// (`false` compiles to the search of a scene without).
     #[inline(always)]
-    pub fn closest_hit<P: Probe>(&self, o: V3<f32>, d: V3<f32>, time: f32, probe: &mut P) -> (u32, f32) {
+    pub fn closest_hit<P: Probe, const M: bool>(&self, o: V3<f32>, d: V3<f32>, time: f32, probe: &mut P) -> (u32, f32) {
         let (index, t) = match &self.bvh {
             Some(b) => b.closest_hit_scalar(o, d, probe),
             None => geometry::closest_hit(&self.spheres, o, d, probe),
         };
-        if self.spheres_only {
+        if !M && self.quads.is_empty() {
             return (index, t);
         }
         let mut best = Closest { t, index };
-        if !self.quads.is_empty() {
+        if !M || !self.quads.is_empty() {
             match &self.quad_bvh {
                 Some(b) => best = b.walk_scalar(o, d, best, probe),
                 None => geometry::closest_quad_hit(&self.quads, o, d, &mut best, probe),
             }
         }
-        if !self.moving.is_empty() {
+        if M {
             match &self.moving_bvh {
                 Some(b) => best = b.walk_scalar_at(o, d, time, best, probe),
                 None => geometry::closest_moving_hit(&self.moving, o, d, time, &mut best, probe),
@@ -204,11 +202,12 @@ impl Prepared {
 
     /// The closest hits of a packet of rays (wavefront kernel; bit k of `live`
     /// marks a real ray), as the plan says: brute force, BVH packets, or the BVH
-    /// one ray at a time. `time` gives the rays' times; it is called only
-    /// for a scene with moving spheres.
+    /// one ray at a time. `M`: the scene has moving spheres (`false` compiles
+    /// to the search of a scene without); `time` gives the rays' times, called
+    /// only when `M`.
     #[cfg_attr(not(feature = "phases"), inline(always))]
     #[cfg_attr(feature = "phases", inline(never))]
-    pub fn closest_hits<W: Wide, P: Probe>(
+    pub fn closest_hits<W: Wide, P: Probe, const M: bool>(
         &self,
         o: V3<W>,
         d: V3<W>,
@@ -221,19 +220,19 @@ impl Prepared {
             (Some(b), _) => b.closest_hit_packet(o, d, live, probe),
             (None, _) => geometry::closest_hit(&self.spheres, o, d, probe),
         };
-        if self.spheres_only {
+        if !M && self.quads.is_empty() {
             return (index, t);
         }
         // Lanes not in `live` take no part (t = -inf), as in the packet walk.
         let t = W::select(W::mask_from_bits(live), t, W::splat(f32::NEG_INFINITY));
         let mut best = Closest { t, index };
-        if !self.quads.is_empty() {
+        if !M || !self.quads.is_empty() {
             match &self.quad_bvh {
                 Some(b) => best = b.walk_packet(o, d, best, probe),
                 None => geometry::closest_quad_hit(&self.quads, o, d, &mut best, probe),
             }
         }
-        if !self.moving.is_empty() {
+        if M {
             let time = time();
             match &self.moving_bvh {
                 Some(b) => best = b.walk_packet_at(o, d, time, best, probe),

@@ -159,7 +159,7 @@ fn packets<W: Wide>(
 ) -> Result<(), TestCaseError> {
     for chunk in rays.chunks(W::LANES) {
         let at = |k: usize| chunk[k.min(chunk.len() - 1)];
-        let lanes = |f: &dyn Fn(usize) -> f32| W::from_fn(|k| f(k));
+        let lanes = |f: &dyn Fn(usize) -> f32| W::from_fn(f);
         let o = V3::new(lanes(&|k| at(k).0.x), lanes(&|k| at(k).0.y), lanes(&|k| at(k).0.z));
         let d = V3::new(lanes(&|k| at(k).1.x), lanes(&|k| at(k).1.y), lanes(&|k| at(k).1.z));
         let t = lanes(&|k| at(k).2);

@@ -200,7 +200,6 @@ pub(super) fn prepare(scene: &Scene, settings: Settings, plan: Plan, estimator: 
                 Background::Constant(c) => Some(c),
             },
         },
-        spheres_only: quads.is_empty() && moving.is_empty(),
         quads,
         bvh,
         quad_bvh,

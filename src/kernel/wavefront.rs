@@ -225,7 +225,28 @@ impl Workspace {
 /// estimate is low enough leave the active list; the next round traces only
 /// the others, so fewer active pixels get more samples per batch and the
 /// packets stay full.
+///
+/// The kernel is instantiated twice: for a scene with moving spheres (each
+/// path carries a time) and for one without (`M = false`), which compiles to
+/// the bounce it ran before motion blur existed; the choice is made here,
+/// once per tile.
 pub fn render_tile<W: Wide, P: Probe, S: PathSampler>(
+    prep: &Prepared,
+    sampler: S,
+    ws: &mut Workspace,
+    tile: &mut TileFilm,
+    samples: Range<u32>,
+    probe: &mut P,
+) -> u64 {
+    if prep.moving.is_empty() {
+        render_tile_in::<W, P, S, false>(prep, sampler, ws, tile, samples, probe)
+    } else {
+        render_tile_in::<W, P, S, true>(prep, sampler, ws, tile, samples, probe)
+    }
+}
+
+/// [`render_tile`] for a scene with moving spheres (`M`) or without.
+fn render_tile_in<W: Wide, P: Probe, S: PathSampler, const M: bool>(
     prep: &Prepared,
     sampler: S,
     ws: &mut Workspace,
@@ -242,7 +263,7 @@ pub fn render_tile<W: Wide, P: Probe, S: PathSampler>(
     let mut done = samples.start;
     while done < samples.end && !ws.active.is_empty() {
         let end = est.round_end(done, samples.end);
-        rays += render_round::<W, P, S>(prep, sampler, ws, tile, done, end, probe);
+        rays += render_round::<W, P, S, M>(prep, sampler, ws, tile, done, end, probe);
         done = end;
         if let (true, Some(a)) = (done < samples.end, est.adaptive) {
             ws.active.retain(|&l| !a.converged(tile, l as usize));
@@ -252,7 +273,7 @@ pub fn render_tile<W: Wide, P: Probe, S: PathSampler>(
 }
 
 /// Samples `s0..s1` of every active pixel, in batches of at most `MAX_PATHS` paths.
-fn render_round<W: Wide, P: Probe, S: PathSampler>(
+fn render_round<W: Wide, P: Probe, S: PathSampler, const M: bool>(
     prep: &Prepared,
     sampler: S,
     ws: &mut Workspace,
@@ -285,12 +306,12 @@ fn render_round<W: Wide, P: Probe, S: PathSampler>(
         let n = (b1 - b0) as usize * na;
         ws.result[..n].fill([0.0; 3]);
         ws.batch_start = b0;
-        generate::<W, P, S>(prep, sampler, ws, b0, b1, probe);
+        generate::<W, P, S, M>(prep, sampler, ws, b0, b1, probe);
         for depth in 0..prep.settings.max_depth {
             if ws.cur.len == 0 {
                 break;
             }
-            rays += bounce::<W, P, S>(prep, sampler, ws, depth, probe);
+            rays += bounce::<W, P, S, M>(prep, sampler, ws, depth, probe);
         }
         tile.add_rounds(&ws.active, &ws.result[..n]);
         b0 = b1;
@@ -301,7 +322,7 @@ fn render_round<W: Wide, P: Probe, S: PathSampler>(
 /// Camera rays for samples `s0..s1` of every active pixel of the tile, W at a time.
 /// Path `slot` is sample `s0 + slot / na` of active pixel `slot % na`.
 #[cfg_attr(feature = "phases", inline(never))]
-fn generate<W: Wide, P: Probe, S: PathSampler>(
+fn generate<W: Wide, P: Probe, S: PathSampler, const M: bool>(
     prep: &Prepared,
     sampler: S,
     ws: &mut Workspace,
@@ -340,7 +361,7 @@ fn generate<W: Wide, P: Probe, S: PathSampler>(
             }
         }));
         let (o, d) = prep.camera.ray(W::load_pow2(&p.thr[0], i), W::load_pow2(&p.thr[1], i), &mut rng);
-        if !prep.moving.is_empty() {
+        if M {
             // The path's time, after its camera ray, as the scalar kernel draws it.
             rng.seek(layout::TIME);
             let time: W = rng.next();
@@ -380,7 +401,7 @@ fn index_run<W: Wide>(i: usize) -> W::Idx {
 /// rays). Returns the rays traced. (Inlined, as the compiler chose to before
 /// the light pass made it larger.)
 #[cfg_attr(not(feature = "phases"), inline(always))]
-fn bounce<W: Wide, P: Probe, S: PathSampler>(
+fn bounce<W: Wide, P: Probe, S: PathSampler, const M: bool>(
     prep: &Prepared,
     sampler: S,
     ws: &mut Workspace,
@@ -389,7 +410,7 @@ fn bounce<W: Wide, P: Probe, S: PathSampler>(
 ) -> u64 {
     let n = ws.cur.len;
     probe.rays(depth, n as u32);
-    intersect::<W, P>(prep, ws, n, probe);
+    intersect::<W, P, M>(prep, ws, n, probe);
     shade_misses::<W>(prep, ws, n);
     let mut len = [0usize; MISS_QUEUE + 1];
     let mut queues = ws.queue.take().expect("the queues are put back after every bounce");
@@ -404,7 +425,7 @@ fn bounce<W: Wide, P: Probe, S: PathSampler>(
     // material kinds (one lookup per lane), then, per kind the plan has, the
     // indices of its lanes compressed onto its queue, in path order as one
     // path at a time would append them. Misses (shaded above) join no queue.
-    if prep.spheres_only {
+    if !M && prep.quads.is_empty() {
         // The path tracer queues only the kinds it has passes for (the plan's);
         // the debug modes shade every kind.
         let kinds = match prep.plan.mode {
@@ -433,7 +454,7 @@ fn bounce<W: Wide, P: Probe, S: PathSampler>(
                 prep.spheres.kind[h as usize & kind_mask] as usize
             } else if h == MISS {
                 MISS_QUEUE
-            } else if h < MOVING_BASE {
+            } else if !M || h < MOVING_BASE {
                 prep.quads.kind[(h - QUAD_BASE) as usize & quad_mask] as usize
             } else {
                 prep.moving.s.kind[(h - MOVING_BASE) as usize & moving_mask] as usize
@@ -448,24 +469,24 @@ fn bounce<W: Wide, P: Probe, S: PathSampler>(
         match prep.plan.mode {
             Mode::Path if kind == Kind::DiffuseLight && prep.plan.kinds.contains(kind) => {
                 for_packets::<W, P>(q, qlen, probe, |idx, active, probe| {
-                    let Hits { srf, albedo: emit, param, .. } = surfaces::<W, P>(prep, ws, idx, active, probe);
+                    let Hits { srf, albedo: emit, param, .. } = surfaces::<W, P, M>(prep, ws, idx, active, probe);
                     let one_sided = param.gt(W::splat(0.0));
                     let c = v3_gather::<W>(&ws.cur.thr, idx).mul_elem(emission(emit, one_sided, srf.front));
                     write_results(ws, idx, active, c);
                 });
             }
             Mode::Path if kind == Kind::Lambertian && !prep.plan.textures.is_empty() => {
-                textured_lambertian_pass::<W, P, S>(prep, sampler, ws, q, qlen, depth, probe);
+                textured_lambertian_pass::<W, P, S, M>(prep, sampler, ws, q, qlen, depth, probe);
             }
             Mode::Path if prep.plan.kinds.contains(kind) => {
                 for_packets::<W, P>(q, qlen, probe, |idx, active, probe| {
-                    scatter::<W, P, S>(prep, sampler, ws, kind, depth, idx, active, false, probe)
+                    scatter::<W, P, S, M>(prep, sampler, ws, kind, depth, idx, active, false, probe)
                 });
             }
             Mode::Path => debug_assert!(qlen == 0, "the plan left out a kind that was hit"),
             mode @ (Mode::Flat | Mode::Normals | Mode::Gradient) => {
                 for_packets::<W, P>(q, qlen, probe, |idx, active, probe| {
-                    debug_shade::<W, P>(prep, ws, mode, idx, active, probe)
+                    debug_shade::<W, P, M>(prep, ws, mode, idx, active, probe)
                 });
             }
         }
@@ -479,12 +500,12 @@ fn bounce<W: Wide, P: Probe, S: PathSampler>(
 /// into `ws.hit` and `ws.t`. (Out of line, once per bounce: the traversal's
 /// code then does not depend on what the rest of the bounce inlines.)
 #[cfg_attr(not(feature = "phases"), inline(never))]
-fn intersect<W: Wide, P: Probe>(prep: &Prepared, ws: &mut Workspace, n: usize, probe: &mut P) {
+fn intersect<W: Wide, P: Probe, const M: bool>(prep: &Prepared, ws: &mut Workspace, n: usize, probe: &mut P) {
     for i in (0..n).step_by(W::LANES) {
         let live = (n - i).min(W::LANES);
         let (o, d) = (Paths::v3::<W>(&ws.cur.o, i), Paths::v3::<W>(&ws.cur.d, i));
         let time = &ws.cur.time;
-        let (hit, t) = prep.closest_hits(o, d, low_bits(live), || W::load_pow2(time, i), probe);
+        let (hit, t) = prep.closest_hits::<W, P, M>(o, d, low_bits(live), || W::load_pow2(time, i), probe);
         W::store_u_pow2(hit, &mut ws.hit, i);
         t.store_pow2(&mut ws.t, i);
         probe.lanes(Stage::Intersect, live as u32, W::LANES as u32);
@@ -520,7 +541,7 @@ fn shade_misses<W: Wide>(prep: &Prepared, ws: &mut Workspace, n: usize) {
 /// that a scene without textures runs the bounce it always ran.
 #[inline(never)]
 #[allow(clippy::too_many_arguments)]
-fn textured_lambertian_pass<W: Wide, P: Probe, S: PathSampler>(
+fn textured_lambertian_pass<W: Wide, P: Probe, S: PathSampler, const M: bool>(
     prep: &Prepared,
     sampler: S,
     ws: &mut Workspace,
@@ -533,7 +554,7 @@ fn textured_lambertian_pass<W: Wide, P: Probe, S: PathSampler>(
     let mut tlen = [0usize; TEX_QUEUES];
     let m = &prep.materials;
     for &i in &queue[..len] {
-        let tex = m.lambertian_tex[material_row(prep, ws.hit[i as usize & MASK])].kind;
+        let tex = m.lambertian_tex[material_row::<M>(prep, ws.hit[i as usize & MASK])].kind;
         if tex != TexKind::Solid {
             let q = tex as usize - 1;
             tq[q][tlen[q] & MASK] = i;
@@ -545,9 +566,9 @@ fn textured_lambertian_pass<W: Wide, P: Probe, S: PathSampler>(
         // The texture passes are not observed by probes: their lanes are the
         // lambertian pass's, which reports them.
         for_packets::<W, ()>(&tq[q], tlen[q], &mut (), |idx, active, _| {
-            let Hits { srf, .. } = surfaces::<W, ()>(prep, ws, idx, active, &mut ());
+            let Hits { srf, .. } = surfaces::<W, (), M>(prep, ws, idx, active, &mut ());
             let hits = W::gather_u_pow2(&ws.hit, idx);
-            let row = |k: usize| m.lambertian_tex[material_row(prep, W::lane_u(hits, k))].row as usize;
+            let row = |k: usize| m.lambertian_tex[material_row::<M>(prep, W::lane_u(hits, k))].row as usize;
             let c = texture_albedo(prep, kind, srf.p, row);
             for (k, &i) in idx.as_ref().iter().enumerate().take(active) {
                 let i = i as usize & MASK;
@@ -559,16 +580,16 @@ fn textured_lambertian_pass<W: Wide, P: Probe, S: PathSampler>(
     }
     ws.tex_queue = Some(tq);
     for_packets::<W, P>(queue, len, probe, |idx, active, probe| {
-        scatter::<W, P, S>(prep, sampler, ws, Kind::Lambertian, depth, idx, active, true, probe)
+        scatter::<W, P, S, M>(prep, sampler, ws, Kind::Lambertian, depth, idx, active, true, probe)
     });
 }
 
 /// The material row of the primitive of hit index `h` (not `MISS`).
 #[inline(always)]
-fn material_row(prep: &Prepared, h: u32) -> usize {
+fn material_row<const M: bool>(prep: &Prepared, h: u32) -> usize {
     if h < QUAD_BASE {
         prep.spheres.row[h as usize] as usize
-    } else if h < MOVING_BASE {
+    } else if !M || h < MOVING_BASE {
         prep.quads.row[(h - QUAD_BASE) as usize] as usize
     } else {
         prep.moving.s.row[(h - MOVING_BASE) as usize] as usize
@@ -633,9 +654,15 @@ struct Hits<W: Wide> {
 /// records and both surfaces are computed, and each lane keeps its own (the
 /// same values the scalar kernel computes for its one kind).
 #[inline(always)]
-fn surfaces<W: Wide, P: Probe>(prep: &Prepared, ws: &Workspace, idx: &W::Idx, active: usize, probe: &mut P) -> Hits<W> {
+fn surfaces<W: Wide, P: Probe, const M: bool>(
+    prep: &Prepared,
+    ws: &Workspace,
+    idx: &W::Idx,
+    active: usize,
+    probe: &mut P,
+) -> Hits<W> {
     let sph = W::gather_u_pow2(&ws.hit, idx);
-    if prep.spheres_only {
+    if !M && prep.quads.is_empty() {
         // Book one's surfaces, as they were.
         let rec = W::gather_rows8(&prep.spheres.shade, &W::idx_of(sph));
         let c = V3::new(rec[Shade::CX], rec[Shade::CY], rec[Shade::CZ]);
@@ -657,11 +684,8 @@ fn surfaces<W: Wide, P: Probe>(prep: &Prepared, ws: &Workspace, idx: &W::Idx, ac
         let q_mask = W::u_splat(prep.quads.shade.len() as u32 - 1);
         let srec = W::gather_rows8(&prep.spheres.shade, &W::idx_of(sph & s_mask));
         let qrec = W::gather_rows8(&prep.quads.shade, &W::idx_of(sph & q_mask));
-        let (is_sphere, srec) = if prep.moving.is_empty() {
-            (is_sphere, srec)
-        } else {
-            moving_records::<W>(prep, ws, idx, sph, is_sphere, srec)
-        };
+        let (is_sphere, srec) =
+            if !M { (is_sphere, srec) } else { moving_records::<W>(prep, ws, idx, sph, is_sphere, srec) };
         let c = V3::new(srec[Shade::CX], srec[Shade::CY], srec[Shade::CZ]);
         let r = W::select(is_sphere, srec[Shade::R], W::splat(0.0));
         let s_srf = surface(o, d, t, c, srec[Shade::R]);
@@ -707,7 +731,7 @@ fn moving_records<W: Wide>(
     (is_sphere | is_moving, std::array::from_fn(|k| W::select(is_moving, mrec[k], srec[k])))
 }
 
-fn debug_shade<W: Wide, P: Probe>(
+fn debug_shade<W: Wide, P: Probe, const M: bool>(
     prep: &Prepared,
     ws: &mut Workspace,
     mode: Mode,
@@ -715,7 +739,7 @@ fn debug_shade<W: Wide, P: Probe>(
     active: usize,
     probe: &mut P,
 ) {
-    let hits = surfaces::<W, P>(prep, ws, idx, active, probe);
+    let hits = surfaces::<W, P, M>(prep, ws, idx, active, probe);
     let c = match mode {
         Mode::Normals => normal_colour(hits.srf.n),
         // The flat colour (`MaterialTables::flat_colour`): the albedo, white for glass.
@@ -728,7 +752,7 @@ fn debug_shade<W: Wide, P: Probe>(
 #[cfg_attr(not(feature = "phases"), inline(always))]
 #[cfg_attr(feature = "phases", inline(never))]
 #[allow(clippy::too_many_arguments)]
-fn scatter<W: Wide, P: Probe, S: PathSampler>(
+fn scatter<W: Wide, P: Probe, S: PathSampler, const M: bool>(
     prep: &Prepared,
     sampler: S,
     ws: &mut Workspace,
@@ -739,7 +763,7 @@ fn scatter<W: Wide, P: Probe, S: PathSampler>(
     textured: bool,
     probe: &mut P,
 ) {
-    let Hits { d, srf, albedo, param } = surfaces::<W, P>(prep, ws, idx, active, probe);
+    let Hits { d, srf, albedo, param } = surfaces::<W, P, M>(prep, ws, idx, active, probe);
     // A textured lambertian's record has parameter 1: its albedo is the one
     // its texture pass wrote.
     let albedo =
@@ -778,6 +802,6 @@ fn scatter<W: Wide, P: Probe, S: PathSampler>(
     let alive = W::mask_bits(alive) & low_bits(active);
     let slot = W::gather_u_pow2(&cur.slot, idx);
     // Scattered rays keep their path's time.
-    let time = if prep.moving.is_empty() { None } else { Some(W::gather_pow2(&cur.time, idx)) };
+    let time = if M { Some(W::gather_pow2(&cur.time, idx)) } else { None };
     ws.next.append::<W, S>(alive, spawn(&srf, dir), dir, thr, S::lane_words::<W>(&rng), slot, time);
 }
