@@ -6,7 +6,7 @@
 use crate::camera::PreparedCamera;
 use crate::choice::Mode;
 use crate::estimator::Estimator;
-use crate::geometry::{self, Bvh, Closest, Media, QuadBvh, Quads, Spheres, QUAD_BASE};
+use crate::geometry::{self, Bvh, Closest, Media, MovingBvh, MovingSpheres, QuadBvh, Quads, Spheres, QUAD_BASE};
 use crate::material::{Kind, MaterialTables};
 use crate::probe::Probe;
 use crate::real::Wide;
@@ -104,6 +104,12 @@ pub struct Plan {
     /// pays nothing).
     #[serde(skip_serializing_if = "Option::is_none")]
     pub quads: Option<Accel>,
+    /// The closest-hit search over moving spheres, when the scene has any
+    /// (searched after the quads'; each path then carries a time, drawn by
+    /// the camera from `layout::TIME` and inherited by its scattered rays).
+    /// A scene without moving spheres draws no time and pays nothing.
+    #[serde(skip_serializing_if = "Option::is_none")]
+    pub moving: Option<Accel>,
 }
 
 impl Plan {
@@ -116,6 +122,11 @@ impl Plan {
             Some(_) => "; quads: their own bvh8, one box at a time",
             None => "",
         };
+        let moving = match self.moving {
+            Some(Accel::Brute) => "; moving spheres: brute force at each path's time",
+            Some(_) => "; moving spheres: their own bvh8 over the shutter interval, tested at each path's time",
+            None => "",
+        };
         let textures: Vec<&str> = self.textures.iter().map(|t| t.name()).collect();
         let textures =
             if textures.is_empty() { String::new() } else { format!("; texture passes: {}", textures.join(", ")) };
@@ -125,7 +136,7 @@ impl Plan {
             ""
         };
         format!(
-            "plan: mode {:?}; material passes: {kinds}{textures}; camera: {} rays, {}; closest hit: {}{quads}{media}; paths stop at zero throughput",
+            "plan: mode {:?}; material passes: {kinds}{textures}; camera: {} rays, {}; closest hit: {}{quads}{moving}{media}; paths stop at zero throughput",
             self.mode,
             if self.lens { "thin-lens" } else { "pinhole" },
             if self.jitter { "jittered in the pixel" } else { "through pixel centres" },
@@ -163,49 +174,81 @@ pub struct Prepared {
     pub bvh: Option<Bvh>,
     /// The quads' tree, when the plan chose one for them.
     pub quad_bvh: Option<QuadBvh>,
+    /// The moving spheres (empty for a scene without: padding only).
+    pub moving: MovingSpheres,
+    /// Their tree, when the plan chose one for them.
+    pub moving_bvh: Option<MovingBvh>,
     /// Russian roulette and adaptive sampling (off unless the render options say so).
     pub estimator: Estimator,
 }
 
 impl Prepared {
-    /// The closest hit of one ray (scalar kernel): the BVH one box at a time, or brute force.
+    /// The closest hit of one ray at time `time` (scalar kernel): the BVH one
+    /// box at a time, or brute force. `M`: the scene has moving spheres
+    /// (`false` compiles to the search of a scene without).
     #[inline(always)]
-    pub fn closest_hit<P: Probe>(&self, o: V3<f32>, d: V3<f32>, probe: &mut P) -> (u32, f32) {
+    pub fn closest_hit<P: Probe, const M: bool>(&self, o: V3<f32>, d: V3<f32>, time: f32, probe: &mut P) -> (u32, f32) {
         let (index, t) = match &self.bvh {
             Some(b) => b.closest_hit_scalar(o, d, probe),
             None => geometry::closest_hit(&self.spheres, o, d, probe),
         };
-        if self.quads.is_empty() {
+        if !M && self.quads.is_empty() {
             return (index, t);
         }
         let mut best = Closest { t, index };
-        match &self.quad_bvh {
-            Some(b) => best = b.walk_scalar(o, d, best, probe),
-            None => geometry::closest_quad_hit(&self.quads, o, d, &mut best, probe),
+        if !M || !self.quads.is_empty() {
+            match &self.quad_bvh {
+                Some(b) => best = b.walk_scalar(o, d, best, probe),
+                None => geometry::closest_quad_hit(&self.quads, o, d, &mut best, probe),
+            }
+        }
+        if M {
+            match &self.moving_bvh {
+                Some(b) => best = b.walk_scalar_at(o, d, time, best, probe),
+                None => geometry::closest_moving_hit(&self.moving, o, d, time, &mut best, probe),
+            }
         }
         (best.index, best.t)
     }
 
     /// The closest hits of a packet of rays (wavefront kernel; bit k of `live`
     /// marks a real ray), as the plan says: brute force, BVH packets, or the BVH
-    /// one ray at a time.
+    /// one ray at a time. `M`: the scene has moving spheres (`false` compiles
+    /// to the search of a scene without); `time` gives the rays' times, called
+    /// only when `M`.
     #[cfg_attr(not(feature = "phases"), inline(always))]
     #[cfg_attr(feature = "phases", inline(never))]
-    pub fn closest_hits<W: Wide, P: Probe>(&self, o: V3<W>, d: V3<W>, live: u32, probe: &mut P) -> (W::U32, W) {
+    pub fn closest_hits<W: Wide, P: Probe, const M: bool>(
+        &self,
+        o: V3<W>,
+        d: V3<W>,
+        live: u32,
+        time: impl FnOnce() -> W,
+        probe: &mut P,
+    ) -> (W::U32, W) {
         let (index, t) = match (&self.bvh, self.plan.accel) {
             (Some(b), Accel::BvhRays) => b.closest_hits_one_by_one(o, d, live, probe),
             (Some(b), _) => b.closest_hit_packet(o, d, live, probe),
             (None, _) => geometry::closest_hit(&self.spheres, o, d, probe),
         };
-        if self.quads.is_empty() {
+        if !M && self.quads.is_empty() {
             return (index, t);
         }
         // Lanes not in `live` take no part (t = -inf), as in the packet walk.
         let t = W::select(W::mask_from_bits(live), t, W::splat(f32::NEG_INFINITY));
         let mut best = Closest { t, index };
-        match &self.quad_bvh {
-            Some(b) => best = b.walk_packet(o, d, best, probe),
-            None => geometry::closest_quad_hit(&self.quads, o, d, &mut best, probe),
+        if !M || !self.quads.is_empty() {
+            match &self.quad_bvh {
+                Some(b) => best = b.walk_packet(o, d, best, probe),
+                None => geometry::closest_quad_hit(&self.quads, o, d, &mut best, probe),
+            }
+        }
+        if M {
+            let time = time();
+            match &self.moving_bvh {
+                Some(b) => best = b.walk_packet_at(o, d, time, best, probe),
+                None => geometry::closest_moving_hit(&self.moving, o, d, time, &mut best, probe),
+            }
         }
         (best.index, best.t)
     }

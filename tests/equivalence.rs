@@ -82,7 +82,7 @@ fn arb_material() -> impl Strategy<Value = Material> {
 
 fn arb_sphere() -> impl Strategy<Value = Sphere> {
     (prop::array::uniform3(-4.0f32..4.0), prop_oneof![0.05f32..2.0, -2.0f32..-0.05], arb_material())
-        .prop_map(|(center, radius, material)| Sphere { center, radius, material })
+        .prop_map(|(center, radius, material)| Sphere { center, center1: None, radius, material })
 }
 
 fn arb_scene() -> impl Strategy<Value = Scene> {

@@ -169,6 +169,7 @@ fn square_scene(file: &str) -> Scene {
         }],
         boxes: vec![],
         groups: vec![],
+        media: vec![],
         sky: Sky::default(),
         background: Background::Constant([1.0; 3]),
         render: Default::default(),
@@ -212,7 +213,7 @@ fn a_textured_square_shows_its_texels_in_place() {
 /// glass and a metal sphere (packets mix primitive and texture kinds).
 fn mixed_scene(file: &str) -> Scene {
     let img = || Material::Lambertian { albedo: Texture::Image { file: file.into() } };
-    let sph = |center: [f32; 3], radius: f32, material: Material| Sphere { center, radius, material };
+    let sph = |center: [f32; 3], radius: f32, material: Material| Sphere { center, center1: None, radius, material };
     Scene {
         mode: Mode::Path,
         camera: Camera::looking([13.0, 2.0, 3.0], [0.0, 0.0, 0.0], 30.0),
@@ -241,6 +242,7 @@ fn mixed_scene(file: &str) -> Scene {
         ],
         boxes: vec![],
         groups: vec![],
+        media: vec![],
         sky: Sky::default(),
         background: Background::Sky,
         render: Default::default(),

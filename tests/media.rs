@@ -71,7 +71,7 @@ fn assert_transmittance(sc: &Scene, density_len: f64, slack: f64, what: &str) {
 #[test]
 fn a_camera_inside_the_mist_sees_exp_of_minus_density_times_radius() {
     let mut sc = empty_scene(Camera::looking([0.0; 3], [0.0, 0.0, -1.0], 90.0));
-    sc.spheres = vec![Sphere { center: [0.0; 3], radius: 6000.0, material: LIGHT }];
+    sc.spheres = vec![Sphere { center1: None, center: [0.0; 3], radius: 6000.0, material: LIGHT }];
     sc.media = vec![medium(MediumBoundary::Sphere { center: [0.0; 3], radius: 5000.0 }, 1e-4, [0.0; 3])];
     assert_transmittance(&sc, 0.5, 0.0, "mist");
 }
@@ -104,8 +104,13 @@ fn transmittance_through_a_turned_box_stops_at_the_surface() {
 #[test]
 fn media_render_the_same_image_on_every_kernel() {
     let mut sc = scene::preset("nw-cornell-smoke").unwrap();
-    let glass = Sphere { center: [200.0, 120.0, 150.0], radius: 70.0, material: Material::Dielectric { ior: 1.5 } };
-    sc.spheres.push(glass);
+    let glass = Sphere {
+        center1: None,
+        center: [200.0, 120.0, 150.0],
+        radius: 70.0,
+        material: Material::Dielectric { ior: 1.5 },
+    };
+    sc.spheres.push(glass.clone());
     sc.media.push(medium(MediumBoundary::Sphere { center: glass.center, radius: 70.0 }, 0.2, [0.2, 0.4, 0.9]));
     sc.media.push(medium(MediumBoundary::Sphere { center: [278.0, 278.0, 0.0], radius: 5000.0 }, 1e-4, [1.0; 3]));
     for sampler in [Sampler::SOBOL, Sampler::Independent] {

@@ -13,8 +13,8 @@ use rtow::internals::geometry::{
 use rtow::internals::material::Kind;
 use rtow::internals::vec3::V3;
 use rtow::scene::{self, Background, Camera, Format, Group, Material, Mode, Quad, QuadBox, Scene, Sky, Sphere};
-use rtow::AccelChoice;
 use rtow::KernelChoice::{Scalar, Simd16, Simd8};
+use rtow::{AccelChoice, Overrides};
 use std::path::Path;
 
 fn empty_scene(camera: Camera, background: [f32; 3]) -> Scene {
@@ -62,8 +62,12 @@ fn emission_furnace_is_exact() {
     for one_sided in [false, true] {
         let mut sc = empty_scene(Camera::looking([5.0, 5.0, 1.0], [5.0, 5.0, 9.0], 100.0), [0.0; 3]);
         sc.quads = room(light(l, one_sided));
-        sc.spheres =
-            vec![Sphere { center: [5.0, 5.0, 6.0], radius: 1.5, material: Material::Lambertian { albedo: a.into() } }];
+        sc.spheres = vec![Sphere {
+            center: [5.0, 5.0, 6.0],
+            center1: None,
+            radius: 1.5,
+            material: Material::Lambertian { albedo: a.into() },
+        }];
         let al: [f32; 3] = std::array::from_fn(|k| a[k] * l[k]);
         for kernel in [Scalar, Simd8, Simd16] {
             let img = image(&sc, settings(32, 32, 1, 50, 3), kernel);
@@ -121,7 +125,7 @@ fn white_furnace_with_emitters_converges_to_the_emission() {
         .enumerate()
         .map(|(i, q)| if i < 2 { Quad { material: white.clone(), ..q } } else { q })
         .collect();
-    sc.spheres = vec![Sphere { center: [5.0, 5.0, 6.0], radius: 2.0, material: white }];
+    sc.spheres = vec![Sphere { center: [5.0, 5.0, 6.0], center1: None, radius: 2.0, material: white }];
     let img = image(&sc, settings(32, 32, 64, 50, 9), Simd8);
     let mean: f64 = img.data.iter().flatten().map(|&x| x as f64).sum::<f64>() / (img.data.len() * 3) as f64;
     assert!((mean - l as f64).abs() < 0.01 * l as f64, "mean {mean}, expected {l}");
@@ -390,4 +394,25 @@ proptest! {
             }
         }
     }
+}
+
+/// `--book` renders each scene's book image: The Next Week's presets carry
+/// theirs (`render.book`), book one's scenes take its final settings; flags
+/// still win; a bad `render.book` is named.
+#[test]
+fn book_settings_follow_the_scene() {
+    let book = |name: &str, o: Overrides| {
+        let s = o.resolve(&scene::preset(name).unwrap().render);
+        (s.width, s.height, s.spp, s.max_depth)
+    };
+    let on = Overrides { book: true, ..Default::default() };
+    assert_eq!(book("nw-final", on), (800, 800, 10_000, 40));
+    assert_eq!(book("nw-final", Overrides::default()), (400, 400, 250, 4));
+    assert_eq!(book("nw-cornell-box", on), (600, 600, 200, 50));
+    assert_eq!(book("final", on), rtow::Settings::BOOK);
+    assert_eq!(book("nw-final", Overrides { spp: Some(16), ..on }), (800, 800, 16, 40));
+    let json = r#"{"camera": {"look_from": [0, 0, 1], "look_at": [0, 0, 0]},
+        "render": {"book": {"width": 800, "height": 0, "samples_per_pixel": 1, "max_depth": 1}}}"#;
+    let e = read_and_check(json, Format::Json, "t.json").unwrap_err().to_string();
+    assert!(e.contains("render.book.height"), "{e}");
 }

@@ -12,7 +12,7 @@ fn one_sphere(material: Material, sky: Sky) -> Scene {
     Scene {
         mode: Mode::Path,
         camera: Camera::looking([0.0, 0.0, 3.0], [0.0, 0.0, 0.0], 40.0),
-        spheres: vec![Sphere { center: [0.0, 0.0, 0.0], radius: 1.0, material }],
+        spheres: vec![Sphere { center: [0.0, 0.0, 0.0], center1: None, radius: 1.0, material }],
         quads: vec![],
         boxes: vec![],
         groups: vec![],

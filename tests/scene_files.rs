@@ -172,7 +172,12 @@ fn material() -> impl Strategy<Value = Material> {
 }
 
 fn sphere() -> impl Strategy<Value = Sphere> {
-    (v3(), radius(), material()).prop_map(|(center, radius, material)| Sphere { center, radius, material })
+    (v3(), radius(), material()).prop_map(|(center, radius, material)| Sphere {
+        center,
+        center1: None,
+        radius,
+        material,
+    })
 }
 
 fn scene_strategy() -> impl Strategy<Value = Scene> {
@@ -230,7 +235,7 @@ proptest! {
     #[test]
     fn out_of_range_spheres_are_refused_naming_the_field(s in scene_strategy(), c in finite(), r in finite()) {
         let mut s = s;
-        s.spheres = vec![Sphere { center: [c, 0.0, 0.0], radius: r, material: Material::Dielectric { ior: 1.5 } }];
+        s.spheres = vec![Sphere { center: [c, 0.0, 0.0], center1: None, radius: r, material: Material::Dielectric { ior: 1.5 } }];
         let lim = &rtow::limits::MAX_COORD;
         let ok_c = c.abs() <= *lim;
         let ok_r = (rtow::limits::MIN_RADIUS..=rtow::limits::MAX_RADIUS).contains(&r.abs());

@@ -42,7 +42,7 @@ fn shard_part(scene: &Scene, s: Settings, o: RenderOptions, split: Split) -> (Pa
 
 #[test]
 fn any_split_merges_into_the_one_process_image() {
-    for name in ["final", "ch09-glass", "nw-simple-light"] {
+    for name in ["final", "ch09-glass", "nw-simple-light", "nw-bouncing-spheres"] {
         let scene = preset(name).unwrap();
         let s = settings(7);
         let one = render(&job(&scene, s, opts(KernelChoice::Simd, 2, 16)), None).unwrap();

@@ -213,7 +213,7 @@ fn checker_tex(scale: f32) -> Texture {
 /// packets mix texture kinds, rows and primitive kinds), metal and glass
 /// among them.
 fn textured_scene() -> Scene {
-    let sph = |center: [f32; 3], radius: f32, material: Material| Sphere { center, radius, material };
+    let sph = |center: [f32; 3], radius: f32, material: Material| Sphere { center, center1: None, radius, material };
     Scene {
         mode: Mode::Path,
         camera: Camera::looking([13.0, 2.0, 3.0], [0.0, 0.0, 0.0], 30.0),

@@ -33,7 +33,8 @@
 //!   pruned only when its entry exceeds `best * (1 + 2^-20)`.
 
 use super::intersect::{sphere_disc, sphere_t, Closest};
-use super::quads::{QuadRec, Quads, QUAD_BASE};
+use super::moving::{centre_at, MovingSpheres, MOVING_BASE};
+use super::quads::{next_down, next_up, QuadRec, Quads, QUAD_BASE};
 use super::spheres::{Spheres, MISS};
 use crate::probe::{Probe, Work, WorkTally};
 use crate::real::{Real, Wide, MAX_LANES};
@@ -126,15 +127,27 @@ pub struct LeafQuad {
     index: u32,
 }
 
+/// A leaf's moving sphere: its centre at time 0, motion, squared radius and
+/// hit index (`MOVING_BASE + i`).
+#[derive(Clone, Copy, Debug)]
+#[repr(C)]
+pub struct LeafMoving {
+    c0: [f32; 3],
+    v: [f32; 3],
+    r2: f32,
+    index: u32,
+}
+
 /// A primitive kind stored in a tree's leaves: its test against a group of
-/// rays, improving the closest hit (the tie rule is [`Closest::offer`]'s).
+/// rays at times `time` (only moving primitives read it), improving the
+/// closest hit (the tie rule is [`Closest::offer`]'s).
 pub trait LeafPrim: Copy + std::fmt::Debug {
-    fn test<R: Real, P: Probe>(&self, o: V3<R>, d: V3<R>, best: &mut Closest<R>, probe: &mut P);
+    fn test<R: Real, P: Probe>(&self, o: V3<R>, d: V3<R>, time: R, best: &mut Closest<R>, probe: &mut P);
 }
 
 impl LeafPrim for LeafSphere {
     #[inline(always)]
-    fn test<R: Real, P: Probe>(&self, o: V3<R>, d: V3<R>, best: &mut Closest<R>, probe: &mut P) {
+    fn test<R: Real, P: Probe>(&self, o: V3<R>, d: V3<R>, _time: R, best: &mut Closest<R>, probe: &mut P) {
         let c = V3::new(R::splat(self.c[0]), R::splat(self.c[1]), R::splat(self.c[2]));
         best.test(o, d, c, R::splat(self.r2), self.index, probe);
     }
@@ -142,14 +155,26 @@ impl LeafPrim for LeafSphere {
 
 impl LeafPrim for LeafQuad {
     #[inline(always)]
-    fn test<R: Real, P: Probe>(&self, o: V3<R>, d: V3<R>, best: &mut Closest<R>, probe: &mut P) {
+    fn test<R: Real, P: Probe>(&self, o: V3<R>, d: V3<R>, _time: R, best: &mut Closest<R>, probe: &mut P) {
         best.test_quad(o, d, &self.rec, self.index, probe);
+    }
+}
+
+impl LeafPrim for LeafMoving {
+    #[inline(always)]
+    fn test<R: Real, P: Probe>(&self, o: V3<R>, d: V3<R>, time: R, best: &mut Closest<R>, probe: &mut P) {
+        let c = centre_at(V3::splat3(self.c0), V3::splat3(self.v), time);
+        best.test(o, d, c, R::splat(self.r2), self.index, probe);
     }
 }
 
 /// The tree over a scene's quads (one tree per primitive kind: a
 /// sphere-only scene's walks are exactly what they were).
 pub type QuadBvh = Bvh<LeafQuad>;
+
+/// The tree over a scene's moving spheres, on their boxes over the shutter
+/// interval (traversal ignores time; the leaves test at each ray's time).
+pub type MovingBvh = Bvh<LeafMoving>;
 
 /// The tree plus the spheres in leaf order: as records for the walks that
 /// test one sphere at a time, and as SoA padded by 8 for whole loads (the
@@ -424,6 +449,39 @@ impl QuadBvh {
     }
 }
 
+impl MovingBvh {
+    /// Builds the tree over the moving spheres for the one-by-one walks;
+    /// `extent` bounds |coordinates| of every ray origin and every primitive
+    /// at every time. A sphere's box is the union of its boxes at `t = 0` and
+    /// `t = 1` ([`MovingSpheres::bounds`]), rounded outwards and padded as the
+    /// static spheres' are (`2 extent 2^-19` on every side): the centre a
+    /// kernel computes, `c0 + t v` in f32, lies within `2u (|c0| + |v|)` of
+    /// the exact segment, far inside the padding.
+    pub fn build_moving(m: &MovingSpheres, extent: f32) -> MovingBvh {
+        let n = m.len();
+        let pad = 2.0 * extent.abs() * PAD;
+        let boxes: Vec<Aabb> = (0..n)
+            .map(|i| {
+                let (lo, hi) = m.bounds(i);
+                Aabb { min: lo.map(|x| next_down(x) - pad), max: hi.map(|x| next_up(x) + pad) }
+            })
+            .collect();
+        let centroid = boxes.iter().map(|b| std::array::from_fn(|k| 0.5 * b.min[k] + 0.5 * b.max[k])).collect();
+        let (bnodes, order) = build_binary(&boxes, centroid, Walk::OneByOne);
+        let mut bvh =
+            Bvh { nodes: Vec::new(), leaf: vec![], cx: vec![], cy: vec![], cz: vec![], r2: vec![], index: vec![] };
+        for &i in &order {
+            let i = i as usize;
+            bvh.leaf.push(LeafMoving { c0: m.c0(i), v: m.v(i), r2: m.s.r2[i], index: MOVING_BASE + i as u32 });
+        }
+        bvh.nodes.push(Node8::EMPTY);
+        if n > 0 {
+            bvh.collapse(&bnodes, 0, 0);
+        }
+        bvh
+    }
+}
+
 impl<L: LeafPrim> Bvh<L> {
     /// Fills node `at` with up to 8 descendants of binary node `root`.
     fn collapse(&mut self, bn: &[BNode], root: u32, at: usize) {
@@ -467,17 +525,19 @@ impl<L: LeafPrim> Bvh<L> {
     /// broadcast against the rays: the leaf test of the scalar and the packet
     /// walks (the sphere test and the tie rule are [`Closest::test`]'s).
     #[inline(always)]
+    #[allow(clippy::too_many_arguments)]
     fn leaf<R: Real, P: Probe>(
         &self,
         start: usize,
         count: usize,
         o: V3<R>,
         d: V3<R>,
+        time: R,
         best: &mut Closest<R>,
         probe: &mut P,
     ) {
         for s in &self.leaf[start..start + count] {
-            s.test(o, d, best, probe);
+            s.test(o, d, time, best, probe);
         }
     }
 
@@ -491,7 +551,20 @@ impl<L: LeafPrim> Bvh<L> {
     /// The scalar walk from `best` (a closest hit found so far, by another
     /// tree, say), returning the improved closest hit.
     #[inline(always)]
-    pub fn walk_scalar<P: Probe>(&self, o: V3<f32>, d: V3<f32>, mut best: Closest<f32>, probe: &mut P) -> Closest<f32> {
+    pub fn walk_scalar<P: Probe>(&self, o: V3<f32>, d: V3<f32>, best: Closest<f32>, probe: &mut P) -> Closest<f32> {
+        self.walk_scalar_at(o, d, 0.0, best, probe)
+    }
+
+    /// [`Bvh::walk_scalar`] for a ray at time `time` (moving primitives' leaves read it).
+    #[inline(always)]
+    pub fn walk_scalar_at<P: Probe>(
+        &self,
+        o: V3<f32>,
+        d: V3<f32>,
+        time: f32,
+        mut best: Closest<f32>,
+        probe: &mut P,
+    ) -> Closest<f32> {
         let mut tally = WorkTally::<P>::new();
         let (inv, noi) = slab_ray(o, d);
         let mut stack = Stack::new((0, 0.0));
@@ -514,7 +587,7 @@ impl<L: LeafPrim> Bvh<L> {
                 }
                 match node.count[k] {
                     0 => stack.push((node.child[k], near)),
-                    count => self.leaf(node.child[k] as usize, count as usize, o, d, &mut best, &mut tally),
+                    count => self.leaf(node.child[k] as usize, count as usize, o, d, time, &mut best, &mut tally),
                 }
             }
         }
@@ -537,10 +610,17 @@ impl<L: LeafPrim> Bvh<L> {
     /// The packet walk from `best` (lanes at `t = -inf` take no part),
     /// returning the improved closest hit.
     #[inline(always)]
-    pub fn walk_packet<W: Wide, P: Probe>(
+    pub fn walk_packet<W: Wide, P: Probe>(&self, o: V3<W>, d: V3<W>, best: Closest<W>, probe: &mut P) -> Closest<W> {
+        self.walk_packet_at(o, d, W::splat(0.0), best, probe)
+    }
+
+    /// [`Bvh::walk_packet`] for rays at times `time` (moving primitives' leaves read it).
+    #[inline(always)]
+    pub fn walk_packet_at<W: Wide, P: Probe>(
         &self,
         o: V3<W>,
         d: V3<W>,
+        time: W,
         mut best: Closest<W>,
         probe: &mut P,
     ) -> Closest<W> {
@@ -564,7 +644,7 @@ impl<L: LeafPrim> Bvh<L> {
                 }
                 match node.count[k] {
                     0 => stack.push(node.child[k]),
-                    count => self.leaf(node.child[k] as usize, count as usize, o, d, &mut best, &mut tally),
+                    count => self.leaf(node.child[k] as usize, count as usize, o, d, time, &mut best, &mut tally),
                 }
             }
         }

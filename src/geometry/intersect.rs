@@ -49,6 +49,7 @@
 //!   radii away). Rendering never asks that question: [`spawn`] moves every new
 //!   origin off the surface by more than the bound on `c'`.
 
+use super::moving::{centre_at, MovingSpheres, MOVING_BASE};
 use super::quads::{quad_hit, QuadRec, Quads, QUAD_BASE};
 use super::spheres::{Spheres, MISS};
 use crate::probe::{Probe, Work, WorkTally};
@@ -144,6 +145,26 @@ impl<R: Real> Closest<R> {
         let (hit, t) = quad_hit(o, d, q);
         self.offer(hit, t, R::u_splat(index));
     }
+}
+
+/// Every moving sphere at the rays' times `time` against the rays (brute
+/// force), improving `best`: the centre per lane ([`centre_at`]), then the
+/// static sphere test.
+#[inline]
+pub fn closest_moving_hit<R: Real, P: Probe>(
+    m: &MovingSpheres,
+    o: V3<R>,
+    d: V3<R>,
+    time: R,
+    best: &mut Closest<R>,
+    probe: &mut P,
+) {
+    let mut tally = WorkTally::<P>::new();
+    for i in 0..m.len() {
+        let c = centre_at(V3::splat3(m.c0(i)), V3::splat3(m.v(i)), time);
+        best.test(o, d, c, R::splat(m.s.r2[i]), MOVING_BASE + i as u32, &mut tally);
+    }
+    tally.flush(probe);
 }
 
 /// Every quad against the rays (brute force), improving `best`.

@@ -3,13 +3,16 @@
 pub mod bvh;
 pub mod intersect;
 pub mod media;
+pub mod moving;
 pub mod quads;
 pub mod spheres;
 
-pub use bvh::{Bvh, LeafQuad, QuadBvh, SahCost, Walk};
+pub use bvh::{Bvh, LeafMoving, LeafQuad, MovingBvh, QuadBvh, SahCost, Walk};
 pub use intersect::{
-    closest_hit, closest_quad_hit, spawn, sphere_disc, sphere_t, surface, Closest, Surface, OFFSET_ULPS,
+    closest_hit, closest_moving_hit, closest_quad_hit, spawn, sphere_disc, sphere_t, surface, Closest, Surface,
+    OFFSET_ULPS,
 };
 pub use media::{sample_media, Boundary, Media, MEDIUM_BASE};
+pub use moving::{centre_at, MovingSpheres, MOVING_BASE};
 pub use quads::{quad_hit, quad_surface, QuadRec, Quads, QUAD_BASE};
 pub use spheres::{Shade, Spheres, MISS};

@@ -75,7 +75,8 @@ impl QuadRec {
     }
 }
 
-fn next_up(x: f64) -> f32 {
+/// `x` rounded up to f32.
+pub(super) fn next_up(x: f64) -> f32 {
     let f = x as f32;
     if (f as f64) < x {
         f.next_up()
@@ -84,7 +85,8 @@ fn next_up(x: f64) -> f32 {
     }
 }
 
-fn next_down(x: f64) -> f32 {
+/// `x` rounded down to f32.
+pub(super) fn next_down(x: f64) -> f32 {
     let f = x as f32;
     if (f as f64) > x {
         f.next_down()

@@ -49,7 +49,9 @@ pub struct Overrides {
     pub max_depth: Option<u32>,
     pub seed: Option<u64>,
     pub sampler: Option<Sampler>,
-    /// The book's final settings (1200x675, 500 spp, depth 50); values given explicitly still win.
+    /// The book's settings: the scene's `render.book` (The Next Week's
+    /// presets), else book one's final settings (1200x675, 500 spp, depth
+    /// 50); values given explicitly still win.
     pub book: bool,
 }
 
@@ -68,7 +70,10 @@ impl Overrides {
             sampler: table.sampler.unwrap_or(d.sampler),
         };
         if self.book {
-            (s.width, s.height, s.spp, s.max_depth) = Settings::BOOK;
+            (s.width, s.height, s.spp, s.max_depth) = match table.book {
+                Some(b) => (b.width, b.height, b.samples_per_pixel, b.max_depth),
+                None => Settings::BOOK,
+            };
         }
         s.width = self.width.unwrap_or(s.width);
         s.height = self.height.unwrap_or(s.height);

@@ -7,7 +7,7 @@ use super::Images;
 use crate::camera::{PreparedCamera, View};
 use crate::choice::{AccelChoice, Mode};
 use crate::estimator::Estimator;
-use crate::geometry::{Boundary, Bvh, Media, QuadBvh, Quads, Spheres, Walk};
+use crate::geometry::{Boundary, Bvh, Media, MovingBvh, MovingSpheres, QuadBvh, Quads, Spheres, Walk};
 use crate::material::{Kind, MaterialTables};
 use crate::plan::{Accel, KindSet, Plan, Prepared, SkyColours};
 use crate::scene::{Background, Camera, FlatBoundary, Material, Scene, Texture};
@@ -54,8 +54,9 @@ fn tex_kind(t: &Texture) -> TexKind {
     }
 }
 
-/// The closest-hit search over `quads` quads (none: no search at all):
-/// brute force below the crossover, a tree of their own above it.
+/// The closest-hit search over `quads` quads, or over `quads` moving spheres
+/// (none: no search at all): brute force below the crossover, a tree of
+/// their own above it.
 fn choose_quad_accel(choice: AccelChoice, quads: usize, mode: Mode) -> Option<Accel> {
     (quads > 0).then(|| match choose_accel(choice, quads, mode) {
         Accel::Brute => Accel::Brute,
@@ -95,8 +96,9 @@ pub(super) fn plan(scene: &Scene, settings: &Settings, accel: AccelChoice) -> Pl
         textures,
         lens: scene.camera.lens_radius() > 0.0 && scene.mode != Mode::Gradient,
         jitter: settings.spp > 1,
-        accel: choose_accel(accel, flat.spheres.len(), scene.mode),
+        accel: choose_accel(accel, flat.spheres.iter().filter(|s| s.center1.is_none()).count(), scene.mode),
         quads: choose_quad_accel(accel, flat.quads.len(), scene.mode),
+        moving: choose_quad_accel(accel, flat.spheres.iter().filter(|s| s.center1.is_some()).count(), scene.mode),
     }
 }
 
@@ -124,6 +126,7 @@ pub(super) fn prepare(
     let mut materials = MaterialTables::default();
     let mut textures = TextureTables::default();
     let mut spheres = Spheres::default();
+    let mut moving = MovingSpheres::default();
     let flat = scene.flatten();
     let mut row_of = |m: &Material| match *m {
         Material::Lambertian { ref albedo } => {
@@ -153,14 +156,20 @@ pub(super) fn prepare(
         Material::DiffuseLight { emit, one_sided } => push(&mut materials.light, (emit, one_sided)),
     };
     for s in &flat.spheres {
-        spheres.push(s.center, s.radius, kind(&s.material), row_of(&s.material));
+        match s.center1 {
+            None => spheres.push(s.center, s.radius, kind(&s.material), row_of(&s.material)),
+            Some(c1) => moving.push(s.center, c1, s.radius, kind(&s.material), row_of(&s.material)),
+        }
     }
     let view = view(&scene.camera);
     // Every ray origin and every primitive lies within `extent` of the origin
     // on each axis (the quads' edge tolerance and boxes are scaled by it).
     let mut extent = scene.camera.look_from.iter().fold(0.0f32, |m, x| m.max(x.abs())) + view.lens_radius as f32;
     for s in &flat.spheres {
-        extent = extent.max(s.center.iter().fold(0.0f32, |m, x| m.max(x.abs())) + s.radius.abs());
+        // A moving sphere's centres at times 0 and 1 (every centre between lies within both's range).
+        for c in [Some(s.center), s.center1].into_iter().flatten() {
+            extent = extent.max(c.iter().fold(0.0f32, |m, x| m.max(x.abs())) + s.radius.abs());
+        }
     }
     // Media only where paths are traced (the debug modes shade surfaces):
     // their scattering points are ray origins anywhere inside them (none for
@@ -196,8 +205,10 @@ pub(super) fn prepare(
     }
     spheres.pad();
     quads.pad();
+    moving.pad();
     // The wavefront's per-primitive shading records (geometry::Shade).
     spheres.shade_with(&materials);
+    moving.s.shade_with(&materials);
     for i in 0..quads.len {
         let (albedo, param) = materials.record(quads.kind[i], quads.row[i]);
         quads.shade[i].0[4..].copy_from_slice(&[albedo[0], albedo[1], albedo[2], param]);
@@ -213,6 +224,7 @@ pub(super) fn prepare(
         Bvh::build_for(&spheres, extent, walk)
     });
     let quad_bvh = (plan.quads.is_some_and(|a| a != Accel::Brute)).then(|| QuadBvh::build_quads(&quads, extent));
+    let moving_bvh = (plan.moving.is_some_and(|a| a != Accel::Brute)).then(|| MovingBvh::build_moving(&moving, extent));
     Prepared {
         plan,
         settings,
@@ -232,6 +244,8 @@ pub(super) fn prepare(
         media,
         bvh,
         quad_bvh,
+        moving,
+        moving_bvh,
         estimator,
     }
 }

@@ -7,7 +7,7 @@ pub mod scalar;
 pub mod wavefront;
 
 use crate::choice::KernelChoice;
-use crate::geometry::{QuadRec, QUAD_BASE};
+use crate::geometry::{QuadRec, MOVING_BASE, QUAD_BASE};
 use crate::plan::{Prepared, SkyColours};
 use crate::real::Real;
 use crate::texture::{checker, image_texel, marble, quad_uv, sphere_uv, TexKind};
@@ -147,7 +147,9 @@ pub(crate) fn texture_albedo<R: Real>(
 fn surface_uv<R: Real>(prep: &Prepared, p: V3<R>, hit: impl Fn(usize) -> u32) -> (R, R) {
     let (sp, qs) = (&prep.spheres, &prep.quads);
     let sphere = |k: usize| (hit(k) < QUAD_BASE).then(|| hit(k) as usize);
-    let quad = |k: usize| (hit(k) >= QUAD_BASE).then(|| &qs.rec[(hit(k) - QUAD_BASE) as usize]);
+    // Image textures are on static spheres and quads only (`Scene::validate`
+    // refuses them on moving spheres): any other lane reads zeros.
+    let quad = |k: usize| (hit(k) >= QUAD_BASE && hit(k) < MOVING_BASE).then(|| &qs.rec[(hit(k) - QUAD_BASE) as usize]);
     let is_sphere = R::from_fn(|k| if sphere(k).is_some() { 1.0 } else { 0.0 }).gt(R::splat(0.5));
     let (su, sv) = if sp.len > 0 {
         let at = |a: &[f32], dflt: f32| R::from_fn(|k| sphere(k).map_or(dflt, |i| a[i]));

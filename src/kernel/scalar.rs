@@ -5,7 +5,7 @@ use super::{background, normal_colour, texture_albedo};
 use crate::choice::Mode;
 use crate::estimator::{roulette, roulette_applies};
 use crate::film::TileFilm;
-use crate::geometry::{quad_surface, sample_media, spawn, surface, Surface, MEDIUM_BASE, MISS, QUAD_BASE};
+use crate::geometry::{quad_surface, sample_media, spawn, surface, Surface, MEDIUM_BASE, MISS, MOVING_BASE, QUAD_BASE};
 use crate::material::{dielectric, emission, lambertian, metal, Kind};
 use crate::plan::Prepared;
 use crate::probe::{PathId, Probe};
@@ -18,8 +18,25 @@ use std::ops::Range;
 /// the paths' values drawn by `sampler`; returns the rays traced. With
 /// adaptive sampling a pixel stops at the first decision point where its
 /// error estimate is low enough.
-#[cfg_attr(feature = "phases", inline(never))]
+/// Instantiated for a scene with moving spheres and for one without (see
+/// `trace_in`), chosen once per tile.
 pub fn render_tile<S: PathSampler, P: Probe>(
+    prep: &Prepared,
+    sampler: S,
+    tile: &mut TileFilm,
+    samples: Range<u32>,
+    probe: &mut P,
+) -> u64 {
+    if prep.moving.is_empty() {
+        render_tile_in::<S, P, false>(prep, sampler, tile, samples, probe)
+    } else {
+        render_tile_in::<S, P, true>(prep, sampler, tile, samples, probe)
+    }
+}
+
+/// [`render_tile`] for a scene with moving spheres (`M`) or without.
+#[cfg_attr(feature = "phases", inline(never))]
+fn render_tile_in<S: PathSampler, P: Probe, const M: bool>(
     prep: &Prepared,
     sampler: S,
     tile: &mut TileFilm,
@@ -37,7 +54,7 @@ pub fn render_tile<S: PathSampler, P: Probe>(
             let end = est.round_end(done, samples.end);
             for sample in done..end {
                 let mut rng = sampler.scalar(s.seed, pixel as u64, sample);
-                let (c, n) = trace(prep, x, y, PathId { pixel, sample }, &mut rng, probe);
+                let (c, n) = trace_in::<P, M>(prep, x, y, PathId { pixel, sample }, &mut rng, probe);
                 rays += n as u64;
                 tile.add(local, c);
             }
@@ -60,8 +77,14 @@ fn camera_ray(prep: &Prepared, x: u32, y: u32, rng: &mut impl Stream<f32>) -> (V
 /// The closest hit of one ray (out of line in `phases` builds).
 #[cfg_attr(not(feature = "phases"), inline(always))]
 #[cfg_attr(feature = "phases", inline(never))]
-fn closest_hit<P: Probe>(prep: &Prepared, o: V3<f32>, d: V3<f32>, probe: &mut P) -> (u32, f32) {
-    prep.closest_hit(o, d, probe)
+fn closest_hit<P: Probe, const M: bool>(
+    prep: &Prepared,
+    o: V3<f32>,
+    d: V3<f32>,
+    time: f32,
+    probe: &mut P,
+) -> (u32, f32) {
+    prep.closest_hit::<P, M>(o, d, time, probe)
 }
 
 /// The scattered direction and attenuation of a path that hit material
@@ -114,13 +137,38 @@ pub fn trace<P: Probe>(
     rng: &mut impl Stream<f32>,
     probe: &mut P,
 ) -> ([f32; 3], u32) {
+    if prep.moving.is_empty() {
+        trace_in::<P, false>(prep, x, y, id, rng, probe)
+    } else {
+        trace_in::<P, true>(prep, x, y, id, rng, probe)
+    }
+}
+
+/// [`trace`] for a scene with moving spheres (`M`: the path draws a time)
+/// or without (`false` compiles to the path of a scene without).
+fn trace_in<P: Probe, const M: bool>(
+    prep: &Prepared,
+    x: u32,
+    y: u32,
+    id: PathId<f32>,
+    rng: &mut impl Stream<f32>,
+    probe: &mut P,
+) -> ([f32; 3], u32) {
     let (o, mut d) = camera_ray(prep, x, y, rng);
     let mut o = if P::PATHS { probe.camera(id, o, d, 1) } else { o };
+    // The path's time (scenes with moving spheres only), inherited by every
+    // ray it scatters.
+    let time = if M {
+        rng.seek(layout::TIME);
+        rng.next()
+    } else {
+        0.0
+    };
     let mut thr = V3::new(1.0f32, 1.0, 1.0);
     for depth in 0..prep.settings.max_depth {
         let rays = depth + 1;
         probe.rays(depth, 1);
-        let (hit, t) = closest_hit(prep, o, d, probe);
+        let (hit, t) = closest_hit::<P, M>(prep, o, d, time, probe);
         if P::PATHS {
             probe.traced(id, o, d, hit, t, 1);
         }
@@ -136,7 +184,7 @@ pub fn trace<P: Probe>(
             let dir = unit_vector(rng);
             (o + d * t, dir, prep.media.albedo[(hit - MEDIUM_BASE) as usize])
         } else {
-            let (dir, atten, srf) = match shade(prep, o, d, t, hit, id, depth, thr, rng, probe) {
+            let (dir, atten, srf) = match shade::<P, M>(prep, o, d, t, time, hit, id, depth, thr, rng, probe) {
                 Ok(s) => s,
                 Err(c) => return (c, rays),
             };
@@ -168,11 +216,12 @@ type Scattered = (V3<f32>, [f32; 3], Surface<f32>);
 /// shading, an absorbed path).
 #[inline(always)]
 #[allow(clippy::too_many_arguments)]
-fn shade<P: Probe>(
+fn shade<P: Probe, const M: bool>(
     prep: &Prepared,
     o: V3<f32>,
     d: V3<f32>,
     t: f32,
+    time: f32,
     hit: u32,
     id: PathId<f32>,
     depth: u32,
@@ -188,6 +237,14 @@ fn shade<P: Probe>(
             probe.shaded(id, hit, sp.r[i], srf.n, srf.front, 1);
         }
         (srf, sp.kind[i], sp.row[i] as usize)
+    } else if M && hit >= MOVING_BASE {
+        let (m, i) = (&prep.moving, (hit - MOVING_BASE) as usize);
+        let r = m.s.r[i];
+        let srf = surface(o, d, t, m.centre(i, time), r);
+        if P::PATHS {
+            probe.shaded(id, hit, r, srf.n, srf.front, 1);
+        }
+        (srf, m.s.kind[i], m.s.row[i] as usize)
     } else {
         let qs = &prep.quads;
         let i = (hit - QUAD_BASE) as usize;

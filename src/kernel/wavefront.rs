@@ -30,7 +30,9 @@ use super::{background, normal_colour, texture_albedo};
 use crate::choice::Mode;
 use crate::estimator::{roulette, roulette_applies};
 use crate::film::TileFilm;
-use crate::geometry::{quad_surface, sample_media, spawn, surface, Shade, Surface, MEDIUM_BASE, MISS, QUAD_BASE};
+use crate::geometry::{
+    centre_at, quad_surface, sample_media, spawn, surface, Shade, Surface, MEDIUM_BASE, MISS, MOVING_BASE, QUAD_BASE,
+};
 use crate::material::{dielectric, emission, lambertian, metal, Kind};
 use crate::plan::{KindSet, Prepared};
 use crate::probe::{PathId, Probe, Stage};
@@ -81,6 +83,9 @@ struct Paths {
     rng: [Arr<u32>; 4],
     /// Index of the path's result: `sample_in_batch * active_pixels + active_index`.
     slot: Arr<u32>,
+    /// The path's time (motion blur): written and read only for a scene
+    /// with moving spheres.
+    time: Arr<f32>,
     len: usize,
 }
 
@@ -94,13 +99,16 @@ impl Paths {
             thr: [f(), f(), f()],
             rng: [u(), u(), u(), u()],
             slot: u(),
+            time: f(),
             len: 0,
         }
     }
 
-    /// Appends the lanes of `alive` (a bitmask) of a packet: SIMD stream compaction.
+    /// Appends the lanes of `alive` (a bitmask) of a packet: SIMD stream
+    /// compaction. `time`: the paths' times, for a scene with moving spheres.
     #[cfg_attr(not(feature = "phases"), inline(always))]
     #[cfg_attr(feature = "phases", inline(never))]
+    #[allow(clippy::too_many_arguments)]
     fn append<W: Wide, S: PathSampler>(
         &mut self,
         alive: u32,
@@ -109,6 +117,7 @@ impl Paths {
         thr: V3<W>,
         rng: [W::U; 4],
         slot: W::U,
+        time: Option<W>,
     ) {
         let at = self.len;
         debug_assert!(at <= MAX_PATHS);
@@ -123,6 +132,9 @@ impl Paths {
         }
         for (w, words) in rng.into_iter().enumerate().take(S::WORDS) {
             W::compress_store_u_pow2(words, alive, &mut self.rng[w], at);
+        }
+        if let Some(t) = time {
+            put(&mut self.time, t);
         }
         self.len = at + W::compress_store_u_pow2(slot, alive, &mut self.slot, at);
     }
@@ -215,7 +227,28 @@ impl Workspace {
 /// estimate is low enough leave the active list; the next round traces only
 /// the others, so fewer active pixels get more samples per batch and the
 /// packets stay full.
+///
+/// The kernel is instantiated twice: for a scene with moving spheres (each
+/// path carries a time) and for one without (`M = false`), which compiles to
+/// the bounce it ran before motion blur existed; the choice is made here,
+/// once per tile.
 pub fn render_tile<W: Wide, P: Probe, S: PathSampler>(
+    prep: &Prepared,
+    sampler: S,
+    ws: &mut Workspace,
+    tile: &mut TileFilm,
+    samples: Range<u32>,
+    probe: &mut P,
+) -> u64 {
+    if prep.moving.is_empty() {
+        render_tile_in::<W, P, S, false>(prep, sampler, ws, tile, samples, probe)
+    } else {
+        render_tile_in::<W, P, S, true>(prep, sampler, ws, tile, samples, probe)
+    }
+}
+
+/// [`render_tile`] for a scene with moving spheres (`M`) or without.
+fn render_tile_in<W: Wide, P: Probe, S: PathSampler, const M: bool>(
     prep: &Prepared,
     sampler: S,
     ws: &mut Workspace,
@@ -232,7 +265,7 @@ pub fn render_tile<W: Wide, P: Probe, S: PathSampler>(
     let mut done = samples.start;
     while done < samples.end && !ws.active.is_empty() {
         let end = est.round_end(done, samples.end);
-        rays += render_round::<W, P, S>(prep, sampler, ws, tile, done, end, probe);
+        rays += render_round::<W, P, S, M>(prep, sampler, ws, tile, done, end, probe);
         done = end;
         if let (true, Some(a)) = (done < samples.end, est.adaptive) {
             ws.active.retain(|&l| !a.converged(tile, l as usize));
@@ -242,7 +275,7 @@ pub fn render_tile<W: Wide, P: Probe, S: PathSampler>(
 }
 
 /// Samples `s0..s1` of every active pixel, in batches of at most `MAX_PATHS` paths.
-fn render_round<W: Wide, P: Probe, S: PathSampler>(
+fn render_round<W: Wide, P: Probe, S: PathSampler, const M: bool>(
     prep: &Prepared,
     sampler: S,
     ws: &mut Workspace,
@@ -275,12 +308,12 @@ fn render_round<W: Wide, P: Probe, S: PathSampler>(
         let n = (b1 - b0) as usize * na;
         ws.result[..n].fill([0.0; 3]);
         ws.batch_start = b0;
-        generate::<W, P, S>(prep, sampler, ws, b0, b1, probe);
+        generate::<W, P, S, M>(prep, sampler, ws, b0, b1, probe);
         for depth in 0..prep.settings.max_depth {
             if ws.cur.len == 0 {
                 break;
             }
-            rays += bounce::<W, P, S>(prep, sampler, ws, depth, probe);
+            rays += bounce::<W, P, S, M>(prep, sampler, ws, depth, probe);
         }
         tile.add_rounds(&ws.active, &ws.result[..n]);
         b0 = b1;
@@ -291,7 +324,7 @@ fn render_round<W: Wide, P: Probe, S: PathSampler>(
 /// Camera rays for samples `s0..s1` of every active pixel of the tile, W at a time.
 /// Path `slot` is sample `s0 + slot / na` of active pixel `slot % na`.
 #[cfg_attr(feature = "phases", inline(never))]
-fn generate<W: Wide, P: Probe, S: PathSampler>(
+fn generate<W: Wide, P: Probe, S: PathSampler, const M: bool>(
     prep: &Prepared,
     sampler: S,
     ws: &mut Workspace,
@@ -330,6 +363,12 @@ fn generate<W: Wide, P: Probe, S: PathSampler>(
             }
         }));
         let (o, d) = prep.camera.ray(W::load_pow2(&p.thr[0], i), W::load_pow2(&p.thr[1], i), &mut rng);
+        if M {
+            // The path's time, after its camera ray, as the scalar kernel draws it.
+            rng.seek(layout::TIME);
+            let time: W = rng.next();
+            time.store_pow2(&mut ws.cur.time, i);
+        }
         let o = if P::PATHS {
             let idx: W::Idx = index_run::<W>(i);
             let id = ws.ids::<W>(&idx);
@@ -364,7 +403,7 @@ fn index_run<W: Wide>(i: usize) -> W::Idx {
 /// rays). Returns the rays traced. (Inlined, as the compiler chose to before
 /// the light pass made it larger.)
 #[cfg_attr(not(feature = "phases"), inline(always))]
-fn bounce<W: Wide, P: Probe, S: PathSampler>(
+fn bounce<W: Wide, P: Probe, S: PathSampler, const M: bool>(
     prep: &Prepared,
     sampler: S,
     ws: &mut Workspace,
@@ -373,7 +412,7 @@ fn bounce<W: Wide, P: Probe, S: PathSampler>(
 ) -> u64 {
     let n = ws.cur.len;
     probe.rays(depth, n as u32);
-    intersect::<W, P>(prep, ws, n, probe);
+    intersect::<W, P, M>(prep, ws, n, probe);
     if !prep.media.is_empty() {
         medium_pass::<W, S>(prep, sampler, ws, n, depth);
     }
@@ -385,12 +424,13 @@ fn bounce<W: Wide, P: Probe, S: PathSampler>(
     // `QUAD_BASE + i`, above every sphere's and below `MISS`.
     let kind_mask = prep.spheres.kind.len().wrapping_sub(1);
     let quad_mask = prep.quads.kind.len().wrapping_sub(1);
+    let moving_mask = prep.moving.s.kind.len().wrapping_sub(1);
     debug_assert!(prep.spheres.kind.len().is_power_of_two() && prep.quads.kind.len().is_power_of_two());
     // A scene without quads classifies W paths at a time: the packet's
     // material kinds (one lookup per lane), then, per kind the plan has, the
     // indices of its lanes compressed onto its queue, in path order as one
     // path at a time would append them. Misses (shaded above) join no queue.
-    if prep.quads.is_empty() && prep.media.is_empty() {
+    if !M && prep.quads.is_empty() && prep.media.is_empty() {
         // The path tracer queues only the kinds it has passes for (the plan's);
         // the debug modes shade every kind.
         let kinds = match prep.plan.mode {
@@ -416,12 +456,17 @@ fn bounce<W: Wide, P: Probe, S: PathSampler>(
         );
     } else {
         for (i, &h) in ws.hit[..n].iter().enumerate() {
-            // Hit indices in order: spheres, quads, media, MISS (two tests for
-            // a sphere or a quad, as before media existed).
+            // Hit indices in order: spheres, quads, moving spheres, media,
+            // MISS (two tests for a sphere or a quad, as before media existed;
+            // moving spheres only in a scene that has them).
             let q = if h < QUAD_BASE {
                 prep.spheres.kind[h as usize & kind_mask] as usize
             } else if h < MEDIUM_BASE {
-                prep.quads.kind[(h - QUAD_BASE) as usize & quad_mask] as usize
+                if !M || h < MOVING_BASE {
+                    prep.quads.kind[(h - QUAD_BASE) as usize & quad_mask] as usize
+                } else {
+                    prep.moving.s.kind[(h - MOVING_BASE) as usize & moving_mask] as usize
+                }
             } else if h == MISS {
                 MISS_QUEUE
             } else {
@@ -437,27 +482,27 @@ fn bounce<W: Wide, P: Probe, S: PathSampler>(
         match prep.plan.mode {
             Mode::Path if kind == Kind::DiffuseLight && prep.plan.kinds.contains(kind) => {
                 for_packets::<W, P>(q, qlen, probe, |idx, active, probe| {
-                    let Hits { srf, albedo: emit, param, .. } = surfaces::<W, P>(prep, ws, idx, active, probe);
+                    let Hits { srf, albedo: emit, param, .. } = surfaces::<W, P, M>(prep, ws, idx, active, probe);
                     let one_sided = param.gt(W::splat(0.0));
                     let c = v3_gather::<W>(&ws.cur.thr, idx).mul_elem(emission(emit, one_sided, srf.front));
                     write_results(ws, idx, active, c);
                 });
             }
             Mode::Path if kind == Kind::Isotropic && prep.plan.kinds.contains(kind) => {
-                isotropic_pass::<W, P, S>(prep, sampler, ws, q, qlen, depth, probe);
+                isotropic_pass::<W, P, S, M>(prep, sampler, ws, q, qlen, depth, probe);
             }
             Mode::Path if kind == Kind::Lambertian && !prep.plan.textures.is_empty() => {
-                textured_lambertian_pass::<W, P, S>(prep, sampler, ws, q, qlen, depth, probe);
+                textured_lambertian_pass::<W, P, S, M>(prep, sampler, ws, q, qlen, depth, probe);
             }
             Mode::Path if prep.plan.kinds.contains(kind) => {
                 for_packets::<W, P>(q, qlen, probe, |idx, active, probe| {
-                    scatter::<W, P, S>(prep, sampler, ws, kind, depth, idx, active, false, probe)
+                    scatter::<W, P, S, M>(prep, sampler, ws, kind, depth, idx, active, false, probe)
                 });
             }
             Mode::Path => debug_assert!(qlen == 0, "the plan left out a kind that was hit"),
             mode @ (Mode::Flat | Mode::Normals | Mode::Gradient) => {
                 for_packets::<W, P>(q, qlen, probe, |idx, active, probe| {
-                    debug_shade::<W, P>(prep, ws, mode, idx, active, probe)
+                    debug_shade::<W, P, M>(prep, ws, mode, idx, active, probe)
                 });
             }
         }
@@ -471,11 +516,12 @@ fn bounce<W: Wide, P: Probe, S: PathSampler>(
 /// into `ws.hit` and `ws.t`. (Out of line, once per bounce: the traversal's
 /// code then does not depend on what the rest of the bounce inlines.)
 #[cfg_attr(not(feature = "phases"), inline(never))]
-fn intersect<W: Wide, P: Probe>(prep: &Prepared, ws: &mut Workspace, n: usize, probe: &mut P) {
+fn intersect<W: Wide, P: Probe, const M: bool>(prep: &Prepared, ws: &mut Workspace, n: usize, probe: &mut P) {
     for i in (0..n).step_by(W::LANES) {
         let live = (n - i).min(W::LANES);
         let (o, d) = (Paths::v3::<W>(&ws.cur.o, i), Paths::v3::<W>(&ws.cur.d, i));
-        let (hit, t) = prep.closest_hits(o, d, low_bits(live), probe);
+        let time = &ws.cur.time;
+        let (hit, t) = prep.closest_hits::<W, P, M>(o, d, low_bits(live), || W::load_pow2(time, i), probe);
         W::store_u_pow2(hit, &mut ws.hit, i);
         t.store_pow2(&mut ws.t, i);
         probe.lanes(Stage::Intersect, live as u32, W::LANES as u32);
@@ -518,7 +564,7 @@ fn medium_pass<W: Wide, S: PathSampler>(prep: &Prepared, sampler: S, ws: &mut Wo
 /// `o + t d` (inside the medium: no surface, no offset).
 #[inline(never)]
 #[allow(clippy::too_many_arguments)]
-fn isotropic_pass<W: Wide, P: Probe, S: PathSampler>(
+fn isotropic_pass<W: Wide, P: Probe, S: PathSampler, const M: bool>(
     prep: &Prepared,
     sampler: S,
     ws: &mut Workspace,
@@ -559,7 +605,9 @@ fn isotropic_pass<W: Wide, P: Probe, S: PathSampler>(
         }
         let alive = W::mask_bits(alive) & low_bits(active);
         let slot = W::gather_u_pow2(&cur.slot, idx);
-        ws.next.append::<W, S>(alive, p, dir, thr, S::lane_words::<W>(&rng), slot);
+        // Scattered rays keep their path's time.
+        let time = if M { Some(W::gather_pow2(&cur.time, idx)) } else { None };
+        ws.next.append::<W, S>(alive, p, dir, thr, S::lane_words::<W>(&rng), slot, time);
     });
 }
 
@@ -588,7 +636,7 @@ fn shade_misses<W: Wide>(prep: &Prepared, ws: &mut Workspace, n: usize) {
 /// that a scene without textures runs the bounce it always ran.
 #[inline(never)]
 #[allow(clippy::too_many_arguments)]
-fn textured_lambertian_pass<W: Wide, P: Probe, S: PathSampler>(
+fn textured_lambertian_pass<W: Wide, P: Probe, S: PathSampler, const M: bool>(
     prep: &Prepared,
     sampler: S,
     ws: &mut Workspace,
@@ -601,7 +649,7 @@ fn textured_lambertian_pass<W: Wide, P: Probe, S: PathSampler>(
     let mut tlen = [0usize; TEX_QUEUES];
     let m = &prep.materials;
     for &i in &queue[..len] {
-        let tex = m.lambertian_tex[material_row(prep, ws.hit[i as usize & MASK])].kind;
+        let tex = m.lambertian_tex[material_row::<M>(prep, ws.hit[i as usize & MASK])].kind;
         if tex != TexKind::Solid {
             let q = tex as usize - 1;
             tq[q][tlen[q] & MASK] = i;
@@ -613,9 +661,9 @@ fn textured_lambertian_pass<W: Wide, P: Probe, S: PathSampler>(
         // The texture passes are not observed by probes: their lanes are the
         // lambertian pass's, which reports them.
         for_packets::<W, ()>(&tq[q], tlen[q], &mut (), |idx, active, _| {
-            let Hits { srf, .. } = surfaces::<W, ()>(prep, ws, idx, active, &mut ());
+            let Hits { srf, .. } = surfaces::<W, (), M>(prep, ws, idx, active, &mut ());
             let hits = W::gather_u_pow2(&ws.hit, idx);
-            let row = |k: usize| m.lambertian_tex[material_row(prep, W::lane_u(hits, k))].row as usize;
+            let row = |k: usize| m.lambertian_tex[material_row::<M>(prep, W::lane_u(hits, k))].row as usize;
             let c = texture_albedo(prep, kind, srf.p, |k| W::lane_u(hits, k), row);
             for (k, &i) in idx.as_ref().iter().enumerate().take(active) {
                 let i = i as usize & MASK;
@@ -627,17 +675,19 @@ fn textured_lambertian_pass<W: Wide, P: Probe, S: PathSampler>(
     }
     ws.tex_queue = Some(tq);
     for_packets::<W, P>(queue, len, probe, |idx, active, probe| {
-        scatter::<W, P, S>(prep, sampler, ws, Kind::Lambertian, depth, idx, active, true, probe)
+        scatter::<W, P, S, M>(prep, sampler, ws, Kind::Lambertian, depth, idx, active, true, probe)
     });
 }
 
 /// The material row of the primitive of hit index `h` (not `MISS`).
 #[inline(always)]
-fn material_row(prep: &Prepared, h: u32) -> usize {
+fn material_row<const M: bool>(prep: &Prepared, h: u32) -> usize {
     if h < QUAD_BASE {
         prep.spheres.row[h as usize] as usize
-    } else {
+    } else if !M || h < MOVING_BASE {
         prep.quads.row[(h - QUAD_BASE) as usize] as usize
+    } else {
+        prep.moving.s.row[(h - MOVING_BASE) as usize] as usize
     }
 }
 
@@ -699,9 +749,15 @@ struct Hits<W: Wide> {
 /// records and both surfaces are computed, and each lane keeps its own (the
 /// same values the scalar kernel computes for its one kind).
 #[inline(always)]
-fn surfaces<W: Wide, P: Probe>(prep: &Prepared, ws: &Workspace, idx: &W::Idx, active: usize, probe: &mut P) -> Hits<W> {
+fn surfaces<W: Wide, P: Probe, const M: bool>(
+    prep: &Prepared,
+    ws: &Workspace,
+    idx: &W::Idx,
+    active: usize,
+    probe: &mut P,
+) -> Hits<W> {
     let sph = W::gather_u_pow2(&ws.hit, idx);
-    if prep.quads.is_empty() {
+    if !M && prep.quads.is_empty() {
         // Book one's surfaces, as they were.
         let rec = W::gather_rows8(&prep.spheres.shade, &W::idx_of(sph));
         let c = V3::new(rec[Shade::CX], rec[Shade::CY], rec[Shade::CZ]);
@@ -723,6 +779,8 @@ fn surfaces<W: Wide, P: Probe>(prep: &Prepared, ws: &Workspace, idx: &W::Idx, ac
         let q_mask = W::u_splat(prep.quads.shade.len() as u32 - 1);
         let srec = W::gather_rows8(&prep.spheres.shade, &W::idx_of(sph & s_mask));
         let qrec = W::gather_rows8(&prep.quads.shade, &W::idx_of(sph & q_mask));
+        let (is_sphere, srec) =
+            if !M { (is_sphere, srec) } else { moving_records::<W>(prep, ws, idx, sph, is_sphere, srec) };
         let c = V3::new(srec[Shade::CX], srec[Shade::CY], srec[Shade::CZ]);
         let r = W::select(is_sphere, srec[Shade::R], W::splat(0.0));
         let s_srf = surface(o, d, t, c, srec[Shade::R]);
@@ -742,7 +800,33 @@ fn surfaces<W: Wide, P: Probe>(prep: &Prepared, ws: &Workspace, idx: &W::Idx, ac
     Hits { d, srf, albedo: V3::new(rec[a], rec[a + 1], rec[a + 2]), param: rec[Shade::PARAM] }
 }
 
-fn debug_shade<W: Wide, P: Probe>(
+/// A packet's sphere records where some lanes may have hit a moving sphere:
+/// in those lanes the moving sphere's record with its centre at the path's
+/// time ([`centre_at`], the scalar kernel's formula), and the lanes counted
+/// as spheres.
+#[inline(never)]
+fn moving_records<W: Wide>(
+    prep: &Prepared,
+    ws: &Workspace,
+    idx: &W::Idx,
+    hit: W::U32,
+    is_sphere: W,
+    srec: [W; 8],
+) -> (W, [W; 8]) {
+    let m = &prep.moving;
+    let is_moving = !W::u_lt(hit, W::u_splat(MOVING_BASE));
+    let m_mask = W::u_splat(m.s.shade.len() as u32 - 1);
+    let midx = W::idx_of(hit & m_mask);
+    let mut mrec = W::gather_rows8(&m.s.shade, &midx);
+    let vel = W::gather_rows8(&m.vel, &midx);
+    let time = W::gather_pow2(&ws.cur.time, idx);
+    let c =
+        centre_at(V3::new(mrec[Shade::CX], mrec[Shade::CY], mrec[Shade::CZ]), V3::new(vel[0], vel[1], vel[2]), time);
+    (mrec[Shade::CX], mrec[Shade::CY], mrec[Shade::CZ]) = (c.x, c.y, c.z);
+    (is_sphere | is_moving, std::array::from_fn(|k| W::select(is_moving, mrec[k], srec[k])))
+}
+
+fn debug_shade<W: Wide, P: Probe, const M: bool>(
     prep: &Prepared,
     ws: &mut Workspace,
     mode: Mode,
@@ -750,7 +834,7 @@ fn debug_shade<W: Wide, P: Probe>(
     active: usize,
     probe: &mut P,
 ) {
-    let hits = surfaces::<W, P>(prep, ws, idx, active, probe);
+    let hits = surfaces::<W, P, M>(prep, ws, idx, active, probe);
     let c = match mode {
         Mode::Normals => normal_colour(hits.srf.n),
         // The flat colour (`MaterialTables::flat_colour`): the albedo, white for glass.
@@ -763,7 +847,7 @@ fn debug_shade<W: Wide, P: Probe>(
 #[cfg_attr(not(feature = "phases"), inline(always))]
 #[cfg_attr(feature = "phases", inline(never))]
 #[allow(clippy::too_many_arguments)]
-fn scatter<W: Wide, P: Probe, S: PathSampler>(
+fn scatter<W: Wide, P: Probe, S: PathSampler, const M: bool>(
     prep: &Prepared,
     sampler: S,
     ws: &mut Workspace,
@@ -774,7 +858,7 @@ fn scatter<W: Wide, P: Probe, S: PathSampler>(
     textured: bool,
     probe: &mut P,
 ) {
-    let Hits { d, srf, albedo, param } = surfaces::<W, P>(prep, ws, idx, active, probe);
+    let Hits { d, srf, albedo, param } = surfaces::<W, P, M>(prep, ws, idx, active, probe);
     // A textured lambertian's record has parameter 1: its albedo is the one
     // its texture pass wrote.
     let albedo =
@@ -812,5 +896,7 @@ fn scatter<W: Wide, P: Probe, S: PathSampler>(
     }
     let alive = W::mask_bits(alive) & low_bits(active);
     let slot = W::gather_u_pow2(&cur.slot, idx);
-    ws.next.append::<W, S>(alive, spawn(&srf, dir), dir, thr, S::lane_words::<W>(&rng), slot);
+    // Scattered rays keep their path's time.
+    let time = if M { Some(W::gather_pow2(&cur.time, idx)) } else { None };
+    ws.next.append::<W, S>(alive, spawn(&srf, dir), dir, thr, S::lane_words::<W>(&rng), slot, time);
 }

@@ -261,12 +261,21 @@ impl PathSampler for Sobol {
 /// | 2, 3 | lens (radius, angle), when the camera has a lens |
 /// | 4 + 3 depth, +1 | scattering: two for a lambertian or metal direction (z, angle); a dielectric's reflect-or-refract choice takes the first |
 /// | 4 + 3 depth + 2 | the Russian-roulette decision after that bounce |
+/// | `TIME` = 0x4000_0000 | the path's time in [0, 1) (motion blur), drawn by the camera after its ray, scenes with moving spheres only |
 /// | 0x4000_1000 + k 2^22 + depth | scenes with media: the free-flight distance of medium k at that bounce ([`layout::free_flight`]; padding, not Sobol) |
 ///
 /// Bounces 0 to 39 take Sobol dimensions (4 to 123, [`sobol::SOBOL_DIMS`] in
 /// all); from bounce 40 on the dimensions are padding (independent hashed
 /// values). The dimensions wrap around past 2^32 (a path of more than 1.4e9
 /// bounces), which no render reaches.
+///
+/// The time dimension is **not** Sobol-stratified: it lies far above the
+/// Sobol dimensions, so under the Sobol sampler its value is padding (an
+/// independent hashed value per path), under the independent sampler the
+/// next draw of the path's stream. It cannot take a low dimension: the
+/// bounces fill the low range contiguously, and moving them to make room
+/// would change every documented image. No bounce below depth 357,913,940
+/// reaches it (bounce `depth` uses dimensions up to `4 + 3 depth + 2`).
 pub mod layout {
     pub const PIXEL: u32 = 0;
     pub const LENS: u32 = 2;
@@ -274,6 +283,8 @@ pub mod layout {
     pub const PER_BOUNCE: u32 = 3;
     /// Bounces whose dimensions are all Sobol dimensions.
     pub const SOBOL_BOUNCES: u32 = 40;
+    /// The path's time (motion blur), for scenes with moving spheres.
+    pub const TIME: u32 = 0x4000_0000;
 
     /// The first of the two scattering dimensions of bounce `depth`.
     #[inline(always)]

@@ -119,6 +119,10 @@ pub fn opt_f32<'de, D: Deserializer<'de>>(d: D) -> Result<Option<f32>, D::Error>
     Option::<Num<f32>>::deserialize(d).map(|o| o.map(|n| n.0))
 }
 
+pub fn u32<'de, D: Deserializer<'de>>(d: D) -> Result<u32, D::Error> {
+    Num::<u32>::deserialize(d).map(|n| n.0)
+}
+
 pub fn opt_u32<'de, D: Deserializer<'de>>(d: D) -> Result<Option<u32>, D::Error> {
     Option::<Num<u32>>::deserialize(d).map(|o| o.map(|n| n.0))
 }

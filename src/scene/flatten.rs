@@ -145,8 +145,10 @@ impl Flat {
 
     fn add(&mut self, t: &Transform, spheres: &[Sphere], quads: &[Quad], boxes: &[QuadBox]) {
         for s in spheres {
+            let center1 = s.center1.map(|c| f32s(t.point(f64s(c))));
             self.spheres.push(Sphere {
                 center: f32s(t.point(f64s(s.center))),
+                center1,
                 radius: s.radius,
                 material: s.material.clone(),
             });
@@ -254,7 +256,7 @@ mod tests {
         let g = Group {
             rotate_y: 90.0,
             translate: [10.0, 0.0, 0.0],
-            spheres: vec![Sphere { center: [1.0, 0.0, 0.0], radius: 1.0, material: white() }],
+            spheres: vec![Sphere { center: [1.0, 0.0, 0.0], center1: None, radius: 1.0, material: white() }],
             ..Group::default()
         };
         let t = Transform::of(&g);

@@ -19,7 +19,7 @@ pub use crate::choice::Mode;
 pub use file::{load_scene, save_scene, scene_from_bytes, scene_from_str, scene_to_string, Format};
 pub use flatten::{box_quads, Flat, FlatBoundary, FlatMedium};
 pub use presets::{final_scene, preset, presets, Preset, PresetGroup};
-pub use render_table::RenderTable;
+pub use render_table::{BookTable, RenderTable};
 pub use source::SceneSource;
 
 use serde::{Deserialize, Serialize};
@@ -294,8 +294,14 @@ impl Material {
 #[derive(Serialize, Deserialize, Clone, Debug, PartialEq)]
 #[serde(deny_unknown_fields)]
 pub struct Sphere {
+    /// The centre (at time 0, for a moving sphere).
     #[serde(deserialize_with = "de::vec3")]
     pub center: [f32; 3],
+    /// A moving sphere's centre at time 1 (The Next Week's
+    /// `sphere(center1, center2, r, mat)`): the centre at time `t` in [0, 1)
+    /// is `center + t (center1 - center)`. Absent for a static sphere.
+    #[serde(default, skip_serializing_if = "Option::is_none", deserialize_with = "de::opt_vec3")]
+    pub center1: Option<[f32; 3]>,
     /// Signed: a negative radius is the book's hollow sphere (normal flipped inwards).
     #[serde(deserialize_with = "de::f32")]
     pub radius: f32,

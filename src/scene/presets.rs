@@ -1,8 +1,8 @@
 //! A preset for every image of the seed (SEED-NOTES.md), with the book's physics.
 
 use super::{
-    Background, Camera, Group, Material, Medium, MediumBoundary, Mode, Quad, QuadBox, RenderTable, Scene, Sky, Sphere,
-    Texture,
+    Background, BookTable, Camera, Group, Material, Medium, MediumBoundary, Mode, Quad, QuadBox, RenderTable, Scene,
+    Sky, Sphere, Texture,
 };
 use crate::real::Real;
 use rand_core::{Rng, SeedableRng};
@@ -36,7 +36,7 @@ impl PresetGroup {
     pub fn title(self) -> &'static str {
         match self {
             PresetGroup::Weekend => "Ray Tracing in One Weekend",
-            PresetGroup::NextWeek => "Ray Tracing: The Next Week (v4; part 1: quads, boxes, instances, lights)",
+            PresetGroup::NextWeek => "Ray Tracing: The Next Week (v4)",
             PresetGroup::Stress => "Stress scenes (numerical robustness, for rtow stress)",
         }
     }
@@ -55,7 +55,7 @@ const fn glass(ior: f32) -> Material {
     Material::Dielectric { ior }
 }
 const fn sphere(center: [f32; 3], radius: f32, material: Material) -> Sphere {
-    Sphere { center, radius, material }
+    Sphere { center, center1: None, radius, material }
 }
 
 fn settings(width: u32, height: u32, spp: u32, depth: u32) -> RenderTable {
@@ -66,6 +66,7 @@ fn settings(width: u32, height: u32, spp: u32, depth: u32) -> RenderTable {
         max_depth: Some(depth),
         seed: None,
         sampler: None,
+        book: None,
     }
 }
 
@@ -210,6 +211,7 @@ pub fn final_scene() -> Scene {
 fn scaled(mut s: Scene, k: f32) -> Scene {
     for sp in &mut s.spheres {
         sp.center = sp.center.map(|x| x * k);
+        sp.center1 = sp.center1.map(|c| c.map(|x| x * k));
         sp.radius *= k;
     }
     let c = &mut s.camera;
@@ -243,7 +245,15 @@ const fn quad(q: [f32; 3], u: [f32; 3], v: [f32; 3], material: Material) -> Quad
 }
 
 /// A scene of The Next Week: a pinhole camera (vup +y), a constant background.
+/// Its render table is the book's settings, which `--book` also renders.
 fn next_week(camera: Camera, background: [f32; 3], render: RenderTable) -> Scene {
+    let book = BookTable {
+        width: render.width.expect("a preset's width"),
+        height: render.height.expect("a preset's height"),
+        samples_per_pixel: render.samples_per_pixel.expect("a preset's samples"),
+        max_depth: render.max_depth.expect("a preset's depth"),
+    };
+    let render = RenderTable { book: Some(book), ..render };
     Scene { background: Background::Constant(background), ..scene(Mode::Path, camera, vec![], render) }
 }
 
@@ -268,6 +278,50 @@ fn nw_quads() -> Scene {
 /// the origin, no defocus, 16:9 at 400 wide, 100 spp, depth 50, daylight.
 fn nw_daylight_spheres() -> Scene {
     next_week(Camera::looking([13.0, 2.0, 3.0], [0.0; 3], 20.0), NW_DAYLIGHT, settings(400, 225, 100, 50))
+}
+
+/// The Next Week, `bouncing_spheres()` (v4 `dev`): book one's final scene
+/// on the 3-D checker ground (scale 0.32), its lambertian spheres moving up
+/// by `U[0, 0.5]` over the shutter (the book's `center2 = center + (0,
+/// random_double(0, .5), 0)`, drawn after the albedo as the book does), the
+/// book's camera (vfov 20 from (13, 2, 3), defocus angle 0.02 degrees, focus
+/// distance 10, as its code has it), daylight, 400x225, 100 spp, depth 50.
+/// The layout comes from rtow's generator with the final scene's seed.
+fn nw_bouncing_spheres() -> Scene {
+    let mut rng = Xoshiro128Plus::seed_from_u64(FINAL_LAYOUT_SEED);
+    let mut rnd = || f32::unit_from_bits(rng.next_u32());
+    let checker = lam_tex(Texture::Checker { scale: 0.32, even: [0.2, 0.3, 0.1], odd: [0.9, 0.9, 0.9] });
+    let mut spheres = vec![sphere([0.0, -1000.0, 0.0], 1000.0, checker)];
+    for a in -11..11 {
+        for b in -11..11 {
+            let choose = rnd();
+            let center = [a as f32 + 0.9 * rnd(), 0.2, b as f32 + 0.9 * rnd()];
+            let d = [center[0] - 4.0, center[1] - 0.2, center[2]];
+            if (d[0] * d[0] + d[1] * d[1] + d[2] * d[2]).sqrt() <= 0.9 {
+                continue;
+            }
+            if choose < 0.8 {
+                let a: [f32; 3] = std::array::from_fn(|_| rnd());
+                let b: [f32; 3] = std::array::from_fn(|_| rnd());
+                let material = lam(std::array::from_fn(|i| a[i] * b[i]));
+                let center1 = Some([center[0], center[1] + 0.5 * rnd(), center[2]]);
+                spheres.push(Sphere { center1, ..sphere(center, 0.2, material) });
+            } else if choose < 0.95 {
+                let albedo = std::array::from_fn(|_| 0.5 + 0.5 * rnd());
+                spheres.push(sphere(center, 0.2, metal(albedo, 0.5 * rnd())));
+            } else {
+                spheres.push(sphere(center, 0.2, glass(1.5)));
+            }
+        }
+    }
+    spheres.push(sphere([0.0, 1.0, 0.0], 1.0, glass(1.5)));
+    spheres.push(sphere([-4.0, 1.0, 0.0], 1.0, lam([0.4, 0.2, 0.1])));
+    spheres.push(sphere([4.0, 1.0, 0.0], 1.0, metal([0.7, 0.6, 0.5], 0.0)));
+    let mut s = nw_daylight_spheres();
+    s.camera.defocus_angle_deg = Some(0.02);
+    s.camera.focus_dist = Some(10.0);
+    s.spheres = spheres;
+    s
 }
 
 /// The Next Week, `checkered_spheres()`: two spheres of radius 10 at y = +-10
@@ -378,6 +432,60 @@ fn nw_cornell_smoke() -> Scene {
             ..Group::default()
         },
     ];
+    s
+}
+
+/// The Next Week, `final_scene(400, 250, 4)` (v4 `dev`, the book's default
+/// build: 400x400, 250 spp, depth 4; the book's image is `final_scene(800,
+/// 10000, 40)`): a 20 x 20 ground of boxes of random height (2,400 quads),
+/// a two-sided light, a moving sphere, glass, fuzzed metal, a glass sphere
+/// filled with a blue medium, a mist over everything (the camera inside it),
+/// the earth under `earthmap.jpg` (from `RTOW_IMAGES`), a marble sphere
+/// (noise scale 0.2) and 1,000 spheres turned by 15 degrees and moved as one
+/// group. Random heights and positions come from rtow's generator.
+fn nw_final() -> Scene {
+    let mut rng = Xoshiro128Plus::seed_from_u64(FINAL_LAYOUT_SEED);
+    let mut rnd = || f32::unit_from_bits(rng.next_u32());
+    let mut s = next_week(
+        Camera::looking([478.0, 278.0, -600.0], [278.0, 278.0, 0.0], 40.0),
+        [0.0; 3],
+        settings(400, 400, 250, 4),
+    );
+    // `--book`: the book's image, `final_scene(800, 10000, 40)`.
+    s.render.book = Some(BookTable { width: 800, height: 800, samples_per_pixel: 10_000, max_depth: 40 });
+    let ground = lam([0.48, 0.83, 0.53]);
+    for i in 0..20 {
+        for j in 0..20 {
+            let (x0, z0) = (-1000.0 + 100.0 * i as f32, -1000.0 + 100.0 * j as f32);
+            let y1 = 1.0 + 100.0 * rnd();
+            s.boxes.push(QuadBox { a: [x0, 0.0, z0], b: [x0 + 100.0, y1, z0 + 100.0], material: ground.clone() });
+        }
+    }
+    s.quads = vec![quad([123.0, 554.0, 147.0], [300.0, 0.0, 0.0], [0.0, 0.0, 265.0], light([7.0; 3]))];
+    let moving = sphere([400.0, 400.0, 200.0], 50.0, lam([0.7, 0.3, 0.1]));
+    s.spheres = vec![
+        Sphere { center1: Some([430.0, 400.0, 200.0]), ..moving },
+        sphere([260.0, 150.0, 45.0], 50.0, glass(1.5)),
+        sphere([0.0, 150.0, 145.0], 50.0, metal([0.8, 0.8, 0.9], 1.0)),
+        sphere([360.0, 150.0, 145.0], 70.0, glass(1.5)),
+        sphere([400.0, 200.0, 400.0], 100.0, lam_tex(Texture::Image { file: "earthmap.jpg".into() })),
+        sphere([220.0, 280.0, 300.0], 80.0, lam_tex(Texture::Noise { scale: 0.2 })),
+    ];
+    s.media = vec![
+        Medium {
+            boundary: MediumBoundary::Sphere { center: [360.0, 150.0, 145.0], radius: 70.0 },
+            density: 0.2,
+            albedo: [0.2, 0.4, 0.9],
+        },
+        Medium {
+            boundary: MediumBoundary::Sphere { center: [0.0; 3], radius: 5000.0 },
+            density: 0.0001,
+            albedo: [1.0; 3],
+        },
+    ];
+    let white = lam([0.73, 0.73, 0.73]);
+    let cloud = (0..1000).map(|_| sphere([165.0 * rnd(), 165.0 * rnd(), 165.0 * rnd()], 10.0, white.clone())).collect();
+    s.groups = vec![Group { rotate_y: 15.0, translate: [-100.0, 270.0, 395.0], spheres: cloud, ..Group::default() }];
     s
 }
 
@@ -508,6 +616,12 @@ static PRESETS: &[Preset] = &[
         build: final_scene,
     },
     Preset {
+        name: "nw-bouncing-spheres",
+        description: "The Next Week: the random spheres on a checker, lambertians moving (motion blur)",
+        group: PresetGroup::NextWeek,
+        build: nw_bouncing_spheres,
+    },
+    Preset {
         name: "nw-checkered-spheres",
         description: "The Next Week: two spheres under the 3-D checker texture (scale 0.32)",
         group: PresetGroup::NextWeek,
@@ -542,6 +656,13 @@ static PRESETS: &[Preset] = &[
         description: "The Next Week: the Cornell box, two rotated boxes (600x600, 200 spp)",
         group: PresetGroup::NextWeek,
         build: nw_cornell_box,
+    },
+    Preset {
+        name: "nw-final",
+        description:
+            "The Next Week: its final scene at the book's default build (400x400, 250 spp, depth 4; needs RTOW_IMAGES)",
+        group: PresetGroup::NextWeek,
+        build: nw_final,
     },
     Preset {
         name: "nw-cornell-smoke",

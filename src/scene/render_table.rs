@@ -25,6 +25,24 @@ pub struct RenderTable {
     /// The sampler (`independent`, `sobol`, ...); an override replaces it.
     #[serde(default, skip_serializing_if = "Option::is_none")]
     pub sampler: Option<Sampler>,
+    /// What `--book` renders for this scene (The Next Week's presets: their
+    /// book's image); without it, `--book` is book one's final settings.
+    #[serde(default, skip_serializing_if = "Option::is_none")]
+    pub book: Option<BookTable>,
+}
+
+/// A scene's book settings (`render.book`): size, samples and depth.
+#[derive(Serialize, Deserialize, Clone, Copy, Debug, PartialEq)]
+#[serde(deny_unknown_fields)]
+pub struct BookTable {
+    #[serde(deserialize_with = "de::u32")]
+    pub width: u32,
+    #[serde(deserialize_with = "de::u32")]
+    pub height: u32,
+    #[serde(deserialize_with = "de::u32")]
+    pub samples_per_pixel: u32,
+    #[serde(deserialize_with = "de::u32")]
+    pub max_depth: u32,
 }
 
 impl RenderTable {
@@ -39,6 +57,25 @@ impl RenderTable {
         ] {
             if v == Some(0) {
                 return Err(Error::invalid(name, "must be at least 1"));
+            }
+        }
+        if let Some(b) = self.book {
+            for (name, v) in [
+                ("render.book.width", b.width),
+                ("render.book.height", b.height),
+                ("render.book.samples_per_pixel", b.samples_per_pixel),
+                ("render.book.max_depth", b.max_depth),
+            ] {
+                if v == 0 {
+                    return Err(Error::invalid(name, "must be at least 1"));
+                }
+            }
+            let px = b.width as u64 * b.height as u64;
+            if px > MAX_PIXELS {
+                return Err(Error::invalid(
+                    "render.book.width x render.book.height",
+                    format!("{}x{} = {px} pixels; at most {MAX_PIXELS} fit in memory", b.width, b.height),
+                ));
             }
         }
         if let (Some(w), Some(h)) = (self.width, self.height) {

@@ -127,6 +127,9 @@ impl Group {
         let flat = super::flatten::group(self);
         for s in &flat.spheres {
             point(&format!("{field}.translate"), s.center)?;
+            if let Some(c1) = s.center1 {
+                point(&format!("{field}.translate"), c1)?;
+            }
         }
         for m in &flat.media {
             if m.boundary.reach() > limits::MAX_COORD as f64 {
@@ -371,6 +374,16 @@ impl Sphere {
     /// The sphere's values; `field` names one of them (`spheres[i].<name>`).
     fn validate(&self, field: &dyn Fn(&str) -> String) -> Result<()> {
         point(&field("center"), self.center)?;
+        if let Some(c1) = self.center1 {
+            point(&field("center1"), c1)?;
+            if let Material::Lambertian { albedo: Texture::Image { .. } } = self.material {
+                return Err(Error::invalid(
+                    field("material.albedo"),
+                    "an image texture on a moving sphere is not supported (its texture coordinates would need the \
+                     path's time); give the sphere no center1, or another albedo",
+                ));
+            }
+        }
         finite(&field("radius"), self.radius)?;
         if self.radius == 0.0 {
             return Err(Error::invalid(field("radius"), "must not be 0"));

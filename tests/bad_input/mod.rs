@@ -170,6 +170,20 @@ pub fn cases() -> Vec<Case> {
             "spheres[0].radius",
             None,
         ),
+        case(
+            "nan_center1.toml",
+            format!(
+                "{CAMERA_TOML}\n[[spheres]]\ncenter = [0, 0, -1]\ncenter1 = [0, nan, -1]\nradius = 0.5\nmaterial = {{ type = \"dielectric\", ior = 1.5 }}\n"
+            ),
+            "spheres[0].center1",
+            None,
+        ),
+        case(
+            "overflow_center1.json",
+            json_sphere(&format!(r#""center": [0, 0, -1], "center1": [0, 1e999, -1], "radius": 0.5, {lam}"#)),
+            "spheres[0].center1[1]",
+            Some("1e999"),
+        ),
         case("nan_radius.toml", toml_sphere("nan", r#"{ type = "dielectric", ior = 1.5 }"#), "spheres[0].radius", None),
         case(
             "inf_ior.toml",
