@@ -11,6 +11,19 @@ use crate::error::{Error, Result};
 /// image (12) and the 8-bit output, about 4.5 GB at the limit.
 pub const MAX_PIXELS: u64 = 1 << 26;
 
+/// Refuses a `width` x `height` image of more than [`MAX_PIXELS`] pixels,
+/// naming `field` (e.g. `width x height`).
+pub fn check_pixels(field: &str, width: u32, height: u32) -> Result<()> {
+    let px = width as u64 * height as u64;
+    if px > MAX_PIXELS {
+        return Err(Error::invalid(
+            field,
+            format!("{width}x{height} = {px} pixels; at most {MAX_PIXELS} fit in memory"),
+        ));
+    }
+    Ok(())
+}
+
 /// Largest tile edge in pixels: a tile's 45 x 45 = 2025 pixels must fit one
 /// wavefront workspace of `MAX_PATHS` = 2048 paths (one sample each at a time).
 pub const MAX_TILE: u32 = 45;

@@ -4,7 +4,7 @@
 //! image; the kernels, the film and the statistics read them from here.
 
 use crate::error::{Error, Result};
-use crate::limits::MAX_PIXELS;
+use crate::limits::check_pixels;
 use crate::sampling::Sampler;
 use serde::Serialize;
 
@@ -56,13 +56,8 @@ impl Settings {
                 return Err(Error::invalid(name, "must be at least 1"));
             }
         }
+        check_pixels("width x height", self.width, self.height)?;
         let px = self.width as u64 * self.height as u64;
-        if px > MAX_PIXELS {
-            return Err(Error::invalid(
-                "width x height",
-                format!("{}x{} = {px} pixels; at most {MAX_PIXELS} fit in memory", self.width, self.height),
-            ));
-        }
         if px * self.spp as u64 > u32::MAX as u64 * 1024 {
             return Err(Error::invalid("spp", format!("{} samples per pixel at {px} pixels is too many", self.spp)));
         }

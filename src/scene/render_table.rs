@@ -4,7 +4,7 @@
 
 use super::de;
 use crate::error::{Error, Result};
-use crate::limits::MAX_PIXELS;
+use crate::limits::check_pixels;
 use crate::sampling::Sampler;
 use serde::{Deserialize, Serialize};
 
@@ -70,22 +70,10 @@ impl RenderTable {
                     return Err(Error::invalid(name, "must be at least 1"));
                 }
             }
-            let px = b.width as u64 * b.height as u64;
-            if px > MAX_PIXELS {
-                return Err(Error::invalid(
-                    "render.book.width x render.book.height",
-                    format!("{}x{} = {px} pixels; at most {MAX_PIXELS} fit in memory", b.width, b.height),
-                ));
-            }
+            check_pixels("render.book.width x render.book.height", b.width, b.height)?;
         }
         if let (Some(w), Some(h)) = (self.width, self.height) {
-            let px = w as u64 * h as u64;
-            if px > MAX_PIXELS {
-                return Err(Error::invalid(
-                    "render.width x render.height",
-                    format!("{w}x{h} = {px} pixels; at most {MAX_PIXELS} fit in memory"),
-                ));
-            }
+            check_pixels("render.width x render.height", w, h)?;
         }
         Ok(())
     }
