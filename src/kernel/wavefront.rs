@@ -594,20 +594,9 @@ fn isotropic_pass<W: Wide, P: Probe, S: PathSampler, const M: bool>(
         }));
         rng.seek(layout::scatter(depth));
         let dir = unit_vector(&mut rng);
-        let mut thr = v3_gather::<W>(&cur.thr, idx).mul_elem(albedo);
-        let zero = W::splat(0.0);
-        let mut alive = !(thr.x.eq(zero) & thr.y.eq(zero) & thr.z.eq(zero));
-        if roulette_applies(&prep.estimator, depth + 1) {
-            rng.seek(layout::roulette(depth));
-            let (t, survives) = roulette(thr, &mut rng);
-            thr = t;
-            alive = alive & survives;
-        }
-        let alive = W::mask_bits(alive) & low_bits(active);
-        let slot = W::gather_u_pow2(&cur.slot, idx);
-        // Scattered rays keep their path's time.
-        let time = if M { Some(W::gather_pow2(&cur.time, idx)) } else { None };
-        ws.next.append::<W, S>(alive, p, dir, thr, S::lane_words::<W>(&rng), slot, time);
+        let thr = v3_gather::<W>(&cur.thr, idx).mul_elem(albedo);
+        let all = W::mask_from_bits(u32::MAX);
+        continue_paths::<W, S, M>(prep, ws, idx, active, depth, rng, thr, all, p, dir);
     });
 }
 
@@ -882,12 +871,32 @@ fn scatter<W: Wide, P: Probe, S: PathSampler, const M: bool>(
         // Lights and media have their own passes (`bounce`).
         Kind::DiffuseLight | Kind::Isotropic => (d, !all),
     };
+    continue_paths::<W, S, M>(prep, ws, idx, active, depth, rng, thr, alive, spawn(&srf, dir), dir);
+}
+
+/// The end of every scatter pass: paths whose throughput is zero die, then
+/// Russian roulette (every lane draws, as the scalar path does when it gets
+/// here; lanes already dead draw too, but their streams are never used
+/// again), and the survivors' rays from `o` along `dir` join the next
+/// bounce with their slots and, in a scene that moves, their paths' times.
+#[inline(always)]
+#[allow(clippy::too_many_arguments)]
+fn continue_paths<W: Wide, S: PathSampler, const M: bool>(
+    prep: &Prepared,
+    ws: &mut Workspace,
+    idx: &W::Idx,
+    active: usize,
+    depth: u32,
+    mut rng: S::Lanes<W>,
+    thr: V3<W>,
+    alive: <W as crate::real::Real>::Mask,
+    o: V3<W>,
+    dir: V3<W>,
+) {
     let zero = W::splat(0.0);
     let dark = thr.x.eq(zero) & thr.y.eq(zero) & thr.z.eq(zero);
     let mut alive = alive & !dark;
     let mut thr = thr;
-    // Every lane draws, as the scalar path does when it gets here; lanes that
-    // are already dead draw too, but their streams are never used again.
     if roulette_applies(&prep.estimator, depth + 1) {
         rng.seek(layout::roulette(depth));
         let (t, survives) = roulette(thr, &mut rng);
@@ -895,8 +904,8 @@ fn scatter<W: Wide, P: Probe, S: PathSampler, const M: bool>(
         alive = alive & survives;
     }
     let alive = W::mask_bits(alive) & low_bits(active);
+    let cur = &ws.cur;
     let slot = W::gather_u_pow2(&cur.slot, idx);
-    // Scattered rays keep their path's time.
     let time = if M { Some(W::gather_pow2(&cur.time, idx)) } else { None };
-    ws.next.append::<W, S>(alive, spawn(&srf, dir), dir, thr, S::lane_words::<W>(&rng), slot, time);
+    ws.next.append::<W, S>(alive, o, dir, thr, S::lane_words::<W>(&rng), slot, time);
 }
