@@ -1,7 +1,8 @@
 //! The named choices of a render, spoken alike by scene files, the command
 //! line, the library's options and the kernels' plan: what the renderer
-//! computes ([`Mode`]), which kernel runs ([`KernelChoice`]) and how closest
-//! hits are found ([`AccelChoice`]). A foundation module: it imports nothing
+//! computes ([`Mode`]), which kernel runs ([`KernelChoice`]), how closest
+//! hits are found ([`AccelChoice`]) and how a path chooses its directions
+//! ([`EstimatorChoice`]). A foundation module: it imports nothing
 //! of the crate, so both sides of the bridge (`scene/` and the kernels) can
 //! name these without importing each other.
 
@@ -104,6 +105,31 @@ choice!(
     }
 );
 
+choice!(
+    /// How a path chooses its next direction at a diffuse vertex (a
+    /// lambertian surface or a medium's isotropic scattering). Both are
+    /// unbiased: they change the noise, not the expected image. Specular
+    /// materials (metal, dielectric) sample their own direction under both.
+    #[derive(Default)]
+    EstimatorChoice {
+        /// The material's own density only: the cosine lobe, a uniform sphere in a medium.
+        #[default]
+        Bsdf = "bsdf",
+        /// The Rest of Your Life's one-sample mixture: half the directions
+        /// from the material's density, half toward the scene's important
+        /// shapes (its `sample_toward` list, else its lights), weighted by
+        /// the mixture's density.
+        Book = "book",
+    }
+);
+
+impl<'de> Deserialize<'de> for EstimatorChoice {
+    fn deserialize<D: serde::Deserializer<'de>>(d: D) -> std::result::Result<Self, D::Error> {
+        let s = String::deserialize(d)?;
+        s.parse().map_err(serde::de::Error::custom)
+    }
+}
+
 #[cfg(test)]
 mod tests {
     use super::*;
@@ -114,6 +140,12 @@ mod tests {
             assert_eq!(k.name().parse::<KernelChoice>(), Ok(*k));
         }
         assert_eq!("bvh-ray".parse::<AccelChoice>(), Ok(AccelChoice::BvhRay));
+        for e in EstimatorChoice::ALL {
+            assert_eq!(e.name().parse::<EstimatorChoice>(), Ok(*e));
+            assert_eq!(serde_json::from_value::<EstimatorChoice>(serde_json::to_value(e).unwrap()).unwrap(), *e);
+        }
+        let e = serde_json::from_str::<EstimatorChoice>("\"mis\"").unwrap_err().to_string();
+        assert!(e.contains("bsdf, book"), "{e}");
         let e = "gpu".parse::<KernelChoice>().unwrap_err();
         assert!(e.contains("scalar, simd, simd8, simd16"), "{e}");
     }

@@ -12,10 +12,54 @@
 
 use crate::error::{Error, Result};
 use crate::film::{Moments, TileFilm};
+use crate::geometry::Lights;
 use crate::real::Real;
-use crate::sampling::Stream;
+use crate::sampling::{layout, Stream};
 use crate::vec3::V3;
 use serde::{Deserialize, Serialize};
+
+/// The `book` estimator at a diffuse vertex `x` (The Rest of Your Life's
+/// `mixture_pdf` of the material's density and the `lights` list, 50/50):
+/// `own` is the direction the material sampled (from the bounce's
+/// scattering dimensions) and `own_pdf` its density, which is also the
+/// material's scattering density (a cosine lobe `max(0, n . d) / pi`, or
+/// the isotropic `1 / 4 pi`). Draws 3 values at [`layout::light`]: the
+/// choice (below 1/2: toward the list, and which of its shapes), then the
+/// point on the shape. Returns the direction and the weight
+/// `own_pdf(dir) / (own_pdf(dir) / 2 + lights.pdf(dir) / 2)` that
+/// multiplies the albedo, 0 where the mixture's density is 0 (the material
+/// does not scatter there: `own_pdf` is 0 too). Every lane draws and
+/// evaluates both halves; each keeps its own choice.
+#[inline(always)]
+pub fn book_mixture<R: Real, S: Stream<R>>(
+    lights: &Lights,
+    x: V3<R>,
+    own: V3<R>,
+    own_pdf: impl Fn(V3<R>) -> R,
+    depth: u32,
+    rng: &mut S,
+) -> (V3<R>, R) {
+    rng.seek(layout::light(depth));
+    let choice = rng.next();
+    let u1 = rng.next();
+    let u2 = rng.next();
+    let half = R::splat(0.5);
+    let toward = choice.lt(half);
+    let dir = V3::select(toward, lights.sample(x, choice * R::splat(2.0), u1, u2), own);
+    let p_own = own_pdf(dir);
+    let pdf = half * p_own + half * lights.pdf(x, dir);
+    let zero = R::splat(0.0);
+    (dir, R::select(pdf.gt(zero), p_own / pdf, zero))
+}
+
+/// A lambertian's scattering density at normal `n`: `max(0, n . d) / pi`.
+#[inline(always)]
+pub fn cosine_pdf<R: Real>(n: V3<R>, d: V3<R>) -> R {
+    n.dot(d).max(R::splat(0.0)) * R::splat(std::f32::consts::FRAC_1_PI)
+}
+
+/// The isotropic phase function's density, `1 / 4 pi`.
+pub const ISOTROPIC_PDF: f32 = 0.25 * std::f32::consts::FRAC_1_PI;
 
 /// By default roulette starts once a path has traced this many rays. Measured
 /// on the final scene and ch11-defocus (docs/convergence.md): starting after

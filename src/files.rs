@@ -5,6 +5,7 @@
 //! renders a whole image or a partial film, whether it counts work for the
 //! statistics, and the order of the checks.
 
+use crate::choice::EstimatorChoice;
 use crate::error::{Error, Result};
 use crate::estimator::{Adaptive, Roulette};
 use crate::film::part::{self, is_part_path, Part, Split, SplitKind};
@@ -197,6 +198,7 @@ pub struct StatsFile {
     pub russian_roulette: Option<Roulette>,
     pub adaptive: Option<Adaptive>,
     pub sampler: Sampler,
+    pub estimator: EstimatorChoice,
     pub rejected_samples: u64,
     pub work: Option<WorkCounters>,
     pub image_hash: String,
@@ -247,6 +249,7 @@ impl StatsFile {
             russian_roulette: st.russian_roulette,
             adaptive: st.adaptive,
             sampler: st.sampler,
+            estimator: st.estimator,
             rejected_samples: st.rejected_samples,
             work: st.work,
             image_hash: st.image_hash.clone(),
@@ -280,6 +283,7 @@ impl StatsFile {
             russian_roulette: st.russian_roulette,
             adaptive: st.adaptive,
             sampler: st.sampler,
+            estimator: st.estimator,
             rejected_samples: st.rejected_samples,
             work: None,
             image_hash: st.image_hash.clone(),
@@ -313,6 +317,7 @@ pub struct MergeStats {
     pub max_depth: u32,
     pub seed: u64,
     pub sampler: Sampler,
+    pub estimator: EstimatorChoice,
     pub russian_roulette: Option<Roulette>,
     pub adaptive: Option<Adaptive>,
     /// Worker threads of the merge.
@@ -370,6 +375,7 @@ pub fn merge_to_files(parts: &[PathBuf], files: &RenderFiles, verify: shard::Ver
         max_depth: s.max_depth,
         seed: s.seed,
         sampler: s.sampler,
+        estimator: s.estimator,
         russian_roulette: s.roulette,
         adaptive: s.adaptive,
         threads: rayon::current_num_threads(),

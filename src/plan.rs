@@ -6,7 +6,9 @@
 use crate::camera::PreparedCamera;
 use crate::choice::Mode;
 use crate::estimator::Estimator;
-use crate::geometry::{self, Bvh, Closest, Media, MovingBvh, MovingSpheres, QuadBvh, Quads, Spheres, QUAD_BASE};
+use crate::geometry::{
+    self, Bvh, Closest, Lights, Media, MovingBvh, MovingSpheres, QuadBvh, Quads, Spheres, QUAD_BASE,
+};
 use crate::material::{Kind, MaterialTables};
 use crate::probe::Probe;
 use crate::real::Wide;
@@ -110,6 +112,17 @@ pub struct Plan {
     /// A scene without moving spheres draws no time and pays nothing.
     #[serde(skip_serializing_if = "Option::is_none")]
     pub moving: Option<Accel>,
+    /// The `book` estimator's shapes (its `sample_toward` list, else the
+    /// scene's lights), when it runs and has any: each diffuse vertex then
+    /// mixes the material's density with directions toward them. 0: the
+    /// materials' own densities only (the `bsdf` estimator, whose bounce
+    /// draws and computes nothing for this).
+    #[serde(skip_serializing_if = "is_zero")]
+    pub sample_toward: usize,
+}
+
+fn is_zero(n: &usize) -> bool {
+    *n == 0
 }
 
 impl Plan {
@@ -135,8 +148,12 @@ impl Plan {
         } else {
             ""
         };
+        let toward = match self.sample_toward {
+            0 => String::new(),
+            n => format!("; diffuse vertices: the book's mixture, half toward {n} shape(s)"),
+        };
         format!(
-            "plan: mode {:?}; material passes: {kinds}{textures}; camera: {} rays, {}; closest hit: {}{quads}{moving}{media}; paths stop at zero throughput",
+            "plan: mode {:?}; material passes: {kinds}{textures}; camera: {} rays, {}; closest hit: {}{quads}{moving}{media}{toward}; paths stop at zero throughput",
             self.mode,
             if self.lens { "thin-lens" } else { "pinhole" },
             if self.jitter { "jittered in the pixel" } else { "through pixel centres" },
@@ -180,6 +197,9 @@ pub struct Prepared {
     pub moving_bvh: Option<MovingBvh>,
     /// Russian roulette and adaptive sampling (off unless the render options say so).
     pub estimator: Estimator,
+    /// The shapes the `book` estimator samples toward (empty unless
+    /// `plan.sample_toward`).
+    pub lights: Lights,
 }
 
 impl Prepared {

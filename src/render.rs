@@ -1,7 +1,7 @@
 //! The render driver: a [`Job`] rendered on its kernel and lane width,
 //! tiles over threads, with progress and statistics.
 
-use crate::choice::Mode;
+use crate::choice::{EstimatorChoice, Mode};
 use crate::error::{Error, Result};
 use crate::estimator::Adaptive;
 use crate::film::{Film, Image, TileFilm};
@@ -50,6 +50,8 @@ pub struct Stats {
     pub adaptive: Option<Adaptive>,
     /// `independent` or `sobol` (`sobol-pixel`, ... for partial layouts).
     pub sampler: Sampler,
+    /// How paths chose directions at diffuse vertices (`bsdf`, `book`).
+    pub estimator: EstimatorChoice,
     /// Samples with a NaN or infinite component, kept out of the image.
     pub rejected_samples: u64,
     /// Exact work counters and lane occupancy, when the render counted them.
@@ -216,6 +218,7 @@ impl Stats {
             russian_roulette: job.options().roulette,
             adaptive: job.options().adaptive,
             sampler: s.sampler,
+            estimator: s.estimator,
             rejected_samples: out.rejected,
             work: None,
             image_hash: format!("{:016x}", out.image.hash()),

@@ -1,8 +1,9 @@
 //! The settings a render runs with, resolved once by the job module from a
 //! scene's render table and the caller's overrides: the image size, samples
-//! per pixel, path depth, seed and sampler. Every one of them changes the
+//! per pixel, path depth, seed, sampler and estimator. Every one of them changes the
 //! image; the kernels, the film and the statistics read them from here.
 
+use crate::choice::EstimatorChoice;
 use crate::error::{Error, Result};
 use crate::limits::check_pixels;
 use crate::sampling::Sampler;
@@ -27,6 +28,9 @@ pub struct Settings {
     pub seed: u64,
     /// Independent streams or Owen-scrambled Sobol points.
     pub sampler: Sampler,
+    /// How paths choose directions at diffuse vertices (`bsdf`, `book`):
+    /// the noise changes, the expected image does not.
+    pub estimator: EstimatorChoice,
 }
 
 impl Default for Settings {
@@ -39,6 +43,7 @@ impl Default for Settings {
             max_depth: DEFAULT_MAX_DEPTH,
             seed: DEFAULT_SEED,
             sampler: Sampler::default(),
+            estimator: EstimatorChoice::default(),
         }
     }
 }

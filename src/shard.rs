@@ -6,7 +6,7 @@
 //! film's sums are exact integers ([`crate::film::accum`]), so any split adds
 //! up to the same bits. The partial film format is [`crate::film::part`].
 
-use crate::choice::{KernelChoice, Mode};
+use crate::choice::{EstimatorChoice, KernelChoice, Mode};
 use crate::error::{Error, Result};
 use crate::estimator::{Adaptive, Roulette};
 use crate::film::part::{self, PartCounters, Pixel};
@@ -302,6 +302,7 @@ fn verification_job(p: &Path, h: &Header, scene: &[u8]) -> Result<Job> {
         max_depth: Some(s.max_depth),
         seed: Some(s.seed),
         sampler: Some(s.sampler),
+        estimator: Some(s.estimator),
         book: false,
     };
     let options = RenderOptions {
@@ -416,6 +417,8 @@ pub struct RenderSettings {
     pub max_depth: u32,
     pub seed: u64,
     pub sampler: Sampler,
+    /// `bsdf` where the header names none (the identity leaves the default out).
+    pub estimator: EstimatorChoice,
     pub roulette: Option<Roulette>,
     pub adaptive: Option<Adaptive>,
 }
@@ -430,6 +433,10 @@ impl RenderSettings {
             max_depth: d.parse().map_err(|_| bad("max_depth", d))?,
             seed: s.parse().map_err(|_| bad("seed", s))?,
             sampler: sm.parse().map_err(|_| bad("sampler", sm))?,
+            estimator: match h.settings.get("estimator") {
+                None => EstimatorChoice::Bsdf,
+                Some(e) => e.parse().map_err(|_| bad("estimator", e))?,
+            },
             roulette: Roulette::from_description(rr).ok_or_else(|| bad("russian_roulette", rr))?,
             adaptive: Adaptive::from_description(ad).ok_or_else(|| bad("adaptive", ad))?,
         })

@@ -7,7 +7,7 @@ use common::*;
 use proptest::prelude::*;
 use rtow::scene::{self, Background, Camera, Group, Material, Mode, Quad, QuadBox, Scene, Sky, Sphere};
 use rtow::KernelChoice::{self, Scalar, Simd, Simd16, Simd8};
-use rtow::{AccelChoice, Kernel};
+use rtow::{AccelChoice, EstimatorChoice, Kernel, Settings};
 
 /// Every SIMD kernel this build has (8 lanes; 16 on AVX-512 builds), with
 /// every accelerator, against the scalar kernel with brute force.
@@ -35,8 +35,8 @@ fn every_preset_is_bit_identical_across_kernels() {
     for p in scene::presets() {
         let sc = self_contained(&(p.build)());
         let d = scene_settings(&sc);
-        // Small images, the preset's own depth and a few samples (jitter on).
-        let s = settings(40, 24, 3, d.max_depth, 11);
+        // Small images, the preset's own depth and estimator, a few samples (jitter on).
+        let s = Settings { estimator: d.estimator, ..settings(40, 24, 3, d.max_depth, 11) };
         let a = render_accel(&sc, s, Scalar, 2, 16, AccelChoice::Brute);
         for (kernel, accel) in others() {
             let b = render_accel(&sc, s, kernel, 2, 16, accel);
@@ -109,6 +109,7 @@ fn arb_scene() -> impl Strategy<Value = Scene> {
                 media: vec![],
                 sky: Sky::default(),
                 background: Default::default(),
+                sample_toward: vec![],
                 render: Default::default(),
             }
         })
@@ -205,6 +206,7 @@ fn arb_mixed_scene() -> impl Strategy<Value = Scene> {
             media: vec![],
             sky: Sky::default(),
             background,
+            sample_toward: vec![],
             render: Default::default(),
         })
         .prop_filter("valid scene", |s| s.validate().is_ok())
@@ -213,11 +215,18 @@ fn arb_mixed_scene() -> impl Strategy<Value = Scene> {
 proptest! {
     #![proptest_config(ProptestConfig { cases: 32, ..ProptestConfig::default() })]
 
-    /// Quads, boxes, instances, lights and backgrounds: every kernel and
-    /// accelerator renders the scalar brute-force image bit for bit.
+    /// Quads, boxes, instances, lights and backgrounds, under either
+    /// estimator (the book's samples toward the scene's lights): every
+    /// kernel and accelerator renders the scalar brute-force image bit for bit.
     #[test]
-    fn mixed_scenes_are_bit_identical_across_kernels(sc in arb_mixed_scene(), seed in 0u64..1000, spp in 1u32..4) {
-        let s = settings(19, 11, spp, 12, seed);
+    fn mixed_scenes_are_bit_identical_across_kernels(
+        sc in arb_mixed_scene(),
+        seed in 0u64..1000,
+        spp in 1u32..4,
+        book in any::<bool>(),
+    ) {
+        let estimator = if book { EstimatorChoice::Book } else { EstimatorChoice::Bsdf };
+        let s = Settings { estimator, ..settings(19, 11, spp, 12, seed) };
         let a = render_accel(&sc, s, Scalar, 1, 8, AccelChoice::Brute);
         prop_assert_eq!(a.stats.rejected_samples, 0);
         for (kernel, accel) in others() {

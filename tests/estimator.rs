@@ -1,6 +1,8 @@
 //! Russian roulette and adaptive sampling: unbiasedness of the roulette,
 //! bit-identical kernels with either on, adaptive decisions independent of
-//! tiles and threads, and rays counted only where traced.
+//! tiles and threads, and rays counted only where traced; the book's
+//! mixture estimator: unbiased, less noisy where lights are small, the same
+//! bits in every kernel.
 
 mod common;
 
@@ -9,8 +11,10 @@ use rtow::instruments::probe::PathId;
 use rtow::internals::kernel::scalar;
 use rtow::internals::plan::Prepared;
 use rtow::internals::sampling::ScalarStream;
-use rtow::scene::preset;
-use rtow::{render, Adaptive, KernelChoice, RenderOptions, Rendered, Roulette, Settings};
+use rtow::scene::{preset, Material, Scene, Shape};
+use rtow::{
+    render, Adaptive, EstimatorChoice, KernelChoice, Overrides, RenderOptions, Rendered, Roulette, Sampler, Settings,
+};
 
 fn settings(w: u32, h: u32, spp: u32, seed: u64) -> Settings {
     common::settings(w, h, spp, 50, seed)
@@ -65,17 +69,24 @@ fn pixel_stats(prep: &Prepared, n: u32) -> Vec<[(f64, f64); 3]> {
     out
 }
 
-/// Russian roulette must not change the expected image. Plain and roulette
-/// renders with independent seeds are compared pixel by pixel (a z-test per
-/// pixel and channel, Bonferroni-corrected to a 1e-3 family-wise level) and
-/// as a whole (the mean difference over all pixels, |z| < 4).
+/// Russian roulette must not change the expected image: plain and roulette
+/// renders with independent seeds have the same mean ([`same_mean`]).
 fn roulette_keeps_the_mean(scene: &str, w: u32, h: u32, n: u32, after: u32) {
     let sc = preset(scene).unwrap();
     let plain = job(&sc, settings(w, h, n, 11), RenderOptions::default());
     let with_rr = RenderOptions { roulette: Some(Roulette { after_rays: after }), ..Default::default() };
     let rr = job(&sc, settings(w, h, n, 12), with_rr);
-    let a = pixel_stats(plain.prepared(), n);
-    let b = pixel_stats(rr.prepared(), n);
+    same_mean(scene, plain.prepared(), rr.prepared(), n);
+}
+
+/// Two jobs of one scene (other seeds, other estimators) render the same
+/// expected image: `n` paths per pixel each, compared pixel by pixel (a
+/// z-test per pixel and channel, Bonferroni-corrected to a 1e-3
+/// family-wise level) and as a whole (the mean difference over all pixels,
+/// |z| < 4).
+fn same_mean(scene: &str, a: &Prepared, b: &Prepared, n: u32) {
+    let a = pixel_stats(a, n);
+    let b = pixel_stats(b, n);
     let tests = (a.len() * 3) as f64;
     // Two-sided z for 1e-3 / tests, by bisection on the normal tail.
     let tail = |z: f64| 0.5 * erfc(z / std::f64::consts::SQRT_2);
@@ -214,4 +225,130 @@ fn bad_adaptive_options_are_errors_naming_the_setting() {
         };
         assert!(e.starts_with(&format!("{field}:")), "{e}");
     }
+}
+
+fn book(s: Settings) -> Settings {
+    Settings { estimator: EstimatorChoice::Book, ..s }
+}
+
+/// ch07's scene with a `sample_toward` sphere around all of it: every
+/// diffuse vertex lies inside the sphere (uniform directions, density 1 / 4 pi).
+fn inside_a_sampled_sphere() -> Scene {
+    let mut sc = preset("ch07-diffuse").unwrap();
+    sc.sample_toward = vec![Shape::Sphere { center: [0.0, 0.0, -1.0], radius: 500.0 }];
+    sc
+}
+
+/// The Rest of Your Life's room with its light enlarged to 400 x 400 and
+/// the glass sphere made white, sampled toward both (vertices on the
+/// sphere sample it from its surface). The bsdf estimator is the reference
+/// for the z-test, and its variance must be estimable: with the book's small
+/// light and glass sphere, lights seen through the glass (caustics) are rare
+/// events for the cosine lobe, whose sample variance then underestimates
+/// its error (docs/sampling.md).
+fn large_light_room() -> Scene {
+    let mut sc = preset("rol-cornell-box").unwrap();
+    let (q, u, v) = ([78.0, 554.0, 92.0], [400.0, 0.0, 0.0], [0.0, 0.0, 400.0]);
+    let light = sc.quads.iter_mut().find(|q| matches!(q.material, Material::DiffuseLight { .. })).unwrap();
+    (light.q, light.u, light.v) = (q, u, v);
+    sc.spheres[0].material = Material::Lambertian { albedo: [0.73; 3].into() };
+    sc.sample_toward[0] = Shape::Quad { q, u, v };
+    sc
+}
+
+/// The book's mixture is unbiased: its expected image is the bsdf
+/// estimator's, on quads and spheres as shapes (seen from outside and from
+/// inside), lambertian and isotropic vertices, a specular material in the
+/// list (the glass sphere), one-sided and two-sided lights.
+#[test]
+fn the_book_estimator_keeps_the_mean() {
+    let cases: [(&str, Scene, u32, u32, u32); 4] = [
+        ("the book's room, a large light, a white sphere", large_light_room(), 14, 14, 384),
+        ("nw-cornell-smoke", preset("nw-cornell-smoke").unwrap(), 10, 10, 256),
+        ("nw-simple-light", preset("nw-simple-light").unwrap(), 16, 9, 256),
+        ("inside a sampled sphere", inside_a_sampled_sphere(), 16, 9, 256),
+    ];
+    for (name, sc, w, h, n) in cases {
+        let plain = job(&sc, settings(w, h, n, 11), RenderOptions::default());
+        let mixed = job(&sc, book(settings(w, h, n, 12)), RenderOptions::default());
+        assert!(mixed.plan().sample_toward > 0, "{name}: the mixture runs");
+        same_mean(name, plain.prepared(), mixed.prepared(), n);
+    }
+}
+
+/// What the mixture is for: on the book's Cornell box (a small light) it
+/// has far less variance than the cosine lobe alone at the same samples.
+#[test]
+fn the_book_estimator_is_less_noisy_where_the_light_is_small() {
+    let sc = preset("rol-cornell-box").unwrap();
+    let var = |s: Settings| {
+        let j = job(&sc, s, RenderOptions::default());
+        pixel_stats(j.prepared(), 256).iter().flat_map(|p| p.iter().map(|c| c.1)).collect::<Vec<f64>>()
+    };
+    let (plain, mixed) = (var(settings(12, 12, 256, 3)), var(book(settings(12, 12, 256, 3))));
+    // The median over pixels and channels of the variance ratio (the light's
+    // own edge pixels, the same under both, would dominate a sum).
+    let mut ratio: Vec<f64> = mixed.iter().zip(&plain).filter(|(_, p)| **p > 0.0).map(|(m, p)| m / p).collect();
+    ratio.sort_by(f64::total_cmp);
+    let median = ratio[ratio.len() / 2];
+    assert!(median < 0.25, "median variance ratio book / bsdf {median:.3}");
+}
+
+/// Every kernel, lane width and sampler renders the book estimator's image
+/// bit for bit, ray counts included.
+#[test]
+fn the_book_estimator_is_bit_identical_across_kernels() {
+    let scenes = ["rol-cornell-box", "rol-cornell-box-aluminium", "nw-cornell-smoke", "nw-simple-light", "nw-final"];
+    for name in scenes {
+        let sc = common::self_contained(&preset(name).unwrap());
+        for sampler in [Sampler::Independent, Sampler::SOBOL] {
+            let s = Settings { sampler, ..book(common::settings(24, 20, 3, 12, 4)) };
+            let j = job(&sc, s, RenderOptions::default());
+            assert!(j.plan().sample_toward > 0, "{name}");
+            let runs: Vec<Rendered> = [KernelChoice::Scalar, KernelChoice::Simd8, KernelChoice::Simd16]
+                .into_iter()
+                .map(|kernel| {
+                    render(&job(&sc, s, RenderOptions { kernel, ..opts(kernel, false, None) }), None).unwrap()
+                })
+                .collect();
+            assert_eq!(runs[0].stats.rejected_samples, 0, "{name}");
+            for r in &runs[1..] {
+                assert_same(&runs[0], r, &format!("{name} {sampler:?} {}", r.stats.kernel));
+            }
+        }
+    }
+}
+
+/// Without anything to sample toward the book estimator is the bsdf
+/// estimator, bit for bit, and the job says so; its identity names it, the
+/// bsdf estimator's does not (identities from before estimators stay).
+#[test]
+fn the_book_estimator_without_lights_is_the_bsdf_estimator() {
+    let sc = preset("final").unwrap();
+    let s = settings(24, 14, 4, 8);
+    let plain = job(&sc, s, RenderOptions::default());
+    let mixed = job(&sc, book(s), RenderOptions::default());
+    assert_eq!(mixed.plan().sample_toward, 0);
+    assert!(
+        mixed.warnings().iter().any(|w| w.to_string().contains("nothing to sample toward")),
+        "{:?}",
+        mixed.warnings()
+    );
+    assert_same(&render(&plain, None).unwrap(), &render(&mixed, None).unwrap(), "book without lights");
+    assert!(!plain.identity().settings.contains_key("estimator"));
+    assert_eq!(mixed.identity().settings.get("estimator").map(String::as_str), Some("book"));
+}
+
+/// More lights than the mixture evaluates per vertex: a clear error that
+/// says what to do, not a slow render.
+#[test]
+fn too_many_lights_for_the_book_estimator_are_refused() {
+    let mut sc = preset("nw-cornell-box-empty").unwrap();
+    let light = sc.quads[2].clone();
+    sc.quads.extend(std::iter::repeat_n(light, rtow::limits::MAX_SAMPLED_SHAPES));
+    let e = rtow::Job::new(&sc, &Overrides::from(book(settings(8, 8, 1, 2))), &RenderOptions::default())
+        .unwrap_err()
+        .to_string();
+    assert!(e.contains("sample_toward") && e.contains("--estimator bsdf"), "{e}");
+    assert!(rtow::Job::new(&sc, &Overrides::from(settings(8, 8, 1, 2)), &RenderOptions::default()).is_ok());
 }

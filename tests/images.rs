@@ -172,6 +172,7 @@ fn square_scene(file: &str) -> Scene {
         media: vec![],
         sky: Sky::default(),
         background: Background::Constant([1.0; 3]),
+        sample_toward: vec![],
         render: Default::default(),
     }
 }
@@ -245,6 +246,7 @@ fn mixed_scene(file: &str) -> Scene {
         media: vec![],
         sky: Sky::default(),
         background: Background::Sky,
+        sample_toward: vec![],
         render: Default::default(),
     }
 }

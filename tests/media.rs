@@ -21,6 +21,7 @@ fn empty_scene(camera: Camera) -> Scene {
         media: vec![],
         sky: Sky::default(),
         background: Background::Constant([0.0; 3]),
+        sample_toward: vec![],
         render: Default::default(),
     }
 }

@@ -215,6 +215,7 @@ fn scattered_rays_keep_their_paths_time() {
         media: vec![],
         sky: Sky::default(),
         background: Background::Constant([1.0; 3]),
+        sample_toward: vec![],
         render: Default::default(),
     };
     for sampler in [Sampler::SOBOL, Sampler::Independent] {

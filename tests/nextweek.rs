@@ -28,6 +28,7 @@ fn empty_scene(camera: Camera, background: [f32; 3]) -> Scene {
         media: vec![],
         sky: Sky::default(),
         background: Background::Constant(background),
+        sample_toward: vec![],
         render: Default::default(),
     }
 }

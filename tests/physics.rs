@@ -19,6 +19,7 @@ fn one_sphere(material: Material, sky: Sky) -> Scene {
         media: vec![],
         sky,
         background: Default::default(),
+        sample_toward: vec![],
         render: Default::default(),
     }
 }

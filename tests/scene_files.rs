@@ -208,6 +208,7 @@ fn scene_strategy() -> impl Strategy<Value = Scene> {
             media: vec![],
             sky: Sky { horizon, zenith },
             background: Default::default(),
+            sample_toward: vec![],
             render: RenderTable { width: w, seed, ..Default::default() },
         })
 }

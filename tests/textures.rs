@@ -243,6 +243,7 @@ fn textured_scene() -> Scene {
         media: vec![],
         sky: Sky::default(),
         background: Background::Sky,
+        sample_toward: vec![],
         render: Default::default(),
     }
 }

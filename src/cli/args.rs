@@ -4,8 +4,8 @@
 use clap::builder::{PossibleValuesParser, TypedValueParser};
 use clap::Args;
 use rtow::{
-    AccelChoice, Adaptive, KernelChoice, Mode, Overrides, RenderOptions, Result, Roulette, Sampler, Settings,
-    ADAPTIVE_MIN_SPP, DEFAULT_TILE, ROULETTE_AFTER_RAYS,
+    AccelChoice, Adaptive, EstimatorChoice, KernelChoice, Mode, Overrides, RenderOptions, Result, Roulette, Sampler,
+    Settings, ADAPTIVE_MIN_SPP, DEFAULT_TILE, ROULETTE_AFTER_RAYS,
 };
 use std::path::PathBuf;
 use std::str::FromStr;
@@ -52,6 +52,11 @@ pub struct ImageArgs {
     pub book: bool,
     #[arg(long, value_parser = sampler_parser(), help = sampler_help())]
     pub sampler: Option<Sampler>,
+    /// Directions at diffuse vertices: bsdf (the material's density), book (The Rest of Your Life's
+    /// mixture: half toward the scene's sample_toward shapes, else its lights) [default: the scene's
+    /// render.estimator, else bsdf]
+    #[arg(long, value_parser = choice::<EstimatorChoice>(EstimatorChoice::NAMES))]
+    pub estimator: Option<EstimatorChoice>,
 }
 
 /// `--depth`'s help, naming the library's default.
@@ -190,7 +195,13 @@ impl SizeArgs {
 
 impl ImageArgs {
     pub fn overrides(&self) -> Overrides {
-        Overrides { spp: self.spp, book: self.book, sampler: self.sampler, ..self.size.overrides() }
+        Overrides {
+            spp: self.spp,
+            book: self.book,
+            sampler: self.sampler,
+            estimator: self.estimator,
+            ..self.size.overrides()
+        }
     }
 }
 
@@ -201,6 +212,7 @@ pub fn flag_of(field: &str) -> Option<&'static str> {
         "height" => "--height",
         "spp" => "--spp",
         "max_depth" => "--depth",
+        "estimator" => "--estimator",
         "threads" => "--threads",
         "tile" => "--tile",
         "roulette.after_rays" => "--rr-after",

@@ -2,6 +2,7 @@
 
 pub mod bvh;
 pub mod intersect;
+pub mod lights;
 pub mod media;
 pub mod moving;
 pub mod quads;
@@ -12,6 +13,7 @@ pub use intersect::{
     closest_hit, closest_moving_hit, closest_quad_hit, spawn, sphere_disc, sphere_t, surface, Closest, Surface,
     OFFSET_ULPS,
 };
+pub use lights::{LightQuad, LightSphere, Lights};
 pub use media::{sample_media, Boundary, Media, MEDIUM_BASE};
 pub use moving::{centre_at, MovingSpheres, MOVING_BASE};
 pub use quads::{quad_hit, quad_surface, QuadRec, Quads, QUAD_BASE};

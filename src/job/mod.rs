@@ -23,7 +23,7 @@ pub(crate) use images::Images;
 pub use images::IMAGES_ENV;
 
 use crate::camera::PreparedCamera;
-use crate::choice::{AccelChoice, KernelChoice, Mode};
+use crate::choice::{AccelChoice, EstimatorChoice, KernelChoice, Mode};
 use crate::error::{Error, Result};
 use crate::estimator::{Adaptive, Estimator, Roulette};
 use crate::film::part::{Fnv1a, Identity};
@@ -49,6 +49,8 @@ pub struct Overrides {
     pub max_depth: Option<u32>,
     pub seed: Option<u64>,
     pub sampler: Option<Sampler>,
+    /// How paths choose directions at diffuse vertices.
+    pub estimator: Option<EstimatorChoice>,
     /// The book's settings: the scene's `render.book` (The Next Week's
     /// presets), else book one's final settings (1200x675, 500 spp, depth
     /// 50); values given explicitly still win.
@@ -68,6 +70,7 @@ impl Overrides {
             max_depth: table.max_depth.unwrap_or(d.max_depth),
             seed: table.seed.unwrap_or(d.seed),
             sampler: table.sampler.unwrap_or(d.sampler),
+            estimator: table.estimator.unwrap_or(d.estimator),
         };
         if self.book {
             (s.width, s.height, s.spp, s.max_depth) = match table.book {
@@ -81,6 +84,7 @@ impl Overrides {
         s.max_depth = self.max_depth.unwrap_or(s.max_depth);
         s.seed = self.seed.unwrap_or(s.seed);
         s.sampler = self.sampler.unwrap_or(s.sampler);
+        s.estimator = self.estimator.unwrap_or(s.estimator);
         s
     }
 }
@@ -95,6 +99,7 @@ impl From<Settings> for Overrides {
             max_depth: Some(s.max_depth),
             seed: Some(s.seed),
             sampler: Some(s.sampler),
+            estimator: Some(s.estimator),
             book: false,
         }
     }
@@ -251,8 +256,26 @@ impl Job {
         settings.validate()?;
         options.validate()?;
         let requested = *options;
-        let (options, warnings) = options.effective(&settings);
+        let (options, mut warnings) = options.effective(&settings);
         let plan = prepare::plan(scene, &settings, options.accel);
+        if plan.sample_toward > limits::MAX_SAMPLED_SHAPES {
+            return Err(Error::invalid(
+                "estimator",
+                format!(
+                    "the book estimator samples toward at most {} shapes, and this scene has {} lights; list the ones \
+                     to sample toward in the scene's sample_toward, or use --estimator bsdf",
+                    limits::MAX_SAMPLED_SHAPES,
+                    plan.sample_toward
+                ),
+            ));
+        }
+        if settings.estimator == EstimatorChoice::Book && scene.mode == Mode::Path && plan.sample_toward == 0 {
+            warnings.push(Error::invalid(
+                "estimator",
+                "the book estimator has nothing to sample toward (the scene has no lights and no sample_toward \
+                 list): every direction comes from the materials, as under bsdf",
+            ));
+        }
         let images = match images {
             Some(i) => i,
             None => Arc::new(Images::load(scene, origin).map_err(in_file)?),
@@ -388,6 +411,11 @@ impl Job {
         set("seed", s.seed.to_string());
         set("pixel_jitter", self.plan.jitter.to_string());
         set("sampler", s.sampler.name().to_string());
+        // The default estimator is not written: every identity made before
+        // estimators could be chosen stays the same.
+        if s.estimator != EstimatorChoice::Bsdf {
+            set("estimator", s.estimator.name().to_string());
+        }
         set("russian_roulette", Roulette::describe(self.options.roulette));
         set("adaptive", Adaptive::describe(self.options.adaptive));
         // The bytes of the image textures (the scene names only their files).

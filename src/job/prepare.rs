@@ -5,12 +5,14 @@
 
 use super::Images;
 use crate::camera::{PreparedCamera, View};
-use crate::choice::{AccelChoice, Mode};
+use crate::choice::{AccelChoice, EstimatorChoice, Mode};
 use crate::estimator::Estimator;
-use crate::geometry::{Boundary, Bvh, Media, MovingBvh, MovingSpheres, QuadBvh, Quads, Spheres, Walk};
+use crate::geometry::{
+    Boundary, Bvh, LightQuad, LightSphere, Lights, Media, MovingBvh, MovingSpheres, QuadBvh, Quads, Spheres, Walk,
+};
 use crate::material::{Kind, MaterialTables};
 use crate::plan::{Accel, KindSet, Plan, Prepared, SkyColours};
-use crate::scene::{Background, Camera, FlatBoundary, Material, Scene, Texture};
+use crate::scene::{Background, Camera, Flat, FlatBoundary, Material, Scene, Shape, Texture};
 use crate::settings::Settings;
 use crate::texture::{Checker, Noise, Perlin, TexKind, TexRef, TexSet, TextureTables, PERLIN_SEED};
 use glam::DVec3;
@@ -64,9 +66,31 @@ fn choose_quad_accel(choice: AccelChoice, quads: usize, mode: Mode) -> Option<Ac
     })
 }
 
+/// The shapes the `book` estimator samples toward: the scene's
+/// `sample_toward` list, else its lights (static spheres and quads of
+/// `diffuse_light`, groups' included, in world space). Possibly more than
+/// [`crate::limits::MAX_SAMPLED_SHAPES`]: the job refuses that.
+pub(super) fn sample_toward(scene: &Scene, flat: &Flat) -> Vec<Shape> {
+    if !scene.sample_toward.is_empty() {
+        return scene.sample_toward.clone();
+    }
+    let light = |m: &Material| matches!(m, Material::DiffuseLight { .. });
+    let quads = flat.quads.iter().filter(|q| light(&q.material)).map(|q| Shape::Quad { q: q.q, u: q.u, v: q.v });
+    let spheres = flat
+        .spheres
+        .iter()
+        .filter(|s| s.center1.is_none() && light(&s.material))
+        .map(|s| Shape::Sphere { center: s.center, radius: s.radius });
+    quads.chain(spheres).collect()
+}
+
 /// The plan (cheap: no geometry is built).
 pub(super) fn plan(scene: &Scene, settings: &Settings, accel: AccelChoice) -> Plan {
     let flat = scene.flatten();
+    let sample_toward = match (scene.mode, settings.estimator) {
+        (Mode::Path, EstimatorChoice::Book) => self::sample_toward(scene, &flat).len(),
+        _ => 0,
+    };
     let kinds: KindSet = match scene.mode {
         Mode::Path => {
             let media = (!flat.media.is_empty()).then_some(Kind::Isotropic);
@@ -99,6 +123,7 @@ pub(super) fn plan(scene: &Scene, settings: &Settings, accel: AccelChoice) -> Pl
         accel: choose_accel(accel, flat.spheres.iter().filter(|s| s.center1.is_none()).count(), scene.mode),
         quads: choose_quad_accel(accel, flat.quads.len(), scene.mode),
         moving: choose_quad_accel(accel, flat.spheres.iter().filter(|s| s.center1.is_some()).count(), scene.mode),
+        sample_toward,
     }
 }
 
@@ -223,6 +248,15 @@ pub(super) fn prepare(
         let walk = if plan.accel == Accel::BvhRays { Walk::Wide8 } else { Walk::OneByOne };
         Bvh::build_for(&spheres, extent, walk)
     });
+    let mut lights = Lights::default();
+    if plan.sample_toward > 0 {
+        for shape in sample_toward(scene, &flat) {
+            match shape {
+                Shape::Quad { q, u, v } => lights.quads.push(LightQuad::new(q, u, v)),
+                Shape::Sphere { center, radius } => lights.spheres.push(LightSphere { c: center, r: radius.abs() }),
+            }
+        }
+    }
     let quad_bvh = (plan.quads.is_some_and(|a| a != Accel::Brute)).then(|| QuadBvh::build_quads(&quads, extent));
     let moving_bvh = (plan.moving.is_some_and(|a| a != Accel::Brute)).then(|| MovingBvh::build_moving(&moving, extent));
     Prepared {
@@ -247,6 +281,7 @@ pub(super) fn prepare(
         moving,
         moving_bvh,
         estimator,
+        lights,
     }
 }
 

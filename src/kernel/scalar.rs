@@ -3,7 +3,7 @@
 
 use super::{background, normal_colour, texture_albedo};
 use crate::choice::Mode;
-use crate::estimator::{roulette, roulette_applies};
+use crate::estimator::{book_mixture, cosine_pdf, roulette, roulette_applies, ISOTROPIC_PDF};
 use crate::film::TileFilm;
 use crate::geometry::{quad_surface, sample_media, spawn, surface, Surface, MEDIUM_BASE, MISS, MOVING_BASE, QUAD_BASE};
 use crate::material::{dielectric, emission, lambertian, metal, Kind};
@@ -112,7 +112,13 @@ fn scatter(
                 TexKind::Solid => m.lambertian[row],
                 kind => texture_albedo(prep, kind, srf.p, |_| hit, |_| tex.row as usize).to_array(),
             };
-            (lambertian(srf.n, rng), albedo)
+            let dir = lambertian(srf.n, rng);
+            if prep.plan.sample_toward == 0 {
+                (dir, albedo)
+            } else {
+                let (dir, w) = book_mixture(&prep.lights, srf.p, dir, |d| cosine_pdf(srf.n, d), depth, rng);
+                (dir, albedo.map(|a| a * w))
+            }
         }
         Kind::Metal => {
             let (albedo, fuzz) = m.metal[row];
@@ -182,7 +188,14 @@ fn trace_in<P: Probe, const M: bool>(
             // Isotropic scattering inside medium k: a uniform direction.
             rng.seek(layout::scatter(depth));
             let dir = unit_vector(rng);
-            (o + d * t, dir, prep.media.albedo[(hit - MEDIUM_BASE) as usize])
+            let p = o + d * t;
+            let albedo = prep.media.albedo[(hit - MEDIUM_BASE) as usize];
+            if prep.plan.sample_toward == 0 {
+                (p, dir, albedo)
+            } else {
+                let (dir, w) = book_mixture(&prep.lights, p, dir, |_| ISOTROPIC_PDF, depth, rng);
+                (p, dir, albedo.map(|a| a * w))
+            }
         } else {
             let (dir, atten, srf) = match shade::<P, M>(prep, o, d, t, time, hit, id, depth, thr, rng, probe) {
                 Ok(s) => s,

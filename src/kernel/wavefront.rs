@@ -28,7 +28,7 @@
 
 use super::{background, normal_colour, texture_albedo};
 use crate::choice::Mode;
-use crate::estimator::{roulette, roulette_applies};
+use crate::estimator::{book_mixture, cosine_pdf, roulette, roulette_applies, ISOTROPIC_PDF};
 use crate::film::TileFilm;
 use crate::geometry::{
     centre_at, quad_surface, sample_media, spawn, surface, Shade, Surface, MEDIUM_BASE, MISS, MOVING_BASE, QUAD_BASE,
@@ -594,6 +594,12 @@ fn isotropic_pass<W: Wide, P: Probe, S: PathSampler, const M: bool>(
         }));
         rng.seek(layout::scatter(depth));
         let dir = unit_vector(&mut rng);
+        let (dir, albedo) = if prep.plan.sample_toward == 0 {
+            (dir, albedo)
+        } else {
+            let (dir, w) = book_mixture(&prep.lights, p, dir, |_| W::splat(ISOTROPIC_PDF), depth, &mut rng);
+            (dir, albedo * w)
+        };
         let thr = v3_gather::<W>(&cur.thr, idx).mul_elem(albedo);
         let all = W::mask_from_bits(u32::MAX);
         continue_paths::<W, S, M>(prep, ws, idx, active, depth, rng, thr, all, p, dir);
@@ -861,16 +867,27 @@ fn scatter<W: Wide, P: Probe, S: PathSampler, const M: bool>(
         }
     }));
     rng.seek(layout::scatter(depth));
-    // The albedo of a dielectric's record is white, as the scalar kernel's [1; 3].
-    let thr = v3_gather::<W>(&cur.thr, idx).mul_elem(albedo);
     let all = W::mask_from_bits(u32::MAX);
-    let (dir, alive) = match kind {
-        Kind::Lambertian => (lambertian(srf.n, &mut rng), all),
-        Kind::Metal => metal(d, srf.n, param, &mut rng),
-        Kind::Dielectric => (dielectric(d, srf.n, srf.front, param, &mut rng), all),
+    let (dir, alive, albedo) = match kind {
+        Kind::Lambertian => {
+            let dir = lambertian(srf.n, &mut rng);
+            if prep.plan.sample_toward == 0 {
+                (dir, all, albedo)
+            } else {
+                let (dir, w) = book_mixture(&prep.lights, srf.p, dir, |d| cosine_pdf(srf.n, d), depth, &mut rng);
+                (dir, all, albedo * w)
+            }
+        }
+        Kind::Metal => {
+            let (dir, alive) = metal(d, srf.n, param, &mut rng);
+            (dir, alive, albedo)
+        }
+        Kind::Dielectric => (dielectric(d, srf.n, srf.front, param, &mut rng), all, albedo),
         // Lights and media have their own passes (`bounce`).
-        Kind::DiffuseLight | Kind::Isotropic => (d, !all),
+        Kind::DiffuseLight | Kind::Isotropic => (d, !all, albedo),
     };
+    // The albedo of a dielectric's record is white, as the scalar kernel's [1; 3].
+    let thr = v3_gather::<W>(&ws.cur.thr, idx).mul_elem(albedo);
     continue_paths::<W, S, M>(prep, ws, idx, active, depth, rng, thr, alive, spawn(&srf, dir), dir);
 }
 

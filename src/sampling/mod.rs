@@ -263,6 +263,7 @@ impl PathSampler for Sobol {
 /// | 4 + 3 depth + 2 | the Russian-roulette decision after that bounce |
 /// | `TIME` = 0x4000_0000 | the path's time in [0, 1) (motion blur), drawn by the camera after its ray, scenes with moving spheres only |
 /// | 0x4000_1000 + k 2^22 + depth | scenes with media: the free-flight distance of medium k at that bounce ([`layout::free_flight`]; padding, not Sobol) |
+/// | `LIGHT` + 3 depth, +1, +2 | the `book` estimator at a diffuse vertex of that bounce: the mixture's choice (and which shape), then the point on the shape ([`layout::light`]; padding, not Sobol) |
 ///
 /// Bounces 0 to 39 take Sobol dimensions (4 to 123, [`sobol::SOBOL_DIMS`] in
 /// all); from bounce 40 on the dimensions are padding (independent hashed
@@ -296,6 +297,19 @@ pub mod layout {
     #[inline(always)]
     pub const fn roulette(depth: u32) -> u32 {
         scatter(depth).wrapping_add(2)
+    }
+
+    /// The first dimension of the `book` estimator's light samples.
+    pub const LIGHT: u32 = 0x6000_0000;
+
+    /// The first of the three light-sample dimensions of bounce `depth`
+    /// (the `book` estimator): `0x6000_0000 + 3 depth`. Padding under Sobol
+    /// (the low dimensions keep the order every documented image was
+    /// rendered with), above every free-flight dimension of a path shorter
+    /// than 2^28 bounces.
+    #[inline(always)]
+    pub const fn light(depth: u32) -> u32 {
+        LIGHT.wrapping_add(3u32.wrapping_mul(depth))
     }
 
     /// The first free-flight dimension (constant media).

@@ -322,6 +322,28 @@ pub struct Quad {
     pub material: Material,
 }
 
+/// A shape of a scene's `sample_toward` list, in world space: `{"type":
+/// "quad", "q": .., "u": .., "v": ..}` or `{"type": "sphere", "center": ..,
+/// "radius": ..}` (a static sphere; a negative radius is its size).
+#[derive(Serialize, Deserialize, Clone, Copy, Debug, PartialEq)]
+#[serde(tag = "type", rename_all = "lowercase", deny_unknown_fields)]
+pub enum Shape {
+    Quad {
+        #[serde(deserialize_with = "de::vec3")]
+        q: [f32; 3],
+        #[serde(deserialize_with = "de::vec3")]
+        u: [f32; 3],
+        #[serde(deserialize_with = "de::vec3")]
+        v: [f32; 3],
+    },
+    Sphere {
+        #[serde(deserialize_with = "de::vec3")]
+        center: [f32; 3],
+        #[serde(deserialize_with = "de::f32")]
+        radius: f32,
+    },
+}
+
 /// The Next Week's `box(a, b)`: the axis-aligned box with opposite corners
 /// `a` and `b`, as its six quads (faces outwards, in the book's order).
 #[derive(Serialize, Deserialize, Clone, Debug, PartialEq)]
@@ -534,6 +556,12 @@ pub struct Scene {
     /// What rays that leave the scene see (default: the sky gradient).
     #[serde(default, skip_serializing_if = "is_default")]
     pub background: Background,
+    /// The shapes the `book` estimator samples directions toward (The Rest
+    /// of Your Life's `lights` list: they need not emit, nor be in the
+    /// world). Empty: the scene's lights (static spheres and quads of
+    /// `diffuse_light`, groups' included).
+    #[serde(default, skip_serializing_if = "Vec::is_empty", deserialize_with = "de::sample_toward")]
+    pub sample_toward: Vec<Shape>,
     /// The render table: size, samples, depth, seed and sampler a scene asks
     /// for (overrides win; see `crate::job`).
     #[serde(default, skip_serializing_if = "is_default")]

@@ -2,8 +2,9 @@
 
 use super::{
     Background, BookTable, Camera, Group, Material, Medium, MediumBoundary, Mode, Quad, QuadBox, RenderTable, Scene,
-    Sky, Sphere, Texture,
+    Shape, Sky, Sphere, Texture,
 };
+use crate::choice::EstimatorChoice;
 use crate::real::Real;
 use rand_core::{Rng, SeedableRng};
 use rand_xoshiro::Xoshiro128Plus;
@@ -24,19 +25,23 @@ pub enum PresetGroup {
     Weekend,
     /// *Ray Tracing: The Next Week* (names `nw-...`).
     NextWeek,
+    /// *Ray Tracing: The Rest of Your Life* (names `rol-...`).
+    RestOfYourLife,
     /// Numerical stress scenes (`rtow stress`), not images of a book.
     Stress,
 }
 
 impl PresetGroup {
     /// Every group, in the order `rtow scenes` lists them.
-    pub const ALL: &'static [PresetGroup] = &[PresetGroup::Weekend, PresetGroup::NextWeek, PresetGroup::Stress];
+    pub const ALL: &'static [PresetGroup] =
+        &[PresetGroup::Weekend, PresetGroup::NextWeek, PresetGroup::RestOfYourLife, PresetGroup::Stress];
 
     /// The heading `rtow scenes` gives the group.
     pub fn title(self) -> &'static str {
         match self {
             PresetGroup::Weekend => "Ray Tracing in One Weekend",
             PresetGroup::NextWeek => "Ray Tracing: The Next Week (v4)",
+            PresetGroup::RestOfYourLife => "Ray Tracing: The Rest of Your Life (v4)",
             PresetGroup::Stress => "Stress scenes (numerical robustness, for rtow stress)",
         }
     }
@@ -66,6 +71,7 @@ fn settings(width: u32, height: u32, spp: u32, depth: u32) -> RenderTable {
         max_depth: Some(depth),
         seed: None,
         sampler: None,
+        estimator: None,
         book: None,
     }
 }
@@ -87,6 +93,7 @@ fn scene(mode: Mode, camera: Camera, spheres: Vec<Sphere>, render: RenderTable) 
         media: vec![],
         sky: Sky::default(),
         background: Background::Sky,
+        sample_toward: vec![],
         render,
     }
 }
@@ -406,6 +413,76 @@ fn nw_cornell_box() -> Scene {
     s
 }
 
+/// The Rest of Your Life's Cornell box room: the walls re-oriented as its
+/// code has them (every normal into the room) and its one-sided light of
+/// 15 at (213, 554, 227) + (130, 0, 0), (0, 0, 105), facing down; 600x600,
+/// 100 spp, depth 50, the book's estimator (its `lights` list is set by
+/// each scene).
+fn rol_room() -> Scene {
+    let cam = Camera::looking([278.0, 278.0, -800.0], [278.0, 278.0, 0.0], 40.0);
+    let mut s = next_week(cam, [0.0; 3], settings(600, 600, 100, 50));
+    s.render.estimator = Some(EstimatorChoice::Book);
+    s.quads = vec![
+        quad([555.0, 0.0, 0.0], [0.0, 0.0, 555.0], [0.0, 555.0, 0.0], NW_GREEN),
+        quad([0.0, 0.0, 555.0], [0.0, 0.0, -555.0], [0.0, 555.0, 0.0], NW_RED),
+        quad([0.0, 555.0, 0.0], [555.0, 0.0, 0.0], [0.0, 0.0, 555.0], NW_WHITE),
+        quad([0.0, 0.0, 555.0], [555.0, 0.0, 0.0], [0.0, 0.0, -555.0], NW_WHITE),
+        quad([555.0, 0.0, 555.0], [-555.0, 0.0, 0.0], [0.0, 555.0, 0.0], NW_WHITE),
+        quad(
+            [213.0, 554.0, 227.0],
+            [130.0, 0.0, 0.0],
+            [0.0, 0.0, 105.0],
+            Material::DiffuseLight { emit: [15.0; 3], one_sided: true },
+        ),
+    ];
+    s
+}
+
+/// The light of The Rest of Your Life's `lights` list: the ceiling light's
+/// rectangle, written from its other corner (the same normal).
+const ROL_LIGHT: Shape = Shape::Quad { q: [343.0, 554.0, 332.0], u: [-130.0, 0.0, 0.0], v: [0.0, 0.0, -105.0] };
+
+/// The Rest of Your Life's tall box: white, 165x330x165 under `rotate_y(15)`
+/// then `translate(265, 0, 295)`, of `material`.
+fn rol_tall_box(material: Material) -> Group {
+    Group {
+        rotate_y: 15.0,
+        translate: [265.0, 0.0, 295.0],
+        boxes: vec![QuadBox { a: [0.0; 3], b: [165.0, 330.0, 165.0], material }],
+        ..Group::default()
+    }
+}
+
+/// The Rest of Your Life's final Cornell box (its image 3.14, `main.cc`):
+/// the tall white box and a glass sphere of radius 90 at (190, 90, 190);
+/// directions are sampled toward the light and the glass sphere.
+fn rol_cornell_box() -> Scene {
+    let mut s = rol_room();
+    s.groups = vec![rol_tall_box(NW_WHITE)];
+    s.spheres = vec![sphere([190.0, 90.0, 190.0], 90.0, glass(1.5))];
+    s.sample_toward = vec![ROL_LIGHT, Shape::Sphere { center: [190.0, 90.0, 190.0], radius: 90.0 }];
+    s
+}
+
+/// The Rest of Your Life's image 3.12: the tall box of aluminium
+/// (`metal((0.8, 0.85, 0.88), 0)`), the short white box of The Next Week
+/// (165^3 under `rotate_y(-18)` then `translate(130, 0, 65)`); directions
+/// are sampled toward the light only.
+fn rol_cornell_box_aluminium() -> Scene {
+    let mut s = rol_room();
+    s.groups = vec![
+        rol_tall_box(metal([0.8, 0.85, 0.88], 0.0)),
+        Group {
+            rotate_y: -18.0,
+            translate: [130.0, 0.0, 65.0],
+            boxes: vec![QuadBox { a: [0.0; 3], b: [165.0; 3], material: NW_WHITE }],
+            ..Group::default()
+        },
+    ];
+    s.sample_toward = vec![ROL_LIGHT];
+    s
+}
+
 /// The Next Week's `cornell_smoke()`: the room of [`nw_cornell_box`] with a
 /// larger, dimmer light, `diffuse_light(7)` at (113, 554, 127) + (330, 0, 0),
 /// (0, 0, 305), and its two boxes, turned and moved as there, as constant
@@ -681,6 +758,18 @@ static PRESETS: &[Preset] = &[
         description: "The Next Week: the Cornell box with its two boxes axis-aligned (its image 20)",
         group: PresetGroup::NextWeek,
         build: nw_cornell_box_unrotated,
+    },
+    Preset {
+        name: "rol-cornell-box",
+        description: "The Rest of Your Life: its final Cornell box, a glass sphere, sampled toward the light and the sphere (600x600, 100 spp)",
+        group: PresetGroup::RestOfYourLife,
+        build: rol_cornell_box,
+    },
+    Preset {
+        name: "rol-cornell-box-aluminium",
+        description: "The Rest of Your Life: the Cornell box with an aluminium box, sampled toward the light (its image 3.12)",
+        group: PresetGroup::RestOfYourLife,
+        build: rol_cornell_box_aluminium,
     },
     Preset {
         name: "stress-final-small",

@@ -3,6 +3,7 @@
 //! rtow's defaults fill what neither gives (`crate::job` resolves them).
 
 use super::de;
+use crate::choice::EstimatorChoice;
 use crate::error::{Error, Result};
 use crate::limits::check_pixels;
 use crate::sampling::Sampler;
@@ -25,6 +26,10 @@ pub struct RenderTable {
     /// The sampler (`independent`, `sobol`, ...); an override replaces it.
     #[serde(default, skip_serializing_if = "Option::is_none")]
     pub sampler: Option<Sampler>,
+    /// How paths choose their directions at diffuse vertices (`bsdf`,
+    /// `book`); an override replaces it.
+    #[serde(default, skip_serializing_if = "Option::is_none")]
+    pub estimator: Option<EstimatorChoice>,
     /// What `--book` renders for this scene (The Next Week's presets: their
     /// book's image); without it, `--book` is book one's final settings.
     #[serde(default, skip_serializing_if = "Option::is_none")]

@@ -3,7 +3,9 @@
 //! an error names the field. The kernels' own check (that the f32 camera is
 //! computable at every image size) is the job module's, which runs both once.
 
-use super::{Background, Camera, Group, Material, Medium, MediumBoundary, Mode, Quad, QuadBox, Scene, Sphere, Texture};
+use super::{
+    Background, Camera, Group, Material, Medium, MediumBoundary, Mode, Quad, QuadBox, Scene, Shape, Sphere, Texture,
+};
 use crate::error::{Error, Result};
 use crate::limits::{self, MAX_MEDIA, MAX_QUADS, MAX_SPHERES};
 
@@ -96,7 +98,23 @@ impl Scene {
         for (i, g) in self.groups.iter().enumerate() {
             g.validate(&format!("groups[{i}]"))?;
         }
+        for (i, s) in self.sample_toward.iter().enumerate() {
+            s.validate(&|name: &str| format!("sample_toward[{i}].{name}"))?;
+        }
         Ok(())
+    }
+}
+
+impl Shape {
+    /// The limits of the primitive of the same shape (a quad's corners and
+    /// edges, a sphere's centre and radius).
+    fn validate(&self, field: &dyn Fn(&str) -> String) -> Result<()> {
+        // The material is not the shape's: one that always validates.
+        let material = Material::Dielectric { ior: 1.5 };
+        match *self {
+            Shape::Quad { q, u, v } => Quad { q, u, v, material }.validate(field),
+            Shape::Sphere { center, radius } => Sphere { center, center1: None, radius, material }.validate(field),
+        }
     }
 }
 

@@ -26,7 +26,7 @@ pub use metrics::{error_metrics, ConvergeRow, Metrics, RELMSE_EPSILON, SIGNED_EP
 pub use report::ReportFiles;
 pub use variant::{Variant, DEFAULT_ADAPTIVE_THRESHOLD};
 
-use crate::choice::KernelChoice;
+use crate::choice::{EstimatorChoice, KernelChoice};
 use crate::error::{Error, Result};
 use crate::estimator::Adaptive;
 use crate::film::Image;
@@ -154,6 +154,7 @@ impl ConvergeConfig {
                     let o = Overrides {
                         spp: Some(spp),
                         sampler: Some(variant.sampler),
+                        estimator: Some(variant.estimator.unwrap_or(job.settings().estimator)),
                         ..Overrides::from(*job.settings())
                     };
                     out.push(Measurement { kernel, variant, spp, job: Job::new(job.scene(), &o, &opts)? });
@@ -164,13 +165,16 @@ impl ConvergeConfig {
     }
 
     /// The reference render's job: `n` samples per pixel with [`reference_seed`],
-    /// the widest SIMD kernel, independent sampling, no roulette or adaptive sampling.
+    /// the widest SIMD kernel, independent sampling, the `bsdf` estimator,
+    /// no roulette or adaptive sampling (the plainest unbiased estimator, so
+    /// that no variant is measured against an image of its own making).
     fn reference_job(&self, job: &Job, n: u32) -> Result<Job> {
         let opts = RenderOptions { kernel: KernelChoice::Simd, roulette: None, adaptive: None, ..*job.options() };
         let o = Overrides {
             spp: Some(n),
             seed: Some(reference_seed(job.settings().seed)),
             sampler: Some(Sampler::Independent),
+            estimator: Some(EstimatorChoice::Bsdf),
             ..Overrides::from(*job.settings())
         };
         Job::new(job.scene(), &o, &opts)
@@ -364,7 +368,12 @@ mod tests {
         assert_eq!((v.rr, v.adaptive), (Some(Roulette { after_rays: 3 }), Some(0.1)));
         assert_eq!(v.name(), "rr:3+adaptive:0.1");
         assert_eq!(Variant::parse(&v.name()).unwrap(), v);
+        let v = Variant::parse("sobol+book").unwrap();
+        assert_eq!((v.estimator, v.name().as_str()), (Some(EstimatorChoice::Book), "book+sobol"));
+        assert_eq!(Variant::parse(&v.name()).unwrap(), v);
+        assert_eq!(Variant::parse("bsdf").unwrap().name(), "bsdf");
         for bad in [
+            "book+bsdf",
             "",
             "fast",
             "rr+rr",

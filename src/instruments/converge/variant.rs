@@ -1,6 +1,8 @@
 //! Estimator variants of `rtow converge`: plain, Russian roulette, adaptive
-//! sampling, Sobol points, or combinations.
+//! sampling, Sobol points, the direction estimator (`bsdf`, `book`), or
+//! combinations.
 
+use crate::choice::EstimatorChoice;
 use crate::error::{Error, Result};
 use crate::estimator::{Roulette, ROULETTE_AFTER_RAYS};
 use crate::sampling::Sampler;
@@ -16,15 +18,17 @@ pub struct Variant {
     pub adaptive: Option<f32>,
     /// The sampler (`plain` is independent sampling).
     pub sampler: Sampler,
+    /// The direction estimator (`None`: the scene's, as a render would take it).
+    pub estimator: Option<EstimatorChoice>,
 }
 
 impl Variant {
-    pub const PLAIN: Variant = Variant { rr: None, adaptive: None, sampler: Sampler::Independent };
+    pub const PLAIN: Variant = Variant { rr: None, adaptive: None, sampler: Sampler::Independent, estimator: None };
 
     /// Parses `plain`, `rr`, `rr:N`, `adaptive`, `adaptive:T`, a sampler
     /// (`sobol`, or `sobol-pixel`, `sobol-lens`, `sobol-bounce1` for part of
-    /// the layout on Sobol points) or a `+`-joined combination such as
-    /// `sobol+rr+adaptive:0.05`.
+    /// the layout on Sobol points), an estimator (`bsdf`, `book`) or a
+    /// `+`-joined combination such as `sobol+rr+adaptive:0.05` or `book+sobol`.
     pub fn parse(text: &str) -> Result<Variant> {
         let bad = |m: String| Error::invalid("variants", m);
         let mut v = Variant::PLAIN;
@@ -58,6 +62,9 @@ impl Variant {
                         bad(format!("'{text}': unknown sampler '{name}' (use one of {})", Sampler::NAMES[1..].join(", ")))
                     })?;
                 }
+                name if value.is_none() && v.estimator.is_none() && EstimatorChoice::NAMES.contains(&name) => {
+                    v.estimator = Some(name.parse().map_err(bad)?);
+                }
                 "adaptive" if v.adaptive.is_none() => {
                     let t = match value {
                         None => DEFAULT_ADAPTIVE_THRESHOLD,
@@ -72,7 +79,7 @@ impl Variant {
                 }
                 _ => {
                     return Err(bad(format!(
-                        "unknown or repeated variant '{part}' in '{text}' (use plain, rr, rr:N, adaptive, adaptive:THRESHOLD, sobol, or e.g. sobol+rr+adaptive:0.05)"
+                        "unknown or repeated variant '{part}' in '{text}' (use plain, rr, rr:N, adaptive, adaptive:THRESHOLD, sobol, bsdf, book, or e.g. sobol+rr+adaptive:0.05)"
                     )))
                 }
             }
@@ -87,6 +94,9 @@ impl Variant {
             None => String::new(),
         };
         let mut parts: Vec<String> = Vec::new();
+        if let Some(e) = self.estimator {
+            parts.push(e.name().into());
+        }
         if self.sampler != Sampler::Independent {
             parts.push(self.sampler.name().into());
         }

@@ -1,0 +1,232 @@
+//! Directions toward the shapes a scene samples (The Rest of Your Life's
+//! `lights` list, rtow's `sample_toward`), over `Real`, so that the scalar
+//! kernel and every lane width compute the same bits.
+//!
+//! Two operations per shape, as the book's `hittable::random` and
+//! `hittable::pdf_value`, each in solid angle at a point `x`:
+//! - a quad: a uniform point on the parallelogram; the density of a
+//!   direction that meets it at distance `t` with cosine `c` to its normal
+//!   is `t^2 / (|c| area)`, 0 where the ray misses it;
+//! - a sphere seen from outside: a uniform direction in the cone it
+//!   subtends; the density is `1 / (2 pi (1 - cos theta_max))` inside the
+//!   cone, 0 outside. The book evaluates `sqrt(1 - r^2 / d^2)` from inside
+//!   the sphere too (a NaN); here a point inside or on the sphere samples
+//!   the uniform sphere of directions (density `1 / 4 pi`: each of them
+//!   meets it). `1 - cos theta_max` is computed as `s / (1 + sqrt(1 - s))`
+//!   with `s = r^2 / d^2`, without the cancellation of `1 - sqrt(1 - s)`
+//!   for a small or far sphere.
+//!
+//! A list samples one of its shapes, uniformly (its density is the average
+//! of the shapes'). The shapes' densities are evaluated for every lane and
+//! each lane keeps its own: the list is short (at most
+//! [`crate::limits::MAX_SAMPLED_SHAPES`]) and the same for every lane.
+
+use crate::real::Real;
+use crate::sampling::cos_sin_turn;
+use crate::vec3::V3;
+
+const PI: f32 = std::f32::consts::PI;
+
+/// A quad of the list, in world space.
+#[derive(Clone, Copy, Debug, PartialEq)]
+pub struct LightQuad {
+    pub q: [f32; 3],
+    pub u: [f32; 3],
+    pub v: [f32; 3],
+    /// The unit normal `u x v / |u x v|` and the plane's offset `n . q`.
+    pub n: [f32; 3],
+    pub d: f32,
+    /// `(u x v) / |u x v|^2`: the plane coordinates of a point `p` are
+    /// `a = w . ((p - q) x v)`, `b = w . (u x (p - q))`.
+    pub w: [f32; 3],
+    /// `|u x v|`.
+    pub area: f32,
+}
+
+/// A sphere of the list: centre and (positive) radius.
+#[derive(Clone, Copy, Debug, PartialEq)]
+pub struct LightSphere {
+    pub c: [f32; 3],
+    pub r: f32,
+}
+
+/// The shapes a scene samples toward: quads first, then spheres (the order
+/// a uniform pick counts them in).
+#[derive(Clone, Debug, Default, PartialEq)]
+pub struct Lights {
+    pub quads: Vec<LightQuad>,
+    pub spheres: Vec<LightSphere>,
+}
+
+impl LightQuad {
+    /// The quad `q + a u + b v`, its derived values computed in f64.
+    pub fn new(q: [f32; 3], u: [f32; 3], v: [f32; 3]) -> LightQuad {
+        let d = |a: [f32; 3]| glam::DVec3::from_array(a.map(f64::from));
+        let f = |a: glam::DVec3| a.to_array().map(|x| x as f32);
+        let nraw = d(u).cross(d(v));
+        let n = nraw.normalize();
+        LightQuad {
+            q,
+            u,
+            v,
+            n: f(n),
+            d: n.dot(d(q)) as f32,
+            w: f(nraw / nraw.length_squared()),
+            area: nraw.length() as f32,
+        }
+    }
+}
+
+impl Lights {
+    pub fn len(&self) -> usize {
+        self.quads.len() + self.spheres.len()
+    }
+
+    pub fn is_empty(&self) -> bool {
+        self.len() == 0
+    }
+
+    /// A direction from `x` toward a shape of the list: shape
+    /// `floor(pick n)` (clamped to the list), at the point or in the cone
+    /// that `u1`, `u2` (uniform in [0, 1)) choose. Unit length.
+    #[inline(always)]
+    pub fn sample<R: Real>(&self, x: V3<R>, pick: R, u1: R, u2: R) -> V3<R> {
+        let n = self.len();
+        debug_assert!(n > 0, "a light sample needs a shape");
+        let which = (pick * R::splat(n as f32)).floor().min(R::splat((n - 1) as f32));
+        let mut dir = V3::new(R::splat(0.0), R::splat(1.0), R::splat(0.0));
+        for (k, l) in self.quads.iter().enumerate() {
+            let p = V3::splat3(l.q) + V3::splat3(l.u) * u1 + V3::splat3(l.v) * u2;
+            let to = p - x;
+            let len2 = to.length_squared();
+            // `x` on the quad itself: any direction (its density is 0 there).
+            let toward = V3::select(len2.gt(R::splat(0.0)), to * (R::splat(1.0) / len2.sqrt()), V3::splat3(l.n));
+            dir = V3::select(which.eq(R::splat(k as f32)), toward, dir);
+        }
+        let base = self.quads.len();
+        for (k, s) in self.spheres.iter().enumerate() {
+            let toward = sphere_sample(s, x, u1, u2);
+            dir = V3::select(which.eq(R::splat((base + k) as f32)), toward, dir);
+        }
+        dir
+    }
+
+    /// The density (solid angle, at `x`) of the unit direction `dir` under
+    /// [`Lights::sample`]: the average of the shapes' densities.
+    #[inline(always)]
+    pub fn pdf<R: Real>(&self, x: V3<R>, dir: V3<R>) -> R {
+        let mut sum = R::splat(0.0);
+        for l in &self.quads {
+            sum = sum + quad_pdf(l, x, dir);
+        }
+        for s in &self.spheres {
+            sum = sum + sphere_pdf(s, x, dir);
+        }
+        sum * R::splat(1.0 / self.len() as f32)
+    }
+}
+
+/// The density of `dir` from `x` toward quad `l`: `t^2 / (|n . dir| area)`
+/// where the ray `x + t dir` (t > 0) meets the parallelogram, else 0.
+#[inline(always)]
+pub fn quad_pdf<R: Real>(l: &LightQuad, x: V3<R>, dir: V3<R>) -> R {
+    let zero = R::splat(0.0);
+    let one = R::splat(1.0);
+    let n = V3::splat3(l.n);
+    let denom = n.dot(dir);
+    let cos = denom.abs();
+    let t = (R::splat(l.d) - n.dot(x)) / denom;
+    let p = x + dir * t - V3::splat3(l.q);
+    let w = V3::splat3(l.w);
+    let a = w.dot(p.cross(V3::splat3(l.v)));
+    let b = w.dot(V3::splat3(l.u).cross(p));
+    let inside = a.ge(zero) & a.le(one) & b.ge(zero) & b.le(one);
+    let hit = cos.gt(R::splat(1e-8)) & t.gt(zero) & inside;
+    // Where `hit` is false the quotient may be infinite or NaN; it is not kept.
+    R::select(hit, t * t / (cos * R::splat(l.area)), zero)
+}
+
+/// `(s, 1 - cos theta_max)` of sphere `s` seen from `x`: `s = r^2 / d^2`
+/// (at least 1: `x` inside or on the sphere) and the cone's `1 - cos`.
+#[inline(always)]
+fn cone<R: Real>(s: &LightSphere, x: V3<R>) -> (V3<R>, R, R) {
+    let oc = V3::splat3(s.c) - x;
+    let d2 = oc.length_squared();
+    let ratio = R::splat(s.r * s.r) / d2;
+    let one = R::splat(1.0);
+    let one_minus_cos = ratio / (one + (one - ratio).max(R::splat(0.0)).sqrt());
+    (oc, ratio, one_minus_cos)
+}
+
+/// The density of `dir` from `x` toward sphere `s` (see the module).
+#[inline(always)]
+pub fn sphere_pdf<R: Real>(s: &LightSphere, x: V3<R>, dir: V3<R>) -> R {
+    let (oc, ratio, one_minus_cos) = cone(s, x);
+    let one = R::splat(1.0);
+    let inside = ratio.ge(one);
+    // dir . oc / |oc| >= cos theta_max, without the division: both sides
+    // times |oc| (positive outside the sphere).
+    let len = oc.length_squared().sqrt();
+    let in_cone = dir.dot(oc).ge((one - one_minus_cos) * len);
+    let cone_pdf = R::select(in_cone, one / (R::splat(2.0 * PI) * one_minus_cos), R::splat(0.0));
+    R::select(inside, R::splat(1.0 / (4.0 * PI)), cone_pdf)
+}
+
+/// A direction from `x` toward sphere `s`: uniform in the cone it subtends
+/// (cos theta uniform in [cos theta_max, 1], the angle `2 pi (u1 - 1/2)`
+/// around the axis), or uniform over the sphere of directions from inside.
+#[inline(always)]
+pub fn sphere_sample<R: Real>(s: &LightSphere, x: V3<R>, u1: R, u2: R) -> V3<R> {
+    let (oc, ratio, one_minus_cos) = cone(s, x);
+    let one = R::splat(1.0);
+    let inside = ratio.ge(one);
+    // 1 - cos theta: in [0, 1 - cos theta_max] in the cone, [0, 2] inside.
+    let omc = u2 * R::select(inside, R::splat(2.0), one_minus_cos);
+    let z = one - omc;
+    let sin = (omc * (R::splat(2.0) - omc)).max(R::splat(0.0)).sqrt();
+    let (c, sn) = cos_sin_turn(u1);
+    let (lx, ly) = (sin * c, sin * sn);
+    // The axis: toward the centre (any axis from inside; the centre itself
+    // may be `x`).
+    let len2 = oc.length_squared();
+    let axis = V3::select(
+        inside | len2.eq(R::splat(0.0)),
+        V3::new(R::splat(0.0), R::splat(0.0), one),
+        oc * (one / len2.sqrt()),
+    );
+    let (t1, t2) = basis(axis);
+    (t1 * lx + t2 * ly + axis * z).normalize()
+}
+
+/// Two unit vectors that make an orthonormal basis with the unit vector `w`
+/// (Duff et al., "Building an Orthonormal Basis, Revisited", 2017): no
+/// division by a small number, branch-free.
+#[inline(always)]
+pub fn basis<R: Real>(w: V3<R>) -> (V3<R>, V3<R>) {
+    let one = R::splat(1.0);
+    let sign = R::select(w.z.ge(R::splat(0.0)), one, R::splat(-1.0));
+    let a = R::splat(-1.0) / (sign + w.z);
+    let b = w.x * w.y * a;
+    let t1 = V3::new(one + sign * w.x * w.x * a, sign * b, -(sign * w.x));
+    let t2 = V3::new(b, sign + w.y * w.y * a, -w.y);
+    (t1, t2)
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    #[test]
+    fn the_basis_is_orthonormal() {
+        for w in [[0.0, 0.0, 1.0], [0.0, 0.0, -1.0], [0.6, 0.0, 0.8], [0.0, -0.6, -0.8], [1.0, 0.0, 0.0]] {
+            let w = V3::<f32>::from_array(w);
+            let (t1, t2) = basis(w);
+            for (a, b) in [(t1, t2), (t1, w), (t2, w)] {
+                assert!(a.dot(b).abs() < 1e-6);
+            }
+            for v in [t1, t2] {
+                assert!((v.length_squared() - 1.0).abs() < 1e-6);
+            }
+        }
+    }
+}
