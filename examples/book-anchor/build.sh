@@ -1,6 +1,7 @@
 #!/usr/bin/env bash
-# Builds the book's own C++ for the Cornell box (The Next Week, v4) with anchor.cc as its
-# driver. Usage: examples/book-anchor/build.sh [DIR]   (default: target/book-anchor)
+# Builds the book's own C++ for three scenes of The Next Week (v4): cornell_box(),
+# cornell_smoke() and final_scene(), with anchor.cc as its driver.
+# Usage: examples/book-anchor/build.sh [DIR]   (default: target/book-anchor)
 #
 # BOOK_REPO: where to clone the books' repository from (default: GitHub; a local clone
 #            or mirror works). The commit is pinned: the v4 `dev` branch's head that
@@ -33,18 +34,44 @@ rm -rf "$src"
 mkdir -p "$src"
 cp "$out/book/src/TheNextWeek/"*.h "$out/book/src/TheNextWeek/main.cc" "$src/"
 
-# Three lines of cornell_box() and nothing else: width, samples and depth from the
-# command line, and the render through the driver's ray counter.
+# Only what the driver needs, and nothing else: in cornell_box() and cornell_smoke(), width,
+# samples and depth from the command line (four lines each, with the render); final_scene()
+# takes them as arguments already, so only its render changes (one line). Every render goes
+# through the driver's ray counter.
 sed -i \
     -e '/^void cornell_box() {/,/^}/{
 s/cam\.image_width       = 600;/cam.image_width       = anchor_width;/
 s/cam\.samples_per_pixel = 200;/cam.samples_per_pixel = anchor_spp;/
 s/cam\.max_depth         = 50;/cam.max_depth         = anchor_depth;/
 s/cam\.render(world);/anchor_render(cam, world);/
+}' \
+    -e '/^void cornell_smoke() {/,/^}/{
+s/cam\.image_width       = 600;/cam.image_width       = anchor_width;/
+s/cam\.samples_per_pixel = 200;/cam.samples_per_pixel = anchor_spp;/
+s/cam\.max_depth         = 50;/cam.max_depth         = anchor_depth;/
+s/cam\.render(world);/anchor_render(cam, world);/
+}' \
+    -e '/^void final_scene(int image_width, int samples_per_pixel, int max_depth) {/,/^}/{
+s/cam\.render(world);/anchor_render(cam, world);/
 }' "$src/main.cc"
+# The guard: each function must have changed in exactly the lines expected.
+changed_in() { # FUNCTION-HEADER-PREFIX
+    diff <(sed -n "/^$1/,/^}/p" "$out/book/src/TheNextWeek/main.cc") \
+        <(sed -n "/^$1/,/^}/p" "$src/main.cc") | grep -c '^>' || true
+}
+for expect in "void cornell_box() {:4" "void cornell_smoke() {:4" \
+    "void final_scene(int image_width, int samples_per_pixel, int max_depth) {:1"; do
+    fn=${expect%:*}
+    want=${expect##*:}
+    got=$(changed_in "$fn")
+    if [ "$got" != "$want" ]; then
+        echo "build.sh: expected to change $want lines of ${fn% \{} in main.cc, changed $got" >&2
+        exit 2
+    fi
+done
 changed=$(diff "$out/book/src/TheNextWeek/main.cc" "$src/main.cc" | grep -c '^>' || true)
-if [ "$changed" != 4 ]; then
-    echo "build.sh: expected to change 4 lines of cornell_box() in main.cc, changed $changed" >&2
+if [ "$changed" != 9 ]; then
+    echo "build.sh: expected to change 9 lines of main.cc, changed $changed" >&2
     exit 2
 fi
 cp "$here/anchor.cc" "$src/"
@@ -54,4 +81,27 @@ cp "$here/anchor.cc" "$src/"
 # The same with std::mt19937 in place of glibc's rand() (a diagnostic: docs/nextweek.md).
 # shellcheck disable=SC2086
 "$CXX" $CXXFLAGS -DANCHOR_MT19937 -I"$src" -I"$out/book/src" -o "$out/book-anchor-mt19937" "$src/anchor.cc"
-echo "$out/book-anchor, $out/book-anchor-mt19937  (book $BOOK_COMMIT, $CXX $CXXFLAGS)"
+
+# The Rest of Your Life's final Cornell box (its main.cc) with anchor-rol.cc: five lines, main()
+# made the function the driver calls, width, samples and depth from the command line, and the
+# render through the driver's ray counter.
+src3="$out/src-rol"
+rm -rf "$src3"
+mkdir -p "$src3"
+cp "$out/book/src/TheRestOfYourLife/"*.h "$out/book/src/TheRestOfYourLife/main.cc" "$src3/"
+sed -i \
+    -e 's/^int main() {$/void anchor_scene() {/' \
+    -e 's/^    cam\.image_width       = 600;$/    cam.image_width       = anchor_width;/' \
+    -e 's/^    cam\.samples_per_pixel = 100;$/    cam.samples_per_pixel = anchor_spp;/' \
+    -e 's/^    cam\.max_depth         = 50;$/    cam.max_depth         = anchor_depth;/' \
+    -e 's/^    cam\.render(world, lights);$/    anchor_render(cam, world, lights);/' \
+    "$src3/main.cc"
+changed=$(diff "$out/book/src/TheRestOfYourLife/main.cc" "$src3/main.cc" | grep -c '^>' || true)
+if [ "$changed" != 5 ]; then
+    echo "build.sh: expected to change 5 lines of The Rest of Your Life's main.cc, changed $changed" >&2
+    exit 2
+fi
+cp "$here/anchor-rol.cc" "$src3/"
+# shellcheck disable=SC2086
+"$CXX" $CXXFLAGS -I"$src3" -I"$out/book/src" -o "$out/book3-anchor" "$src3/anchor-rol.cc"
+echo "$out/book-anchor, $out/book-anchor-mt19937, $out/book3-anchor  (book $BOOK_COMMIT, $CXX $CXXFLAGS)"
