@@ -35,6 +35,21 @@
 #include <string>
 #include <vector>
 
+#ifdef ANCHOR_MT19937
+// A diagnostic build (build.sh's book3-anchor-mt19937): the book's rand() replaced by the 31
+// high bits of std::mt19937 seeded with the same seed, as book-anchor-mt19937 does (anchor.cc).
+#include <random>
+static std::mt19937 anchor_mt;
+static int anchor_rand() { return int(anchor_mt() >> 1); }
+static void anchor_srand(unsigned seed) {
+    std::srand(seed);
+    anchor_mt.seed(seed);
+}
+#define rand anchor_rand
+#else
+static void anchor_srand(unsigned seed) { std::srand(seed); }
+#endif
+
 #include "rtweekend.h"
 
 #include "camera.h"
@@ -72,7 +87,7 @@ class counting_world : public hittable {
 
 void anchor_render(camera& cam, const hittable& world, const hittable& lights) {
     counting_world counted(world);
-    std::srand(anchor_seed);
+    anchor_srand(anchor_seed);
     cam.render(counted, lights);
     std::fprintf(stderr, "rays %llu\n", counted.rays);
 }
@@ -103,7 +118,7 @@ int main(int argc, char** argv) {
     anchor_spp = int(spp);
     anchor_depth = int(depth);
     anchor_seed = unsigned(seed);
-    std::srand(1); // the state the book's own program starts in (nothing is drawn before the render)
+    anchor_srand(1); // the state the book's own program starts in (nothing is drawn before the render)
     anchor_scene();
     return 0;
 }
