@@ -144,4 +144,6 @@ cp "$here/anchor-rol.cc" "$src3/"
 "$CXX" $CXXFLAGS -I"$src3" -I"$out/book/src" -o "$out/book3-anchor" "$src3/anchor-rol.cc"
 # shellcheck disable=SC2086
 "$CXX" $CXXFLAGS -DANCHOR_MT19937 -I"$src3" -I"$out/book/src" -o "$out/book3-anchor-mt19937" "$src3/anchor-rol.cc"
-echo "$out/book-anchor, $out/book-anchor-mt19937, $out/book-final-layout, $out/book3-anchor, $out/book3-anchor-mt19937  (book $BOOK_COMMIT, $CXX $CXXFLAGS)"
+diag=""
+if [ "${DIAGNOSTICS:-0}" = 1 ]; then diag=", $out/book-anchor-{metal,metal-white,grey-mt19937}"; fi
+echo "$out/book-anchor, $out/book-anchor-mt19937$diag, $out/book-final-layout, $out/book3-anchor, $out/book3-anchor-mt19937  (book $BOOK_COMMIT, $CXX $CXXFLAGS)"
