@@ -1,4 +1,5 @@
-//! The Cornell box, rtow against the book's own C++, region by region.
+//! A scene, rtow against the book's own C++, region by region (the Cornell box, the Cornell smoke,
+//! the final scene: docs/nextweek.md).
 //!
 //! Reads two renders of each side with different seeds, the book's as the 8-bit P3 PPM its
 //! code writes and rtow's as a linear PFM (`rtow render ... --float x.pfm`), of the same size.
@@ -17,8 +18,9 @@
 //! Any of the four may be either kind (a `.ppm` is read as the book's, anything else as
 //! rtow's), to compare two rtow renders, or two of the book's, the same way.
 //!
-//! Usage: `cargo run --release --example compare_regions -- [--regions K] BOOK1.ppm BOOK2.ppm
-//! RTOW1.pfm RTOW2.pfm` (K defaults to 6). Prints a Markdown table, then a summary: the
+//! Usage: `cargo run --release --example compare_regions -- [--regions K] [--noise] BOOK1.ppm
+//! BOOK2.ppm RTOW1.pfm RTOW2.pfm` (K defaults to 6; `--noise` adds each side's `s`, the standard
+//! error of its two-seed mean, per channel). Prints a Markdown table, then a summary: the
 //! number of |z| > 3, the root mean square of z (about 1 when the two agree within noise).
 //! A last line checks the noise estimate on each side: seed 1 against seed 2, per region
 //! and channel, `(mean1 - mean2) / (2 s)`, whose root mean square is about 1 when pixels'
@@ -129,8 +131,9 @@ fn run() -> Result<(), String> {
         k = v.parse().ok().filter(|&k| (1..=64).contains(&k)).ok_or(format!("--regions {v}: give 1 to 64"))?;
         args.drain(i..i + 2);
     }
+    let noise = args.iter().position(|a| a == "--noise").map(|i| args.remove(i)).is_some();
     let [b1, b2, r1, r2] = <[String; 4]>::try_from(args)
-        .map_err(|_| "usage: compare_regions [--regions K] BOOK1.ppm BOOK2.ppm RTOW1.pfm RTOW2.pfm")?;
+        .map_err(|_| "usage: compare_regions [--regions K] [--noise] BOOK1.ppm BOOK2.ppm RTOW1.pfm RTOW2.pfm")?;
     let book = [read_any(&b1)?, read_any(&b2)?];
     let rtow = [read_any(&r1)?, read_any(&r2)?];
     for img in book.iter().chain(&rtow) {
@@ -147,8 +150,14 @@ fn run() -> Result<(), String> {
     let bk = regions(&book[0], &book[1], k);
     let rt = regions(&rtow[0], &rtow[1], k);
     let fmt3 = |v: [f64; 3]| format!("{:.4} {:.4} {:.4}", v[0], v[1], v[2]);
-    println!("| region (row, col) | book mean (r g b) | rtow mean (r g b) | z (r g b) |");
-    println!("|---|---|---|---|");
+    let sd3 = |v: [f64; 3]| format!("{:.5} {:.5} {:.5}", v[0].sqrt(), v[1].sqrt(), v[2].sqrt());
+    if noise {
+        println!("| region (row, col) | book mean (r g b) | book s | rtow mean (r g b) | rtow s | z (r g b) |");
+        println!("|---|---|---|---|---|---|");
+    } else {
+        println!("| region (row, col) | book mean (r g b) | rtow mean (r g b) | z (r g b) |");
+        println!("|---|---|---|---|");
+    }
     let (mut over, mut sum_z2, mut count, mut max_z) = (0, 0.0, 0, 0.0f64);
     for (i, ((mb, vb, _), (mr, vr, _))) in bk.iter().zip(&rt).enumerate() {
         let z: [f64; 3] = std::array::from_fn(|c| {
@@ -169,16 +178,12 @@ fn run() -> Result<(), String> {
             max_z = max_z.max(v.abs());
         }
         let flag = if z.iter().any(|v| v.abs() > 3.0) { " **" } else { "" };
-        println!(
-            "| ({}, {}){flag} | {} | {} | {:+.2} {:+.2} {:+.2} |",
-            i / k,
-            i % k,
-            fmt3(*mb),
-            fmt3(*mr),
-            z[0],
-            z[1],
-            z[2]
-        );
+        let (book, rtow) = if noise {
+            (format!("{} | {}", fmt3(*mb), sd3(*vb)), format!("{} | {}", fmt3(*mr), sd3(*vr)))
+        } else {
+            (fmt3(*mb), fmt3(*mr))
+        };
+        println!("| ({}, {}){flag} | {book} | {rtow} | {:+.2} {:+.2} {:+.2} |", i / k, i % k, z[0], z[1], z[2]);
     }
     println!();
     println!(
