@@ -14,7 +14,7 @@ use crate::error::{Error, Result};
 use crate::film::{Moments, TileFilm};
 use crate::geometry::Lights;
 use crate::real::Real;
-use crate::sampling::{layout, Stream};
+use crate::sampling::Stream;
 use crate::vec3::V3;
 use serde::{Deserialize, Serialize};
 
@@ -23,7 +23,8 @@ use serde::{Deserialize, Serialize};
 /// `own` is the direction the material sampled (from the bounce's
 /// scattering dimensions) and `own_pdf` its density, which is also the
 /// material's scattering density (a cosine lobe `max(0, n . d) / pi`, or
-/// the isotropic `1 / 4 pi`). Draws 3 values at [`layout::light`]: the
+/// the isotropic `1 / 4 pi`). Draws 3 values from dimension `dim` on
+/// (`layout::Bounces::light`): the
 /// choice (below 1/2: toward the list, and which of its shapes), then the
 /// point on the shape. Returns the direction and the weight
 /// `own_pdf(dir) / (own_pdf(dir) / 2 + lights.pdf(dir) / 2)` that
@@ -36,10 +37,10 @@ pub fn book_mixture<R: Real, S: Stream<R>>(
     x: V3<R>,
     own: V3<R>,
     own_pdf: impl Fn(V3<R>) -> R,
-    depth: u32,
+    dim: u32,
     rng: &mut S,
 ) -> (V3<R>, R) {
-    rng.seek(layout::light(depth));
+    rng.seek(dim);
     let choice = rng.next();
     let u1 = rng.next();
     let u2 = rng.next();

@@ -12,6 +12,7 @@ use crate::geometry::{
 use crate::material::{Kind, MaterialTables};
 use crate::probe::Probe;
 use crate::real::Wide;
+use crate::sampling::layout::Bounces;
 use crate::settings::Settings;
 use crate::texture::{TexSet, TextureTables};
 use crate::vec3::V3;
@@ -200,6 +201,9 @@ pub struct Prepared {
     /// The shapes the `book` estimator samples toward (empty unless
     /// `plan.sample_toward`).
     pub lights: Lights,
+    /// The sampler dimensions of each bounce (the `book` estimator's when
+    /// it samples toward shapes, else the `bsdf` estimator's).
+    pub bounces: Bounces,
 }
 
 impl Prepared {

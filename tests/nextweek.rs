@@ -403,7 +403,7 @@ proptest! {
 #[test]
 fn book_settings_follow_the_scene() {
     let book = |name: &str, o: Overrides| {
-        let s = o.resolve(&scene::preset(name).unwrap().render);
+        let s = o.resolve(&scene::preset(name).unwrap());
         (s.width, s.height, s.spp, s.max_depth)
     };
     let on = Overrides { book: true, ..Default::default() };

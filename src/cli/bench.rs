@@ -96,13 +96,14 @@ pub fn run(a: BenchArgs) -> Result<bool> {
     }
     let s = job.settings();
     tell!(
-        "bench {name}: {}x{} {} spp depth {} seed {}, {} sampler, {} repetition(s) per kernel, built for {}",
+        "bench {name}: {}x{} {} spp depth {} seed {}, {} sampler, {} estimator, {} repetition(s) per kernel, built for {}",
         s.width,
         s.height,
         s.spp,
         s.max_depth,
         s.seed,
         s.sampler,
+        s.estimator,
         a.repeat,
         rtow::isa()
     );
@@ -160,6 +161,7 @@ fn count_instructions(a: &BenchArgs, source: &SceneSource, job: &Job) -> Result<
             ("--depth", s.max_depth.to_string()),
             ("--seed", s.seed.to_string()),
             ("--sampler", s.sampler.name().to_string()),
+            ("--estimator", s.estimator.name().to_string()),
             ("--threads", job.threads().to_string()),
             ("--accel", job.options().accel.name().to_string()),
             ("--kernels", job.kernel().name().to_string()),
@@ -173,8 +175,8 @@ fn count_instructions(a: &BenchArgs, source: &SceneSource, job: &Job) -> Result<
     rtow::instruments::callgrind::valgrind_version()?;
     let s = job.settings();
     tell!(
-        "bench --instructions {}: {}x{} {} spp depth {} seed {}, {} sampler, {} thread(s), built for {}; \
-         each kernel under callgrind (about 50x slower than a plain render)",
+        "bench --instructions {}: {}x{} {} spp depth {} seed {}, {} sampler, {} estimator, {} thread(s), built for \
+         {}; each kernel under callgrind (about 50x slower than a plain render)",
         source.name,
         s.width,
         s.height,
@@ -182,6 +184,7 @@ fn count_instructions(a: &BenchArgs, source: &SceneSource, job: &Job) -> Result<
         s.max_depth,
         s.seed,
         s.sampler,
+        s.estimator,
         job.threads(),
         rtow::isa()
     );

@@ -31,7 +31,7 @@ use crate::kernel::Kernel;
 use crate::limits::{self, MAX_TILE};
 use crate::plan::{Plan, Prepared};
 use crate::sampling::Sampler;
-use crate::scene::{RenderTable, Scene, SceneSource};
+use crate::scene::{Scene, SceneSource};
 use crate::settings::Settings;
 use std::path::Path;
 use std::sync::{Arc, OnceLock};
@@ -58,10 +58,12 @@ pub struct Overrides {
 }
 
 impl Overrides {
-    /// The settings of a scene whose render table is `table`, with these
-    /// overrides on top: an override wins over `--book`, which wins over the
-    /// table, which wins over rtow's defaults.
-    pub fn resolve(&self, table: &RenderTable) -> Settings {
+    /// The settings of `scene` (its render table), with these overrides on
+    /// top: an override wins over `--book`, which wins over the table, which
+    /// wins over rtow's defaults (the estimator's default is the scene's,
+    /// [`Scene::default_estimator`]).
+    pub fn resolve(&self, scene: &Scene) -> Settings {
+        let table = &scene.render;
         let d = Settings::default();
         let mut s = Settings {
             width: table.width.unwrap_or(d.width),
@@ -70,7 +72,10 @@ impl Overrides {
             max_depth: table.max_depth.unwrap_or(d.max_depth),
             seed: table.seed.unwrap_or(d.seed),
             sampler: table.sampler.unwrap_or(d.sampler),
-            estimator: table.estimator.unwrap_or(d.estimator),
+            estimator: match (self.estimator, table.estimator) {
+                (Some(e), _) | (None, Some(e)) => e,
+                (None, None) => scene.default_estimator(),
+            },
         };
         if self.book {
             (s.width, s.height, s.spp, s.max_depth) = match table.book {
@@ -84,7 +89,6 @@ impl Overrides {
         s.max_depth = self.max_depth.unwrap_or(s.max_depth);
         s.seed = self.seed.unwrap_or(s.seed);
         s.sampler = self.sampler.unwrap_or(s.sampler);
-        s.estimator = self.estimator.unwrap_or(s.estimator);
         s
     }
 }
@@ -252,7 +256,7 @@ impl Job {
         if scene.mode != Mode::Gradient {
             PreparedCamera::check(&view).map_err(in_file)?;
         }
-        let settings = overrides.resolve(&scene.render);
+        let settings = overrides.resolve(scene);
         settings.validate()?;
         options.validate()?;
         let requested = *options;
@@ -430,15 +434,38 @@ impl Job {
 #[cfg(test)]
 mod tests {
     use super::*;
-    use crate::scene::preset;
+    use crate::scene::{preset, RenderTable};
 
     #[test]
     fn flags_win_over_the_book_which_wins_over_the_scene() {
-        let table = RenderTable { width: Some(100), samples_per_pixel: Some(7), ..Default::default() };
-        let s = Overrides::default().resolve(&table);
+        let render = RenderTable { width: Some(100), samples_per_pixel: Some(7), ..Default::default() };
+        let scene = Scene { render, ..preset("ch07-diffuse").unwrap() };
+        let s = Overrides::default().resolve(&scene);
         assert_eq!((s.width, s.height, s.spp, s.max_depth, s.seed), (100, 225, 7, 50, 0));
-        let s = Overrides { book: true, spp: Some(3), ..Default::default() }.resolve(&table);
+        let s = Overrides { book: true, spp: Some(3), ..Default::default() }.resolve(&scene);
         assert_eq!((s.width, s.height, s.spp, s.max_depth), (1200, 675, 3, 50));
+    }
+
+    #[test]
+    fn scenes_with_lights_take_the_book_estimator_unless_told_otherwise() {
+        let est = |name: &str, o: &Overrides| o.resolve(&preset(name).unwrap()).estimator;
+        let none = Overrides::default();
+        for lit in ["nw-cornell-box", "nw-simple-light", "nw-cornell-smoke", "rol-cornell-box"] {
+            assert_eq!(est(lit, &none), EstimatorChoice::Book, "{lit}");
+        }
+        for unlit in ["final", "ch07-diffuse", "nw-quads", "nw-earth", "ch05-normals"] {
+            assert_eq!(est(unlit, &none), EstimatorChoice::Bsdf, "{unlit}");
+        }
+        let bsdf = Overrides { estimator: Some(EstimatorChoice::Bsdf), ..Default::default() };
+        assert_eq!(est("nw-cornell-box", &bsdf), EstimatorChoice::Bsdf);
+        let mut table_says = preset("nw-cornell-box").unwrap();
+        table_says.render.estimator = Some(EstimatorChoice::Bsdf);
+        assert_eq!(none.resolve(&table_says).estimator, EstimatorChoice::Bsdf);
+        // More lights than the mixture takes: bsdf, not an error.
+        let mut many = preset("nw-cornell-box-empty").unwrap();
+        let light = many.quads[2].clone();
+        many.quads.extend(std::iter::repeat_n(light, limits::MAX_SAMPLED_SHAPES));
+        assert_eq!(none.resolve(&many).estimator, EstimatorChoice::Bsdf);
     }
 
     #[test]

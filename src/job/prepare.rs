@@ -12,7 +12,8 @@ use crate::geometry::{
 };
 use crate::material::{Kind, MaterialTables};
 use crate::plan::{Accel, KindSet, Plan, Prepared, SkyColours};
-use crate::scene::{Background, Camera, Flat, FlatBoundary, Material, Scene, Shape, Texture};
+use crate::sampling::layout::Bounces;
+use crate::scene::{Background, Camera, FlatBoundary, Material, Scene, Shape, Texture};
 use crate::settings::Settings;
 use crate::texture::{Checker, Noise, Perlin, TexKind, TexRef, TexSet, TextureTables, PERLIN_SEED};
 use glam::DVec3;
@@ -66,29 +67,11 @@ fn choose_quad_accel(choice: AccelChoice, quads: usize, mode: Mode) -> Option<Ac
     })
 }
 
-/// The shapes the `book` estimator samples toward: the scene's
-/// `sample_toward` list, else its lights (static spheres and quads of
-/// `diffuse_light`, groups' included, in world space). Possibly more than
-/// [`crate::limits::MAX_SAMPLED_SHAPES`]: the job refuses that.
-pub(super) fn sample_toward(scene: &Scene, flat: &Flat) -> Vec<Shape> {
-    if !scene.sample_toward.is_empty() {
-        return scene.sample_toward.clone();
-    }
-    let light = |m: &Material| matches!(m, Material::DiffuseLight { .. });
-    let quads = flat.quads.iter().filter(|q| light(&q.material)).map(|q| Shape::Quad { q: q.q, u: q.u, v: q.v });
-    let spheres = flat
-        .spheres
-        .iter()
-        .filter(|s| s.center1.is_none() && light(&s.material))
-        .map(|s| Shape::Sphere { center: s.center, radius: s.radius });
-    quads.chain(spheres).collect()
-}
-
 /// The plan (cheap: no geometry is built).
 pub(super) fn plan(scene: &Scene, settings: &Settings, accel: AccelChoice) -> Plan {
     let flat = scene.flatten();
     let sample_toward = match (scene.mode, settings.estimator) {
-        (Mode::Path, EstimatorChoice::Book) => self::sample_toward(scene, &flat).len(),
+        (Mode::Path, EstimatorChoice::Book) => scene.sampled_shapes(&flat).len(),
         _ => 0,
     };
     let kinds: KindSet = match scene.mode {
@@ -250,7 +233,7 @@ pub(super) fn prepare(
     });
     let mut lights = Lights::default();
     if plan.sample_toward > 0 {
-        for shape in sample_toward(scene, &flat) {
+        for shape in scene.sampled_shapes(&flat) {
             match shape {
                 Shape::Quad { q, u, v } => lights.quads.push(LightQuad::new(q, u, v)),
                 Shape::Sphere { center, radius } => lights.spheres.push(LightSphere { c: center, r: radius.abs() }),
@@ -281,6 +264,7 @@ pub(super) fn prepare(
         moving,
         moving_bvh,
         estimator,
+        bounces: if lights.is_empty() { Bounces::BSDF } else { Bounces::BOOK },
         lights,
     }
 }

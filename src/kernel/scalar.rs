@@ -104,7 +104,7 @@ fn scatter(
     rng: &mut impl Stream<f32>,
 ) -> Option<(V3<f32>, [f32; 3])> {
     let m = &prep.materials;
-    rng.seek(layout::scatter(depth));
+    rng.seek(prep.bounces.scatter(depth));
     Some(match kind {
         Kind::Lambertian => {
             let tex = m.lambertian_tex[row];
@@ -116,7 +116,8 @@ fn scatter(
             if prep.plan.sample_toward == 0 {
                 (dir, albedo)
             } else {
-                let (dir, w) = book_mixture(&prep.lights, srf.p, dir, |d| cosine_pdf(srf.n, d), depth, rng);
+                let (dir, w) =
+                    book_mixture(&prep.lights, srf.p, dir, |d| cosine_pdf(srf.n, d), prep.bounces.light(depth), rng);
                 (dir, albedo.map(|a| a * w))
             }
         }
@@ -186,14 +187,14 @@ fn trace_in<P: Probe, const M: bool>(
         }
         let (next_o, dir, atten) = if hit >= MEDIUM_BASE {
             // Isotropic scattering inside medium k: a uniform direction.
-            rng.seek(layout::scatter(depth));
+            rng.seek(prep.bounces.scatter(depth));
             let dir = unit_vector(rng);
             let p = o + d * t;
             let albedo = prep.media.albedo[(hit - MEDIUM_BASE) as usize];
             if prep.plan.sample_toward == 0 {
                 (p, dir, albedo)
             } else {
-                let (dir, w) = book_mixture(&prep.lights, p, dir, |_| ISOTROPIC_PDF, depth, rng);
+                let (dir, w) = book_mixture(&prep.lights, p, dir, |_| ISOTROPIC_PDF, prep.bounces.light(depth), rng);
                 (p, dir, albedo.map(|a| a * w))
             }
         } else {
@@ -208,7 +209,7 @@ fn trace_in<P: Probe, const M: bool>(
             return ([0.0; 3], rays);
         }
         if roulette_applies(&prep.estimator, rays) {
-            rng.seek(layout::roulette(depth));
+            rng.seek(prep.bounces.roulette(depth));
             let (t, survives) = roulette(thr, rng);
             if !survives {
                 return ([0.0; 3], rays);

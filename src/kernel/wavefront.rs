@@ -592,12 +592,13 @@ fn isotropic_pass<W: Wide, P: Probe, S: PathSampler, const M: bool>(
                 W::u_splat(0)
             }
         }));
-        rng.seek(layout::scatter(depth));
+        rng.seek(prep.bounces.scatter(depth));
         let dir = unit_vector(&mut rng);
         let (dir, albedo) = if prep.plan.sample_toward == 0 {
             (dir, albedo)
         } else {
-            let (dir, w) = book_mixture(&prep.lights, p, dir, |_| W::splat(ISOTROPIC_PDF), depth, &mut rng);
+            let (dir, w) =
+                book_mixture(&prep.lights, p, dir, |_| W::splat(ISOTROPIC_PDF), prep.bounces.light(depth), &mut rng);
             (dir, albedo * w)
         };
         let thr = v3_gather::<W>(&cur.thr, idx).mul_elem(albedo);
@@ -866,7 +867,7 @@ fn scatter<W: Wide, P: Probe, S: PathSampler, const M: bool>(
             W::u_splat(0)
         }
     }));
-    rng.seek(layout::scatter(depth));
+    rng.seek(prep.bounces.scatter(depth));
     let all = W::mask_from_bits(u32::MAX);
     let (dir, alive, albedo) = match kind {
         Kind::Lambertian => {
@@ -874,7 +875,14 @@ fn scatter<W: Wide, P: Probe, S: PathSampler, const M: bool>(
             if prep.plan.sample_toward == 0 {
                 (dir, all, albedo)
             } else {
-                let (dir, w) = book_mixture(&prep.lights, srf.p, dir, |d| cosine_pdf(srf.n, d), depth, &mut rng);
+                let (dir, w) = book_mixture(
+                    &prep.lights,
+                    srf.p,
+                    dir,
+                    |d| cosine_pdf(srf.n, d),
+                    prep.bounces.light(depth),
+                    &mut rng,
+                );
                 (dir, all, albedo * w)
             }
         }
@@ -915,7 +923,7 @@ fn continue_paths<W: Wide, S: PathSampler, const M: bool>(
     let mut alive = alive & !dark;
     let mut thr = thr;
     if roulette_applies(&prep.estimator, depth + 1) {
-        rng.seek(layout::roulette(depth));
+        rng.seek(prep.bounces.roulette(depth));
         let (t, survives) = roulette(thr, &mut rng);
         thr = t;
         alive = alive & survives;

@@ -263,7 +263,7 @@ impl PathSampler for Sobol {
 /// | 4 + 3 depth + 2 | the Russian-roulette decision after that bounce |
 /// | `TIME` = 0x4000_0000 | the path's time in [0, 1) (motion blur), drawn by the camera after its ray, scenes with moving spheres only |
 /// | 0x4000_1000 + k 2^22 + depth | scenes with media: the free-flight distance of medium k at that bounce ([`layout::free_flight`]; padding, not Sobol) |
-/// | `LIGHT` + 3 depth, +1, +2 | the `book` estimator at a diffuse vertex of that bounce: the mixture's choice (and which shape), then the point on the shape ([`layout::light`]; padding, not Sobol) |
+/// | under `book`: 4 + 6 depth, ..., 9 + 6 depth | the `book` estimator's layout ([`layout::Bounces::BOOK`]): scattering (2), roulette (1), then the light sample at a diffuse vertex (3: the mixture's choice and which shape, then the point on the shape); bounces 0 to 19 on Sobol dimensions |
 ///
 /// Bounces 0 to 39 take Sobol dimensions (4 to 123, [`sobol::SOBOL_DIMS`] in
 /// all); from bounce 40 on the dimensions are padding (independent hashed
@@ -299,17 +299,40 @@ pub mod layout {
         scatter(depth).wrapping_add(2)
     }
 
-    /// The first dimension of the `book` estimator's light samples.
-    pub const LIGHT: u32 = 0x6000_0000;
+    /// The dimensions of each bounce: [`scatter`] and [`roulette`]'s
+    /// layout (3 per bounce) for the `bsdf` estimator, 6 per bounce for the
+    /// `book` estimator, whose light samples take the last 3, so that they
+    /// too are Sobol points for the first 20 bounces. A render takes one
+    /// (`Prepared::bounces`); both kernels read the same.
+    #[derive(Clone, Copy, Debug, PartialEq, Eq)]
+    pub struct Bounces {
+        pub per_bounce: u32,
+    }
 
-    /// The first of the three light-sample dimensions of bounce `depth`
-    /// (the `book` estimator): `0x6000_0000 + 3 depth`. Padding under Sobol
-    /// (the low dimensions keep the order every documented image was
-    /// rendered with), above every free-flight dimension of a path shorter
-    /// than 2^28 bounces.
-    #[inline(always)]
-    pub const fn light(depth: u32) -> u32 {
-        LIGHT.wrapping_add(3u32.wrapping_mul(depth))
+    impl Bounces {
+        /// The `bsdf` estimator's: [`scatter`], [`roulette`] (every documented image).
+        pub const BSDF: Bounces = Bounces { per_bounce: PER_BOUNCE };
+        /// The `book` estimator's: scattering, roulette, then 3 light dimensions.
+        pub const BOOK: Bounces = Bounces { per_bounce: PER_BOUNCE + 3 };
+
+        /// The first of the two scattering dimensions of bounce `depth`.
+        #[inline(always)]
+        pub const fn scatter(self, depth: u32) -> u32 {
+            FIRST_BOUNCE.wrapping_add(self.per_bounce.wrapping_mul(depth))
+        }
+
+        /// The Russian-roulette dimension of bounce `depth`.
+        #[inline(always)]
+        pub const fn roulette(self, depth: u32) -> u32 {
+            self.scatter(depth).wrapping_add(2)
+        }
+
+        /// The first of the three light-sample dimensions of bounce `depth`
+        /// (the `book` layout only).
+        #[inline(always)]
+        pub const fn light(self, depth: u32) -> u32 {
+            self.scatter(depth).wrapping_add(3)
+        }
     }
 
     /// The first free-flight dimension (constant media).

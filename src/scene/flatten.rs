@@ -9,7 +9,8 @@
 //! bounding box of a rotated box is that of its world-space quads, each
 //! covering its four corners (#749, #1402).
 
-use super::{Group, Material, Medium, MediumBoundary, Quad, QuadBox, Scene, Sphere};
+use super::{Group, Material, Medium, MediumBoundary, Mode, Quad, QuadBox, Scene, Shape, Sphere};
+use crate::choice::EstimatorChoice;
 
 /// A scene's primitives in world space, in the one global order the
 /// closest-hit tie rule uses: spheres (the scene's, then each group's), then
@@ -173,6 +174,44 @@ pub(super) fn group(g: &Group) -> Flat {
 }
 
 impl Scene {
+    /// The shapes the `book` estimator samples toward: the scene's
+    /// `sample_toward` list, else its lights (static spheres and quads of
+    /// `diffuse_light`, groups' included, in world space, from `flat`, this
+    /// scene's [`Scene::flatten`]). Possibly more than
+    /// [`crate::limits::MAX_SAMPLED_SHAPES`]: a render job refuses that.
+    pub fn sampled_shapes(&self, flat: &Flat) -> Vec<Shape> {
+        if !self.sample_toward.is_empty() {
+            return self.sample_toward.clone();
+        }
+        let light = |m: &Material| matches!(m, Material::DiffuseLight { .. });
+        let quads = flat.quads.iter().filter(|q| light(&q.material)).map(|q| Shape::Quad { q: q.q, u: q.u, v: q.v });
+        let spheres = flat
+            .spheres
+            .iter()
+            .filter(|s| s.center1.is_none() && light(&s.material))
+            .map(|s| Shape::Sphere { center: s.center, radius: s.radius });
+        quads.chain(spheres).collect()
+    }
+
+    /// The estimator a render of this scene takes when neither its render
+    /// table nor an override names one: `book` for a path-traced scene with
+    /// shapes to sample toward (its lights, at most
+    /// [`crate::limits::MAX_SAMPLED_SHAPES`], or a `sample_toward` list),
+    /// which measured faster to every error than `bsdf` on the scenes with
+    /// lights (docs/sampling.md); `bsdf` for the others (book one's scenes,
+    /// lit by the sky, keep their images).
+    pub fn default_estimator(&self) -> EstimatorChoice {
+        if self.mode != Mode::Path {
+            return EstimatorChoice::Bsdf;
+        }
+        let n = self.sampled_shapes(&self.flatten()).len();
+        if n > 0 && n <= crate::limits::MAX_SAMPLED_SHAPES {
+            EstimatorChoice::Book
+        } else {
+            EstimatorChoice::Bsdf
+        }
+    }
+
     /// The scene's primitives in world space (see [`Flat`]); a scene without
     /// quads, boxes or groups gives back its spheres unchanged.
     pub fn flatten(&self) -> Flat {
