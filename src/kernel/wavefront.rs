@@ -37,7 +37,8 @@ use crate::material::{dielectric, emission, lambertian, metal, Kind};
 use crate::plan::{KindSet, Prepared};
 use crate::probe::{PathId, Probe, Stage};
 use crate::real::{U32Lanes, Wide, MAX_LANES};
-use crate::sampling::{layout, unit_vector, PathSampler, Stream};
+use crate::sampling::layout::{self, Bounces};
+use crate::sampling::{unit_vector, PathSampler, Stream};
 use crate::texture::TexKind;
 use crate::vec3::V3;
 use std::ops::Range;
@@ -494,9 +495,16 @@ fn bounce<W: Wide, P: Probe, S: PathSampler, const M: bool>(
             Mode::Path if kind == Kind::Lambertian && !prep.plan.textures.is_empty() => {
                 textured_lambertian_pass::<W, P, S, M>(prep, sampler, ws, q, qlen, depth, probe);
             }
+            // The book estimator's passes apart: the bsdf estimator's are
+            // the ones it always ran (the same instructions per ray).
+            Mode::Path if prep.plan.kinds.contains(kind) && prep.plan.sample_toward > 0 => {
+                for_packets::<W, P>(q, qlen, probe, |idx, active, probe| {
+                    scatter::<W, P, S, M>(prep, sampler, ws, kind, depth, idx, active, false, true, probe)
+                });
+            }
             Mode::Path if prep.plan.kinds.contains(kind) => {
                 for_packets::<W, P>(q, qlen, probe, |idx, active, probe| {
-                    scatter::<W, P, S, M>(prep, sampler, ws, kind, depth, idx, active, false, probe)
+                    scatter::<W, P, S, M>(prep, sampler, ws, kind, depth, idx, active, false, false, probe)
                 });
             }
             Mode::Path => debug_assert!(qlen == 0, "the plan left out a kind that was hit"),
@@ -603,7 +611,7 @@ fn isotropic_pass<W: Wide, P: Probe, S: PathSampler, const M: bool>(
         };
         let thr = v3_gather::<W>(&cur.thr, idx).mul_elem(albedo);
         let all = W::mask_from_bits(u32::MAX);
-        continue_paths::<W, S, M>(prep, ws, idx, active, depth, rng, thr, all, p, dir);
+        continue_paths::<W, S, M>(prep, ws, idx, active, depth, prep.bounces, rng, thr, all, p, dir);
     });
 }
 
@@ -671,7 +679,8 @@ fn textured_lambertian_pass<W: Wide, P: Probe, S: PathSampler, const M: bool>(
     }
     ws.tex_queue = Some(tq);
     for_packets::<W, P>(queue, len, probe, |idx, active, probe| {
-        scatter::<W, P, S, M>(prep, sampler, ws, Kind::Lambertian, depth, idx, active, true, probe)
+        let book = prep.plan.sample_toward > 0;
+        scatter::<W, P, S, M>(prep, sampler, ws, Kind::Lambertian, depth, idx, active, true, book, probe)
     });
 }
 
@@ -852,8 +861,13 @@ fn scatter<W: Wide, P: Probe, S: PathSampler, const M: bool>(
     idx: &W::Idx,
     active: usize,
     textured: bool,
+    book: bool,
     probe: &mut P,
 ) {
+    // `book`: the plan's book estimator (its sampler layout, its mixture at
+    // lambertian vertices); a literal at the call, so each is compiled apart.
+    debug_assert_eq!(book, prep.plan.sample_toward > 0);
+    let dims = if book { prep.bounces } else { Bounces::BSDF };
     let Hits { d, srf, albedo, param } = surfaces::<W, P, M>(prep, ws, idx, active, probe);
     // A textured lambertian's record has parameter 1: its albedo is the one
     // its texture pass wrote.
@@ -867,22 +881,16 @@ fn scatter<W: Wide, P: Probe, S: PathSampler, const M: bool>(
             W::u_splat(0)
         }
     }));
-    rng.seek(prep.bounces.scatter(depth));
+    rng.seek(dims.scatter(depth));
     let all = W::mask_from_bits(u32::MAX);
     let (dir, alive, albedo) = match kind {
         Kind::Lambertian => {
             let dir = lambertian(srf.n, &mut rng);
-            if prep.plan.sample_toward == 0 {
+            if !book {
                 (dir, all, albedo)
             } else {
-                let (dir, w) = book_mixture(
-                    &prep.lights,
-                    srf.p,
-                    dir,
-                    |d| cosine_pdf(srf.n, d),
-                    prep.bounces.light(depth),
-                    &mut rng,
-                );
+                let (dir, w) =
+                    book_mixture(&prep.lights, srf.p, dir, |d| cosine_pdf(srf.n, d), dims.light(depth), &mut rng);
                 (dir, all, albedo * w)
             }
         }
@@ -896,7 +904,7 @@ fn scatter<W: Wide, P: Probe, S: PathSampler, const M: bool>(
     };
     // The albedo of a dielectric's record is white, as the scalar kernel's [1; 3].
     let thr = v3_gather::<W>(&ws.cur.thr, idx).mul_elem(albedo);
-    continue_paths::<W, S, M>(prep, ws, idx, active, depth, rng, thr, alive, spawn(&srf, dir), dir);
+    continue_paths::<W, S, M>(prep, ws, idx, active, depth, dims, rng, thr, alive, spawn(&srf, dir), dir);
 }
 
 /// The end of every scatter pass: paths whose throughput is zero die, then
@@ -912,6 +920,7 @@ fn continue_paths<W: Wide, S: PathSampler, const M: bool>(
     idx: &W::Idx,
     active: usize,
     depth: u32,
+    dims: Bounces,
     mut rng: S::Lanes<W>,
     thr: V3<W>,
     alive: <W as crate::real::Real>::Mask,
@@ -923,7 +932,7 @@ fn continue_paths<W: Wide, S: PathSampler, const M: bool>(
     let mut alive = alive & !dark;
     let mut thr = thr;
     if roulette_applies(&prep.estimator, depth + 1) {
-        rng.seek(prep.bounces.roulette(depth));
+        rng.seek(dims.roulette(depth));
         let (t, survives) = roulette(thr, &mut rng);
         thr = t;
         alive = alive & survives;
