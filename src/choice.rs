@@ -120,6 +120,12 @@ choice!(
         /// shapes (its `sample_toward` list, else its lights), weighted by
         /// the mixture's density.
         Book = "book",
+        /// Next-event estimation with multiple importance sampling: at
+        /// every diffuse vertex a shadow ray toward a point on one of the
+        /// scene's lights, and the scattered direction as under `bsdf`; the
+        /// two are weighted by the power heuristic (pbrt's and Mitsuba's
+        /// path tracer).
+        NeeMis = "nee-mis",
     }
 );
 

@@ -12,7 +12,7 @@
 
 use crate::error::{Error, Result};
 use crate::film::{Moments, TileFilm};
-use crate::geometry::Lights;
+use crate::geometry::{Emitters, Lights};
 use crate::real::Real;
 use crate::sampling::Stream;
 use crate::vec3::V3;
@@ -51,6 +51,66 @@ pub fn book_mixture<R: Real, S: Stream<R>>(
     let pdf = half * p_own + half * lights.pdf(x, dir);
     let zero = R::splat(0.0);
     (dir, R::select(pdf.gt(zero), p_own / pdf, zero))
+}
+
+/// The `nee-mis` estimator's light sample at a diffuse vertex `x` whose
+/// scattering density is `own_pdf` (which is also its BSDF over its
+/// albedo: the cosine lobe `max(0, n . d) / pi`, or the isotropic `1 / 4
+/// pi`). Draws 3 values from dimension `dim` on
+/// ([`crate::sampling::layout::Bounces::light`]): which light, then the
+/// point on it. Returns the shadow ray's direction, the distance to the
+/// light along it, and what it carries if nothing blocks it, per unit
+/// albedo and throughput: the light's radiance times the power heuristic's
+/// weight over the density, `own_pdf / (p_light (1 + (own_pdf / p_light)^2))`
+/// ([`mis_light`]); 0 where the sample is unusable or the material does not
+/// scatter toward it.
+#[inline(always)]
+pub fn next_event<R: Real, S: Stream<R>>(
+    emitters: &Emitters,
+    x: V3<R>,
+    own_pdf: impl Fn(V3<R>) -> R,
+    dim: u32,
+    rng: &mut S,
+) -> (V3<R>, R, V3<R>) {
+    rng.seek(dim);
+    let pick = rng.next();
+    let u1 = rng.next();
+    let u2 = rng.next();
+    let ls = emitters.sample(x, pick, u1, u2);
+    let w = mis_light(own_pdf(ls.dir), ls.pdf);
+    (ls.dir, ls.t, ls.emit * w)
+}
+
+/// A light sample's weight over its density under the power heuristic,
+/// `w_light / p_light = p_light / (p_light^2 + p_bsdf^2)`, times the BSDF's
+/// `p_bsdf`: `r / (1 + r^2)` with `r = p_bsdf / p_light`, written
+/// `1 / (1 / r + r)` so that neither a tiny nor a huge ratio overflows (each
+/// gives 0). 0 where `p_light` is 0 (no sample).
+#[inline(always)]
+pub fn mis_light<R: Real>(p_bsdf: R, p_light: R) -> R {
+    let (zero, one) = (R::splat(0.0), R::splat(1.0));
+    let r = p_bsdf / p_light;
+    R::select(p_light.gt(zero), one / (one / r + r), zero)
+}
+
+/// The power heuristic's weight of emission reached by a scattered
+/// direction of density `p_bsdf`, which a light sample would have drawn
+/// with density `p_light`: `1 / (1 + (p_light / p_bsdf)^2)`; 1 where
+/// `p_bsdf` is 0 (the camera ray, a specular bounce: no light sample
+/// competed).
+#[inline(always)]
+pub fn mis_bsdf<R: Real>(p_bsdf: R, p_light: R) -> R {
+    let (zero, one) = (R::splat(0.0), R::splat(1.0));
+    let q = p_light / p_bsdf;
+    R::select(p_bsdf.gt(zero), one / (one + q * q), one)
+}
+
+/// The end of a shadow ray toward a light at distance `t` from the vertex,
+/// from an origin moved `offset` off the surface: short of the light by a
+/// relative `2^-10` (its own surface never blocks it) and by the offset.
+#[inline(always)]
+pub fn shadow_tmax<R: Real>(t: R, offset: R) -> R {
+    t * R::splat(1.0 - 1.0 / 1024.0) - offset
 }
 
 /// A lambertian's scattering density at normal `n`: `max(0, n . d) / pi`.

@@ -178,6 +178,8 @@ pub struct StatsFile {
     /// `render` or `merge`.
     pub command: &'static str,
     pub rays: u64,
+    /// Render: shadow rays (`nee-mis`), apart from `rays`; merge: `null`.
+    pub shadow_rays: Option<u64>,
     /// Samples traced (accepted and rejected).
     pub samples: u64,
     /// Render: the render alone (scene preparation apart). Merge: the whole
@@ -233,6 +235,7 @@ impl StatsFile {
             schema: STATS_SCHEMA,
             command: "render",
             rays: st.rays,
+            shadow_rays: Some(st.shadow_rays),
             samples: st.samples,
             seconds: st.seconds,
             prepare_seconds: Some(st.prepare_seconds),
@@ -267,6 +270,7 @@ impl StatsFile {
             schema: STATS_SCHEMA,
             command: "merge",
             rays: st.rays,
+            shadow_rays: None,
             samples: st.samples,
             seconds: st.seconds,
             prepare_seconds: None,

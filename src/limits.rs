@@ -61,8 +61,8 @@ pub const MAX_GROUPS: usize = 1 << 16;
 /// are not in a BVH), and takes its own sampler dimensions.
 pub const MAX_MEDIA: usize = 64;
 /// Shapes the `book` estimator samples toward, at most (its `sample_toward`
-/// list, or the lights it takes by default): every diffuse vertex evaluates
-/// the density of each.
+/// list, or the lights it takes by default), and lights the `nee-mis`
+/// estimator samples: every diffuse vertex evaluates the density of each.
 pub const MAX_SAMPLED_SHAPES: usize = 64;
 
 /// The longest image file name a scene may give (bytes).

@@ -7,11 +7,11 @@ use crate::camera::PreparedCamera;
 use crate::choice::Mode;
 use crate::estimator::Estimator;
 use crate::geometry::{
-    self, Bvh, Closest, Lights, Media, MovingBvh, MovingSpheres, QuadBvh, Quads, Spheres, QUAD_BASE,
+    self, Bvh, Closest, Emitters, Lights, Media, MovingBvh, MovingSpheres, QuadBvh, Quads, Spheres, MISS, QUAD_BASE,
 };
 use crate::material::{Kind, MaterialTables};
 use crate::probe::Probe;
-use crate::real::Wide;
+use crate::real::{Real, Wide};
 use crate::sampling::layout::Bounces;
 use crate::settings::Settings;
 use crate::texture::{TexSet, TextureTables};
@@ -120,6 +120,12 @@ pub struct Plan {
     /// draws and computes nothing for this).
     #[serde(skip_serializing_if = "is_zero")]
     pub sample_toward: usize,
+    /// The `nee-mis` estimator's lights (the scene's static emitters), when
+    /// it runs and has any: each diffuse vertex then sends a shadow ray
+    /// toward one of them, weighted against the scattered direction by the
+    /// power heuristic. 0: no light samples.
+    #[serde(skip_serializing_if = "is_zero")]
+    pub nee: usize,
 }
 
 fn is_zero(n: &usize) -> bool {
@@ -152,6 +158,13 @@ impl Plan {
         let toward = match self.sample_toward {
             0 => String::new(),
             n => format!("; diffuse vertices: the book's mixture, half toward {n} shape(s)"),
+        };
+        let toward = match self.nee {
+            0 => toward,
+            n => format!(
+                "{toward}; diffuse vertices: a shadow ray toward one of {n} light(s) (any-hit packets, their own queue), \
+                 weighted against the scattered direction by the power heuristic"
+            ),
         };
         format!(
             "plan: mode {:?}; material passes: {kinds}{textures}; camera: {} rays, {}; closest hit: {}{quads}{moving}{media}{toward}; paths stop at zero throughput",
@@ -201,6 +214,8 @@ pub struct Prepared {
     /// The shapes the `book` estimator samples toward (empty unless
     /// `plan.sample_toward`).
     pub lights: Lights,
+    /// The lights the `nee-mis` estimator samples (empty unless `plan.nee`).
+    pub emitters: Emitters,
     /// The sampler dimensions of each bounce (the `book` estimator's when
     /// it samples toward shapes, else the `bsdf` estimator's).
     pub bounces: Bounces,
@@ -275,6 +290,79 @@ impl Prepared {
             }
         }
         (best.index, best.t)
+    }
+
+    /// Whether something lies on the segment `o + t d`, `0 < t < tmax`, of
+    /// one ray at time `time` (a shadow ray, scalar kernel): any hit, the
+    /// search stopping at the first. Media do not block (their
+    /// transmittance is [`geometry::transmittance`]).
+    #[inline(always)]
+    pub fn occluded_one<P: Probe, const M: bool>(
+        &self,
+        o: V3<f32>,
+        d: V3<f32>,
+        tmax: f32,
+        time: f32,
+        probe: &mut P,
+    ) -> bool {
+        let mut best = Closest { t: tmax, index: MISS };
+        match &self.bvh {
+            Some(b) => best = b.any_hit_scalar_at(o, d, 0.0, best, probe),
+            None => geometry::any_sphere_hit(&self.spheres, o, d, &mut best, probe),
+        }
+        if best.index == MISS && !self.quads.is_empty() {
+            match &self.quad_bvh {
+                Some(b) => best = b.any_hit_scalar_at(o, d, 0.0, best, probe),
+                None => geometry::any_quad_hit(&self.quads, o, d, &mut best, probe),
+            }
+        }
+        if M && best.index == MISS {
+            match &self.moving_bvh {
+                Some(b) => best = b.any_hit_scalar_at(o, d, time, best, probe),
+                None => geometry::any_moving_hit(&self.moving, o, d, time, &mut best, probe),
+            }
+        }
+        best.index != MISS
+    }
+
+    /// [`Prepared::occluded_one`] for a packet of shadow rays (bit k of
+    /// `live` marks a real one; the others are not occluded): the packet
+    /// walks in their any-hit form, each lane leaving at its first hit and
+    /// each search stopping once no lane is left. The same answer as one ray
+    /// at a time, whatever the order: a hit below `tmax` is one whatever
+    /// else was found.
+    #[inline(always)]
+    pub fn occluded<W: Wide, P: Probe, const M: bool>(
+        &self,
+        o: V3<W>,
+        d: V3<W>,
+        tmax: W,
+        live: u32,
+        time: impl FnOnce() -> W,
+        probe: &mut P,
+    ) -> <W as Real>::Mask {
+        let mut best = Closest {
+            t: W::select(W::mask_from_bits(live), tmax, W::splat(f32::NEG_INFINITY)),
+            index: W::u_splat(MISS),
+        };
+        match &self.bvh {
+            Some(b) => best = b.any_hit_packet_at(o, d, W::splat(0.0), best, probe),
+            None => geometry::any_sphere_hit(&self.spheres, o, d, &mut best, probe),
+        }
+        if !best.leave_found() && !self.quads.is_empty() {
+            match &self.quad_bvh {
+                Some(b) => best = b.any_hit_packet_at(o, d, W::splat(0.0), best, probe),
+                None => geometry::any_quad_hit(&self.quads, o, d, &mut best, probe),
+            }
+        }
+        if M && !best.leave_found() {
+            let time = time();
+            match &self.moving_bvh {
+                Some(b) => best = b.any_hit_packet_at(o, d, time, best, probe),
+                None => geometry::any_moving_hit(&self.moving, o, d, time, &mut best, probe),
+            }
+        }
+        !W::u_eq(best.index, W::u_splat(MISS))
     }
 
     /// Whether hit index `hit` (not `MISS`) is a quad's.

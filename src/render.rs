@@ -29,12 +29,18 @@ pub struct Progress {
 /// What a render measured. `seconds` is the render alone; scene preparation is apart.
 #[derive(Clone, Debug, Serialize)]
 pub struct Stats {
+    /// Rays traced for their closest hit (camera and scattered rays).
     pub rays: u64,
+    /// Shadow rays (`nee-mis`'s light samples: any-hit queries), counted
+    /// apart so that `mrays_per_s` stays comparable across estimators.
+    pub shadow_rays: u64,
     /// Samples actually traced (fewer than width x height x spp with adaptive sampling).
     pub samples: u64,
     pub seconds: f64,
     pub prepare_seconds: f64,
     pub mrays_per_s: f64,
+    /// Shadow rays per second, in millions (0 unless `nee-mis`).
+    pub mshadow_rays_per_s: f64,
     pub kernel: &'static str,
     /// Lanes per packet: 1 (scalar), 8 or 16.
     pub lanes: u32,
@@ -202,10 +208,12 @@ impl Stats {
         let kernel = job.kernel();
         Stats {
             rays: out.rays,
+            shadow_rays: out.shadow_rays,
             samples: out.traced.unwrap_or(s.width as u64 * s.height as u64 * s.spp as u64),
             seconds,
             prepare_seconds: job.prepare_seconds(),
             mrays_per_s: out.rays as f64 / seconds / 1e6,
+            mshadow_rays_per_s: out.shadow_rays as f64 / seconds / 1e6,
             kernel: kernel.name(),
             lanes: kernel.lanes(),
             threads,
@@ -240,6 +248,7 @@ struct Work<'a> {
 struct Finished<P> {
     image: Image,
     rays: u64,
+    shadow_rays: u64,
     rejected: u64,
     /// Samples traced (`None` when no sample is traced: the gradient).
     traced: Option<u64>,
@@ -264,7 +273,7 @@ fn render_prepared<P: Probe + Send>(
                 image.data[(y * s.width + x) as usize] = gradient(x, y, s.width, s.height);
             }
         }
-        return Finished { image, rays: 0, rejected: 0, traced: None, probes: Vec::new(), film: None };
+        return Finished { image, rays: 0, shadow_rays: 0, rejected: 0, traced: None, probes: Vec::new(), film: None };
     }
     let moments = prep.estimator.adaptive.is_some();
     let mut films = tiles(s.width, work.rows.clone(), tile, moments, work.start);
@@ -290,6 +299,7 @@ fn render_prepared<P: Probe + Send>(
     // a plain render writes the image straight from the tiles.
     let mut film = work.keep_film.then(|| Film::new(s.width, s.height, work.rows.clone(), moments));
     let mut rejected = 0;
+    let mut shadow_rays = 0;
     let mut traced = 0;
     // Tiles are dropped as they are copied: the peak stays near one film.
     for t in films {
@@ -298,13 +308,14 @@ fn render_prepared<P: Probe + Send>(
             None => image.put_tile(&t),
         }
         rejected += t.rejected;
+        shadow_rays += t.shadow_rays;
         traced += t.rejected + t.count.iter().map(|&c| c as u64).sum::<u64>();
     }
     if let Some(f) = &film {
         f.write_into(&mut image);
     }
     let traced = Some(traced - started);
-    Finished { image, rays: rays.into_inner(), rejected, traced, probes, film }
+    Finished { image, rays: rays.into_inner(), shadow_rays, rejected, traced, probes, film }
 }
 
 fn scalar_tiles<P: Probe + Send, S: PathSampler>(

@@ -212,27 +212,100 @@ fn arb_mixed_scene() -> impl Strategy<Value = Scene> {
         .prop_filter("valid scene", |s| s.validate().is_ok())
 }
 
+/// A shadow ray: origin, unit direction, length.
+type ShadowRay = (rtow::internals::vec3::V3<f32>, rtow::internals::vec3::V3<f32>, f32);
+
 proptest! {
     #![proptest_config(ProptestConfig { cases: 32, ..ProptestConfig::default() })]
 
-    /// Quads, boxes, instances, lights and backgrounds, under either
-    /// estimator (the book's samples toward the scene's lights): every
-    /// kernel and accelerator renders the scalar brute-force image bit for bit.
+    /// Quads, boxes, instances, lights and backgrounds, under every
+    /// estimator (the book's samples toward the scene's lights, nee-mis's
+    /// shadow rays through brute force or the trees, one ray or a packet at
+    /// a time): every kernel and accelerator renders the scalar brute-force
+    /// image bit for bit, and traces as many rays and shadow rays.
     #[test]
     fn mixed_scenes_are_bit_identical_across_kernels(
         sc in arb_mixed_scene(),
         seed in 0u64..1000,
         spp in 1u32..4,
-        book in any::<bool>(),
+        which in 0usize..3,
     ) {
-        let estimator = if book { EstimatorChoice::Book } else { EstimatorChoice::Bsdf };
+        let estimator = EstimatorChoice::ALL[which];
         let s = Settings { estimator, ..settings(19, 11, spp, 12, seed) };
         let a = render_accel(&sc, s, Scalar, 1, 8, AccelChoice::Brute);
         prop_assert_eq!(a.stats.rejected_samples, 0);
         for (kernel, accel) in others() {
             let b = render_accel(&sc, s, kernel, 1, 8, accel);
-            assert_identical(&a.image, &b.image, &format!("mixed scene, {kernel:?} {accel:?}"));
+            assert_identical(&a.image, &b.image, &format!("mixed scene, {estimator:?} {kernel:?} {accel:?}"));
             prop_assert_eq!(a.stats.rays, b.stats.rays);
+            prop_assert_eq!(a.stats.shadow_rays, b.stats.shadow_rays);
+        }
+    }
+
+    /// Shadow rays' any-hit queries answer what the closest hit says: a
+    /// ray is blocked exactly when its closest hit is nearer than its
+    /// length, for one ray at a time and for packets, with brute force and
+    /// with the trees, whatever else the packet holds.
+    #[test]
+    fn any_hit_queries_agree_with_the_closest_hit(
+        sc in arb_mixed_scene(),
+        rays in proptest::collection::vec(
+            ([-3.0f32..3.0, -3.0f32..3.0, -3.0f32..3.0], [-1.0f32..1.0, -1.0f32..1.0, -1.0f32..1.0], 0.0f32..8.0),
+            8,
+        ),
+    ) {
+        use rtow::internals::real::Real;
+        use rtow::internals::vec3::V3;
+        use wide::f32x8;
+        let rays: Vec<_> = rays
+            .into_iter()
+            .filter_map(|(o, d, tmax)| {
+                let d = V3::<f32>::from_array(d);
+                let len = d.length_squared().sqrt();
+                (len > 0.1).then(|| (V3::from_array(o), d * (1.0 / len), tmax))
+            })
+            .collect();
+        prop_assume!(!rays.is_empty());
+        for accel in [AccelChoice::Brute, AccelChoice::Bvh] {
+            let opts = rtow::RenderOptions { accel, ..Default::default() };
+            let j = job(&sc, settings(8, 8, 1, 4, 1), opts);
+            let prep = j.prepared();
+            let moving = !prep.moving.is_empty();
+            let want: Vec<bool> = rays
+                .iter()
+                .map(|&(o, d, tmax)| {
+                    let (_, t) = if moving {
+                        prep.closest_hit::<(), true>(o, d, 0.25, &mut ())
+                    } else {
+                        prep.closest_hit::<(), false>(o, d, 0.25, &mut ())
+                    };
+                    t < tmax
+                })
+                .collect();
+            for (k, &(o, d, tmax)) in rays.iter().enumerate() {
+                let got = if moving {
+                    prep.occluded_one::<(), true>(o, d, tmax, 0.25, &mut ())
+                } else {
+                    prep.occluded_one::<(), false>(o, d, tmax, 0.25, &mut ())
+                };
+                prop_assert_eq!(got, want[k], "one ray, {:?}", accel);
+            }
+            let lane = |f: &dyn Fn(&ShadowRay) -> f32| f32x8::from_fn(|k| f(&rays[k % rays.len()]));
+            let o = V3::new(lane(&|r| r.0.x), lane(&|r| r.0.y), lane(&|r| r.0.z));
+            let d = V3::new(lane(&|r| r.1.x), lane(&|r| r.1.y), lane(&|r| r.1.z));
+            let tmax = lane(&|r| r.2);
+            let live = (1u32 << rays.len()) - 1;
+            let time = || f32x8::splat(0.25);
+            let got = if moving {
+                prep.occluded::<f32x8, (), true>(o, d, tmax, live, time, &mut ())
+            } else {
+                prep.occluded::<f32x8, (), false>(o, d, tmax, live, time, &mut ())
+            };
+            let bits = f32x8::mask_bits(got);
+            for (k, &w) in want.iter().enumerate() {
+                prop_assert_eq!(bits >> k & 1 == 1, w, "packet lane {}, {:?}", k, accel);
+            }
+            prop_assert_eq!(bits >> rays.len(), 0, "lanes that are not live are not blocked");
         }
     }
 }

@@ -53,8 +53,9 @@ pub struct ImageArgs {
     #[arg(long, value_parser = sampler_parser(), help = sampler_help())]
     pub sampler: Option<Sampler>,
     /// Directions at diffuse vertices: bsdf (the material's density), book (The Rest of Your Life's
-    /// mixture: half toward the scene's sample_toward shapes, else its lights) [default: the scene's
-    /// render.estimator, else bsdf]
+    /// mixture: half toward the scene's sample_toward shapes, else its lights), nee-mis (a shadow ray
+    /// toward a light sample at every diffuse vertex, weighted against the scattered direction by
+    /// the power heuristic) [default: the scene's render.estimator, else by the scene]
     #[arg(long, value_parser = choice::<EstimatorChoice>(EstimatorChoice::NAMES))]
     pub estimator: Option<EstimatorChoice>,
 }

@@ -53,7 +53,7 @@ fn variants_help() -> String {
     format!(
         "Estimator variants, comma separated: plain, rr (roulette after {} rays), rr:N (after N rays), adaptive \
          (threshold {}), adaptive:THRESHOLD, sobol (Owen-scrambled Sobol points; sobol-pixel, sobol-lens, \
-         sobol-bounce1 for part of the layout), bsdf or book (the direction estimator; default: the scene's), or \
+         sobol-bounce1 for part of the layout), bsdf, book or nee-mis (the direction estimator; default: the scene's), or \
          combinations such as sobol+rr+adaptive:0.05 or book+sobol. The first kernel's first variant is the \
          baseline. The reference is always rendered with independent sampling and the bsdf estimator",
         rtow::ROULETTE_AFTER_RAYS,

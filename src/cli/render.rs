@@ -136,8 +136,13 @@ fn summary(name: &str, st: &Stats, req: &RenderRequest, output: &std::path::Path
     } else {
         String::new()
     };
+    let shadow = if st.shadow_rays > 0 {
+        format!(" + {} shadow rays = {:.2} M/s", st.shadow_rays, st.mshadow_rays_per_s)
+    } else {
+        String::new()
+    };
     format!(
-        "{name}: {}x{} {} spp{piece} -> {}: {} rays, {} samples in {:.3} s = {:.2} Mrays/s ({} kernel, {} threads, {}){rejected}",
+        "{name}: {}x{} {} spp{piece} -> {}: {} rays, {} samples in {:.3} s = {:.2} Mrays/s{shadow} ({} kernel, {} threads, {}){rejected}",
         st.width,
         st.height,
         st.spp,

@@ -48,12 +48,25 @@ pub struct TileFilm {
     /// Per pixel, the sums of squares. Empty unless asked for ([`TileFilm::with_moments`]).
     pub sum_sq: Vec<[f64; 3]>,
     pub rejected: u64,
+    /// Shadow rays the kernel traced for this tile (`nee-mis`), counted
+    /// apart from the rays; not part of the film's data.
+    pub shadow_rays: u64,
 }
 
 impl TileFilm {
     pub fn new(x0: u32, y0: u32, w: u32, h: u32) -> Self {
         let n = (w * h) as usize;
-        TileFilm { x0, y0, w, h, sum: vec![[0; 3]; n], count: vec![0; n], sum_sq: Vec::new(), rejected: 0 }
+        TileFilm {
+            x0,
+            y0,
+            w,
+            h,
+            sum: vec![[0; 3]; n],
+            count: vec![0; n],
+            sum_sq: Vec::new(),
+            rejected: 0,
+            shadow_rays: 0,
+        }
     }
 
     /// Also keeps the sums of squares that adaptive sampling's error estimate needs.

@@ -562,6 +562,34 @@ impl<L: LeafPrim> Bvh<L> {
         o: V3<f32>,
         d: V3<f32>,
         time: f32,
+        best: Closest<f32>,
+        probe: &mut P,
+    ) -> Closest<f32> {
+        self.walk_scalar_impl::<P, false>(o, d, time, best, probe)
+    }
+
+    /// Any hit of one ray below `best.t` (a shadow ray's length; `best`
+    /// found none yet): the scalar walk, which stops at the first leaf that
+    /// holds one (its index is then not `MISS`).
+    #[inline(always)]
+    pub fn any_hit_scalar_at<P: Probe>(
+        &self,
+        o: V3<f32>,
+        d: V3<f32>,
+        time: f32,
+        best: Closest<f32>,
+        probe: &mut P,
+    ) -> Closest<f32> {
+        self.walk_scalar_impl::<P, true>(o, d, time, best, probe)
+    }
+
+    /// The scalar walk: the closest hit, or (`ANY`) any hit, stopping early.
+    #[inline(always)]
+    fn walk_scalar_impl<P: Probe, const ANY: bool>(
+        &self,
+        o: V3<f32>,
+        d: V3<f32>,
+        time: f32,
         mut best: Closest<f32>,
         probe: &mut P,
     ) -> Closest<f32> {
@@ -587,7 +615,13 @@ impl<L: LeafPrim> Bvh<L> {
                 }
                 match node.count[k] {
                     0 => stack.push((node.child[k], near)),
-                    count => self.leaf(node.child[k] as usize, count as usize, o, d, time, &mut best, &mut tally),
+                    count => {
+                        self.leaf(node.child[k] as usize, count as usize, o, d, time, &mut best, &mut tally);
+                        if ANY && best.index != MISS {
+                            tally.flush(probe);
+                            return best;
+                        }
+                    }
                 }
             }
         }
@@ -621,6 +655,35 @@ impl<L: LeafPrim> Bvh<L> {
         o: V3<W>,
         d: V3<W>,
         time: W,
+        best: Closest<W>,
+        probe: &mut P,
+    ) -> Closest<W> {
+        self.walk_packet_impl::<W, P, false>(o, d, time, best, probe)
+    }
+
+    /// Any hit of each ray of a packet below its `best.t` (shadow rays'
+    /// lengths; lanes at `-inf` take no part): the packet walk, in which a
+    /// lane that found a hit leaves (its `t` becomes `-inf`, its index is
+    /// not `MISS`), and which stops once every lane has left.
+    #[inline(always)]
+    pub fn any_hit_packet_at<W: Wide, P: Probe>(
+        &self,
+        o: V3<W>,
+        d: V3<W>,
+        time: W,
+        best: Closest<W>,
+        probe: &mut P,
+    ) -> Closest<W> {
+        self.walk_packet_impl::<W, P, true>(o, d, time, best, probe)
+    }
+
+    /// The packet walk: closest hits, or (`ANY`) any hits, stopping early.
+    #[inline(always)]
+    fn walk_packet_impl<W: Wide, P: Probe, const ANY: bool>(
+        &self,
+        o: V3<W>,
+        d: V3<W>,
+        time: W,
         mut best: Closest<W>,
         probe: &mut P,
     ) -> Closest<W> {
@@ -644,7 +707,13 @@ impl<L: LeafPrim> Bvh<L> {
                 }
                 match node.count[k] {
                     0 => stack.push(node.child[k]),
-                    count => self.leaf(node.child[k] as usize, count as usize, o, d, time, &mut best, &mut tally),
+                    count => {
+                        self.leaf(node.child[k] as usize, count as usize, o, d, time, &mut best, &mut tally);
+                        if ANY && best.leave_found() {
+                            tally.flush(probe);
+                            return best;
+                        }
+                    }
                 }
             }
         }

@@ -111,6 +111,16 @@ impl<R: Real> Closest<R> {
         Closest { t: R::select(live, R::splat(f32::INFINITY), R::splat(f32::NEG_INFINITY)), index: R::u_splat(MISS) }
     }
 
+    /// Any-hit queries: the lanes that found a hit leave the search (their
+    /// `t` becomes `-inf`, which no box entry reaches); true once no lane
+    /// searches.
+    #[inline(always)]
+    pub fn leave_found(&mut self) -> bool {
+        let found = !R::u_eq(self.index, R::u_splat(MISS));
+        self.t = R::select(found, R::splat(f32::NEG_INFINITY), self.t);
+        !self.t.gt(R::splat(f32::NEG_INFINITY)).any()
+    }
+
     /// Takes the lanes of `hit` whose `t` beats the current one (ties: lower index).
     #[inline(always)]
     pub fn offer(&mut self, hit: R::Mask, t: R, index: R::U32) {
@@ -190,6 +200,55 @@ pub fn closest_hit<R: Real, P: Probe>(s: &Spheres, o: V3<R>, d: V3<R>, probe: &m
     }
     tally.flush(probe);
     (best.index, best.t)
+}
+
+/// Any hit of the rays below `best.t` (shadow rays) among the spheres
+/// (brute force): as [`closest_hit`], stopping once every lane found one.
+#[inline]
+pub fn any_sphere_hit<R: Real, P: Probe>(s: &Spheres, o: V3<R>, d: V3<R>, best: &mut Closest<R>, probe: &mut P) {
+    let mut tally = WorkTally::<P>::new();
+    for i in 0..s.len {
+        let c = V3::new(R::splat(s.cx[i]), R::splat(s.cy[i]), R::splat(s.cz[i]));
+        best.test(o, d, c, R::splat(s.r2[i]), i as u32, &mut tally);
+        if best.leave_found() {
+            break;
+        }
+    }
+    tally.flush(probe);
+}
+
+/// Any hit of the rays below `best.t` among the quads (brute force).
+#[inline]
+pub fn any_quad_hit<R: Real, P: Probe>(q: &Quads, o: V3<R>, d: V3<R>, best: &mut Closest<R>, probe: &mut P) {
+    let mut tally = WorkTally::<P>::new();
+    for (i, rec) in q.rec[..q.len].iter().enumerate() {
+        best.test_quad(o, d, rec, QUAD_BASE + i as u32, &mut tally);
+        if best.leave_found() {
+            break;
+        }
+    }
+    tally.flush(probe);
+}
+
+/// Any hit of the rays below `best.t` among the moving spheres at `time` (brute force).
+#[inline]
+pub fn any_moving_hit<R: Real, P: Probe>(
+    m: &MovingSpheres,
+    o: V3<R>,
+    d: V3<R>,
+    time: R,
+    best: &mut Closest<R>,
+    probe: &mut P,
+) {
+    let mut tally = WorkTally::<P>::new();
+    for i in 0..m.len() {
+        let c = centre_at(V3::splat3(m.c0(i)), V3::splat3(m.v(i)), time);
+        best.test(o, d, c, R::splat(m.s.r2[i]), MOVING_BASE + i as u32, &mut tally);
+        if best.leave_found() {
+            break;
+        }
+    }
+    tally.flush(probe);
 }
 
 /// What the shading needs to know about a hit.

@@ -21,6 +21,8 @@
 //! each lane keeps its own: the list is short (at most
 //! [`crate::limits::MAX_SAMPLED_SHAPES`]) and the same for every lane.
 
+use crate::geometry::intersect::{sphere_disc, sphere_t};
+use crate::material::emission;
 use crate::real::Real;
 use crate::sampling::cos_sin_turn;
 use crate::vec3::V3;
@@ -124,6 +126,131 @@ impl Lights {
         }
         sum * R::splat(1.0 / self.len() as f32)
     }
+}
+
+/// The emitters the `nee-mis` estimator samples (next-event estimation):
+/// the scene's static light spheres and quads as shapes (in [`Lights`]'
+/// order: quads, then spheres), each one's radiance and sidedness, and the
+/// way back from a light primitive that a path hits to its shape.
+#[derive(Clone, Debug, Default, PartialEq)]
+pub struct Emitters {
+    pub shapes: Lights,
+    /// Per shape: its emitted radiance and whether it emits from its front face only.
+    pub emit: Vec<[f32; 3]>,
+    pub one_sided: Vec<bool>,
+    /// Per row of the light material table (one row per light primitive):
+    /// the index of its shape, or [`Emitters::UNSAMPLED`] (a moving light,
+    /// which only the scattered directions reach).
+    pub of_row: Vec<u32>,
+}
+
+/// A light sample seen from a point: the unit direction toward it, the
+/// distance to the light along it, its density (solid angle, over the
+/// whole list) and the radiance the light sends back along it. Where the
+/// sample is unusable (the point on the light itself, a cone direction that
+/// rounding made miss the sphere) the density is 0.
+#[derive(Clone, Copy, Debug)]
+pub struct LightSample<R: Real> {
+    pub dir: V3<R>,
+    pub t: R,
+    pub pdf: R,
+    pub emit: V3<R>,
+}
+
+impl Emitters {
+    /// The shape index of a light that is not sampled.
+    pub const UNSAMPLED: u32 = u32::MAX;
+
+    pub fn len(&self) -> usize {
+        self.shapes.len()
+    }
+
+    pub fn is_empty(&self) -> bool {
+        self.shapes.is_empty()
+    }
+
+    /// A light sample from `x`: shape `floor(pick n)`, then a uniform point
+    /// on a quad or a uniform direction in the cone of a sphere (`u1`, `u2`),
+    /// as [`Lights::sample`] draws them. Every lane evaluates every shape and
+    /// keeps its own.
+    #[inline(always)]
+    pub fn sample<R: Real>(&self, x: V3<R>, pick: R, u1: R, u2: R) -> LightSample<R> {
+        let n = self.len();
+        debug_assert!(n > 0, "a light sample needs a light");
+        let zero = R::splat(0.0);
+        let one = R::splat(1.0);
+        let which = (pick * R::splat(n as f32)).floor().min(R::splat((n - 1) as f32));
+        let up = V3::new(zero, one, zero);
+        let mut out = LightSample { dir: up, t: zero, pdf: zero, emit: V3::new(zero, zero, zero) };
+        let lights = &self.shapes;
+        for (k, l) in lights.quads.iter().enumerate() {
+            let p = V3::splat3(l.q) + V3::splat3(l.u) * u1 + V3::splat3(l.v) * u2;
+            let to = p - x;
+            let len2 = to.length_squared();
+            let t = len2.sqrt();
+            let dir = to * (one / t);
+            let nl = V3::splat3(l.n);
+            let cos = nl.dot(dir);
+            let pdf = len2 / (cos.abs() * R::splat(l.area));
+            let ok = len2.gt(zero) & pdf.is_finite();
+            let emit = emission(V3::splat3(self.emit[k]), mask::<R>(self.one_sided[k]), cos.lt(zero));
+            let take = which.eq(R::splat(k as f32));
+            out = LightSample {
+                dir: V3::select(take & ok, dir, out.dir),
+                t: R::select(take, t, out.t),
+                pdf: R::select(take, R::select(ok, pdf, zero), out.pdf),
+                emit: V3::select(take, emit, out.emit),
+            };
+        }
+        let base = lights.quads.len();
+        for (k, s) in lights.spheres.iter().enumerate() {
+            let dir = sphere_sample(s, x, u1, u2);
+            let c = V3::splat3(s.c);
+            let r2 = R::splat(s.r * s.r);
+            let (disc, g, b) = sphere_disc(x, dir, c, r2);
+            let (hit, t) = sphere_t(disc, g, b, r2);
+            let outside = g.length_squared().gt(r2);
+            let pdf = R::select(hit, sphere_pdf(s, x, dir), zero);
+            let j = base + k;
+            let emit = emission(V3::splat3(self.emit[j]), mask::<R>(self.one_sided[j]), outside);
+            let take = which.eq(R::splat(j as f32));
+            out = LightSample {
+                dir: V3::select(take, dir, out.dir),
+                t: R::select(take, t, out.t),
+                pdf: R::select(take, pdf, out.pdf),
+                emit: V3::select(take, emit, out.emit),
+            };
+        }
+        out.pdf = out.pdf * R::splat(1.0 / n as f32);
+        out
+    }
+
+    /// The density (solid angle, at `x`, over the whole list) with which
+    /// [`Emitters::sample`] draws the unit direction `dir` toward shape
+    /// `shape` (per lane; [`Emitters::UNSAMPLED`]: 0): the density of the
+    /// light a path hit, for the weight of its emission. Only that shape's:
+    /// a light sample toward another shape along the same line would be
+    /// blocked by this one.
+    #[inline(always)]
+    pub fn pdf_of<R: Real>(&self, x: V3<R>, dir: V3<R>, shape: R::U32) -> R {
+        let zero = R::splat(0.0);
+        let mut pdf = zero;
+        let lights = &self.shapes;
+        for (k, l) in lights.quads.iter().enumerate() {
+            pdf = R::select(R::u_eq(shape, R::u_splat(k as u32)), quad_pdf(l, x, dir), pdf);
+        }
+        let base = lights.quads.len();
+        for (k, s) in lights.spheres.iter().enumerate() {
+            pdf = R::select(R::u_eq(shape, R::u_splat((base + k) as u32)), sphere_pdf(s, x, dir), pdf);
+        }
+        pdf * R::splat(1.0 / self.len().max(1) as f32)
+    }
+}
+
+/// A mask of every lane set to `b`.
+#[inline(always)]
+fn mask<R: Real>(b: bool) -> R::Mask {
+    R::splat(if b { 1.0 } else { 0.0 }).gt(R::splat(0.5))
 }
 
 /// The density of `dir` from `x` toward quad `l`: `t^2 / (|n . dir| area)`

@@ -10,11 +10,11 @@ pub mod spheres;
 
 pub use bvh::{Bvh, LeafMoving, LeafQuad, MovingBvh, QuadBvh, SahCost, Walk};
 pub use intersect::{
-    closest_hit, closest_moving_hit, closest_quad_hit, spawn, sphere_disc, sphere_t, surface, Closest, Surface,
-    OFFSET_ULPS,
+    any_moving_hit, any_quad_hit, any_sphere_hit, closest_hit, closest_moving_hit, closest_quad_hit, spawn,
+    sphere_disc, sphere_t, surface, Closest, Surface, OFFSET_ULPS,
 };
-pub use lights::{LightQuad, LightSphere, Lights};
-pub use media::{sample_media, Boundary, Media, MEDIUM_BASE};
+pub use lights::{Emitters, LightQuad, LightSample, LightSphere, Lights};
+pub use media::{sample_media, transmittance, Boundary, Media, MEDIUM_BASE};
 pub use moving::{centre_at, MovingSpheres, MOVING_BASE};
 pub use quads::{quad_hit, quad_surface, QuadRec, Quads, QUAD_BASE};
 pub use spheres::{Shade, Spheres, MISS};

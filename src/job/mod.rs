@@ -273,6 +273,24 @@ impl Job {
                 ),
             ));
         }
+        if plan.nee > limits::MAX_SAMPLED_SHAPES {
+            return Err(Error::invalid(
+                "estimator",
+                format!(
+                    "the nee-mis estimator samples at most {} lights, and this scene has {}; use --estimator book \
+                     with a sample_toward list of the important ones, or --estimator bsdf",
+                    limits::MAX_SAMPLED_SHAPES,
+                    plan.nee
+                ),
+            ));
+        }
+        if settings.estimator == EstimatorChoice::NeeMis && scene.mode == Mode::Path && plan.nee == 0 {
+            warnings.push(Error::invalid(
+                "estimator",
+                "the nee-mis estimator has no light to sample (the scene has no static diffuse_light sphere or \
+                 quad): every direction comes from the materials, as under bsdf",
+            ));
+        }
         if settings.estimator == EstimatorChoice::Book && scene.mode == Mode::Path && plan.sample_toward == 0 {
             warnings.push(Error::invalid(
                 "estimator",

@@ -8,7 +8,8 @@ use crate::camera::{PreparedCamera, View};
 use crate::choice::{AccelChoice, EstimatorChoice, Mode};
 use crate::estimator::Estimator;
 use crate::geometry::{
-    Boundary, Bvh, LightQuad, LightSphere, Lights, Media, MovingBvh, MovingSpheres, QuadBvh, Quads, Spheres, Walk,
+    Boundary, Bvh, Emitters, LightQuad, LightSphere, Lights, Media, MovingBvh, MovingSpheres, QuadBvh, Quads, Spheres,
+    Walk,
 };
 use crate::material::{Kind, MaterialTables};
 use crate::plan::{Accel, KindSet, Plan, Prepared, SkyColours};
@@ -74,6 +75,10 @@ pub(super) fn plan(scene: &Scene, settings: &Settings, accel: AccelChoice) -> Pl
         (Mode::Path, EstimatorChoice::Book) => scene.sampled_shapes(&flat).len(),
         _ => 0,
     };
+    let nee = match (scene.mode, settings.estimator) {
+        (Mode::Path, EstimatorChoice::NeeMis) => Scene::emitter_shapes(&flat).len(),
+        _ => 0,
+    };
     let kinds: KindSet = match scene.mode {
         Mode::Path => {
             let media = (!flat.media.is_empty()).then_some(Kind::Isotropic);
@@ -107,6 +112,7 @@ pub(super) fn plan(scene: &Scene, settings: &Settings, accel: AccelChoice) -> Pl
         quads: choose_quad_accel(accel, flat.quads.len(), scene.mode),
         moving: choose_quad_accel(accel, flat.spheres.iter().filter(|s| s.center1.is_some()).count(), scene.mode),
         sample_toward,
+        nee,
     }
 }
 
@@ -240,6 +246,8 @@ pub(super) fn prepare(
             }
         }
     }
+    let emitters = if plan.nee > 0 { emitters(&spheres, &quads, &materials) } else { Emitters::default() };
+    debug_assert_eq!(emitters.len(), plan.nee);
     let quad_bvh = (plan.quads.is_some_and(|a| a != Accel::Brute)).then(|| QuadBvh::build_quads(&quads, extent));
     let moving_bvh = (plan.moving.is_some_and(|a| a != Accel::Brute)).then(|| MovingBvh::build_moving(&moving, extent));
     Prepared {
@@ -264,8 +272,9 @@ pub(super) fn prepare(
         moving,
         moving_bvh,
         estimator,
-        bounces: if lights.is_empty() { Bounces::BSDF } else { Bounces::BOOK },
+        bounces: if lights.is_empty() && emitters.is_empty() { Bounces::BSDF } else { Bounces::BOOK },
         lights,
+        emitters,
     }
 }
 
@@ -273,6 +282,35 @@ pub(super) fn prepare(
 fn push<T>(table: &mut Vec<T>, v: T) -> u32 {
     table.push(v);
     table.len() as u32 - 1
+}
+
+/// The lights `nee-mis` samples, from the prepared primitives: the static
+/// quads, then the static spheres, of the light kind, in primitive order (as
+/// [`Scene::emitter_shapes`] lists them), with their rows' radiance.
+fn emitters(spheres: &Spheres, quads: &Quads, materials: &MaterialTables) -> Emitters {
+    let mut e = Emitters { of_row: vec![Emitters::UNSAMPLED; materials.light.len()], ..Emitters::default() };
+    let add = |e: &mut Emitters, row: u32| {
+        let (emit, one_sided) = materials.light[row as usize];
+        e.of_row[row as usize] = (e.emit.len()) as u32;
+        e.emit.push(emit);
+        e.one_sided.push(one_sided);
+    };
+    for i in 0..quads.len {
+        if quads.kind[i] == Kind::DiffuseLight {
+            let r = &quads.rec[i];
+            e.shapes.quads.push(LightQuad::new(r.q, r.u, r.v));
+            add(&mut e, quads.row[i]);
+        }
+    }
+    for i in 0..spheres.len {
+        if spheres.kind[i] == Kind::DiffuseLight {
+            e.shapes
+                .spheres
+                .push(LightSphere { c: [spheres.cx[i], spheres.cy[i], spheres.cz[i]], r: spheres.r[i].abs() });
+            add(&mut e, spheres.row[i]);
+        }
+    }
+    e
 }
 
 #[cfg(test)]

@@ -13,8 +13,13 @@
 //!     light pass (scenes with lights): throughput x emission -> the result; the path ends
 //!     texture passes (scenes with textures): one per texture kind, over the
 //!         lambertian hits of that kind, writing each path's albedo
-//!     one scatter pass per material kind the scene uses (W paths at a time, gathered)
+//!     one scatter pass per material kind the scene uses (W paths at a time, gathered);
+//!         under nee-mis the diffuse passes also append a shadow ray per path
+//!         toward a light sample to the shadow queue
 //!     compaction: survivors are appended to the next bounce's arrays
+//!     shadow pass (nee-mis): W contiguous shadow rays per packet, any-hit
+//!         (each lane leaves at its first blocker), the unblocked ones'
+//!         radiance added to their paths' results
 //! add results to the film in sample order
 //! ```
 //!
@@ -28,10 +33,13 @@
 
 use super::{background, normal_colour, texture_albedo};
 use crate::choice::Mode;
-use crate::estimator::{book_mixture, cosine_pdf, roulette, roulette_applies, ISOTROPIC_PDF};
+use crate::estimator::{
+    book_mixture, cosine_pdf, mis_bsdf, next_event, roulette, roulette_applies, shadow_tmax, ISOTROPIC_PDF,
+};
 use crate::film::TileFilm;
 use crate::geometry::{
-    centre_at, quad_surface, sample_media, spawn, surface, Shade, Surface, MEDIUM_BASE, MISS, MOVING_BASE, QUAD_BASE,
+    centre_at, quad_surface, sample_media, spawn, surface, transmittance, Shade, Surface, MEDIUM_BASE, MISS,
+    MOVING_BASE, QUAD_BASE,
 };
 use crate::material::{dielectric, emission, lambertian, metal, Kind};
 use crate::plan::{KindSet, Prepared};
@@ -87,6 +95,9 @@ struct Paths {
     /// The path's time (motion blur): written and read only for a scene
     /// with moving spheres.
     time: Arr<f32>,
+    /// The density its last direction was drawn with (0: the camera's or a
+    /// specular one): written and read only under `nee-mis`.
+    pdf: Arr<f32>,
     len: usize,
 }
 
@@ -101,12 +112,14 @@ impl Paths {
             rng: [u(), u(), u(), u()],
             slot: u(),
             time: f(),
+            pdf: f(),
             len: 0,
         }
     }
 
     /// Appends the lanes of `alive` (a bitmask) of a packet: SIMD stream
-    /// compaction. `time`: the paths' times, for a scene with moving spheres.
+    /// compaction. `time`: the paths' times, for a scene with moving
+    /// spheres; `pdf`: their directions' densities, under `nee-mis`.
     #[cfg_attr(not(feature = "phases"), inline(always))]
     #[cfg_attr(feature = "phases", inline(never))]
     #[allow(clippy::too_many_arguments)]
@@ -119,6 +132,7 @@ impl Paths {
         rng: [W::U; 4],
         slot: W::U,
         time: Option<W>,
+        pdf: Option<W>,
     ) {
         let at = self.len;
         debug_assert!(at <= MAX_PATHS);
@@ -137,12 +151,67 @@ impl Paths {
         if let Some(t) = time {
             put(&mut self.time, t);
         }
+        if let Some(p) = pdf {
+            put(&mut self.pdf, p);
+        }
         self.len = at + W::compress_store_u_pow2(slot, alive, &mut self.slot, at);
     }
 
     #[inline(always)]
     fn v3<W: Wide>(v: &[Arr<f32>; 3], i: usize) -> V3<W> {
         V3::new(W::load_pow2(&v[0], i), W::load_pow2(&v[1], i), W::load_pow2(&v[2], i))
+    }
+}
+
+/// The shadow rays of a bounce (`nee-mis`), structure of arrays: at most
+/// one per path, appended by the diffuse scatter passes, traced by the
+/// shadow pass.
+struct Shadows {
+    o: [Arr<f32>; 3],
+    d: [Arr<f32>; 3],
+    tmax: Arr<f32>,
+    /// What each carries to its path's result if nothing blocks it.
+    c: [Arr<f32>; 3],
+    slot: Arr<u32>,
+    /// Scenes with moving spheres: the path's time.
+    time: Arr<f32>,
+    len: usize,
+}
+
+impl Shadows {
+    fn new() -> Self {
+        let f = || arr(0.0f32);
+        Shadows {
+            o: [f(), f(), f()],
+            d: [f(), f(), f()],
+            tmax: f(),
+            c: [f(), f(), f()],
+            slot: arr(0),
+            time: f(),
+            len: 0,
+        }
+    }
+
+    /// Appends the lanes of `keep` (a bitmask): SIMD stream compaction.
+    #[inline(always)]
+    #[allow(clippy::too_many_arguments)]
+    fn append<W: Wide>(&mut self, keep: u32, o: V3<W>, d: V3<W>, tmax: W, c: V3<W>, slot: W::U32, time: Option<W>) {
+        let at = self.len;
+        debug_assert!(at + keep.count_ones() as usize <= MAX_PATHS);
+        let put = |v: &mut Arr<f32>, x: W| {
+            let v: &mut [u32; CAP] = bytemuck::cast_slice_mut(&mut v[..]).try_into().unwrap();
+            W::compress_store_u_pow2(x.to_bits(), keep, v, at)
+        };
+        for (a, (ov, dv, cv)) in [(o.x, d.x, c.x), (o.y, d.y, c.y), (o.z, d.z, c.z)].into_iter().enumerate() {
+            put(&mut self.o[a], ov);
+            put(&mut self.d[a], dv);
+            put(&mut self.c[a], cv);
+        }
+        put(&mut self.tmax, tmax);
+        if let Some(t) = time {
+            put(&mut self.time, t);
+        }
+        self.len = at + W::compress_store_u_pow2(slot, keep, &mut self.slot, at);
     }
 }
 
@@ -172,6 +241,9 @@ pub struct Workspace {
     queue: Option<[Arr<u32>; MISS_QUEUE + 1]>,
     /// Each path's colour, by its slot.
     result: Arr<[f32; 3]>,
+    /// The bounce's shadow rays (`nee-mis`), and how many the tile traced.
+    shadows: Shadows,
+    shadow_rays: u64,
     /// Scenes with textures: the albedo of each textured lambertian hit, by
     /// its index in `cur`, written by the texture passes, read by the
     /// lambertian pass; and the texture queues.
@@ -197,6 +269,8 @@ impl Default for Workspace {
             t: arr(0.0),
             queue: Some(std::array::from_fn(|_| arr(0))),
             result: arr([0.0; 3]),
+            shadows: Shadows::new(),
+            shadow_rays: 0,
             albedo: [arr(0.0), arr(0.0), arr(0.0)],
             tex_queue: Some(std::array::from_fn(|_| arr(0))),
             active: Vec::with_capacity(MAX_PATHS),
@@ -262,6 +336,7 @@ fn render_tile_in<W: Wide, P: Probe, S: PathSampler, const M: bool>(
     let est = &prep.estimator;
     ws.active.clear();
     ws.active.extend(0..px as u32);
+    ws.shadow_rays = 0;
     let mut rays = 0;
     let mut done = samples.start;
     while done < samples.end && !ws.active.is_empty() {
@@ -272,6 +347,7 @@ fn render_tile_in<W: Wide, P: Probe, S: PathSampler, const M: bool>(
             ws.active.retain(|&l| !a.converged(tile, l as usize));
         }
     }
+    tile.shadow_rays += ws.shadow_rays;
     rays
 }
 
@@ -383,6 +459,9 @@ fn generate<W: Wide, P: Probe, S: PathSampler, const M: bool>(
             da.store_pow2(&mut p.d[a], i);
             W::splat(1.0).store_pow2(&mut p.thr[a], i);
         }
+        if prep.plan.nee > 0 {
+            W::splat(0.0).store_pow2(&mut p.pdf, i);
+        }
         for (w, words) in S::lane_words::<W>(&rng).into_iter().enumerate().take(S::WORDS) {
             W::store_u_pow2(words, &mut p.rng[w], i);
         }
@@ -417,7 +496,13 @@ fn bounce<W: Wide, P: Probe, S: PathSampler, const M: bool>(
     if !prep.media.is_empty() {
         medium_pass::<W, S>(prep, sampler, ws, n, depth);
     }
-    shade_misses::<W>(prep, ws, n);
+    let nee = prep.plan.nee > 0;
+    if nee {
+        shade_misses::<W, true>(prep, ws, n);
+        ws.shadows.len = 0;
+    } else {
+        shade_misses::<W, false>(prep, ws, n);
+    }
     let mut len = [0usize; MISS_QUEUE + 1];
     let mut queues = ws.queue.take().expect("the queues are put back after every bounce");
     // The sphere and quad arrays have a power-of-two length above every hit
@@ -486,7 +571,11 @@ fn bounce<W: Wide, P: Probe, S: PathSampler, const M: bool>(
                     let Hits { srf, albedo: emit, param, .. } = surfaces::<W, P, M>(prep, ws, idx, active, probe);
                     let one_sided = param.gt(W::splat(0.0));
                     let c = v3_gather::<W>(&ws.cur.thr, idx).mul_elem(emission(emit, one_sided, srf.front));
-                    write_results(ws, idx, active, c);
+                    if nee {
+                        write_results::<W, true>(ws, idx, active, c * light_weight::<W, M>(prep, ws, idx));
+                    } else {
+                        write_results::<W, false>(ws, idx, active, c);
+                    }
                 });
             }
             Mode::Path if kind == Kind::Isotropic && prep.plan.kinds.contains(kind) => {
@@ -495,16 +584,22 @@ fn bounce<W: Wide, P: Probe, S: PathSampler, const M: bool>(
             Mode::Path if kind == Kind::Lambertian && !prep.plan.textures.is_empty() => {
                 textured_lambertian_pass::<W, P, S, M>(prep, sampler, ws, q, qlen, depth, probe);
             }
-            // The book estimator's passes apart: the bsdf estimator's are
-            // the ones it always ran (the same instructions per ray).
+            // The book and nee-mis estimators' passes apart: the bsdf
+            // estimator's are the ones it always ran (the same instructions
+            // per ray).
             Mode::Path if prep.plan.kinds.contains(kind) && prep.plan.sample_toward > 0 => {
                 for_packets::<W, P>(q, qlen, probe, |idx, active, probe| {
-                    scatter::<W, P, S, M>(prep, sampler, ws, kind, depth, idx, active, false, true, probe)
+                    scatter::<W, P, S, M>(prep, sampler, ws, kind, depth, idx, active, false, Dirs::Book, probe)
+                });
+            }
+            Mode::Path if prep.plan.kinds.contains(kind) && nee => {
+                for_packets::<W, P>(q, qlen, probe, |idx, active, probe| {
+                    scatter::<W, P, S, M>(prep, sampler, ws, kind, depth, idx, active, false, Dirs::Nee, probe)
                 });
             }
             Mode::Path if prep.plan.kinds.contains(kind) => {
                 for_packets::<W, P>(q, qlen, probe, |idx, active, probe| {
-                    scatter::<W, P, S, M>(prep, sampler, ws, kind, depth, idx, active, false, false, probe)
+                    scatter::<W, P, S, M>(prep, sampler, ws, kind, depth, idx, active, false, Dirs::Bsdf, probe)
                 });
             }
             Mode::Path => debug_assert!(qlen == 0, "the plan left out a kind that was hit"),
@@ -516,8 +611,59 @@ fn bounce<W: Wide, P: Probe, S: PathSampler, const M: bool>(
         }
     }
     ws.queue = Some(queues);
+    if nee && ws.shadows.len > 0 {
+        shadow_pass::<W, P, M>(prep, ws, probe);
+    }
     std::mem::swap(&mut ws.cur, &mut ws.next);
     n as u64
+}
+
+/// How a diffuse vertex chooses its direction: the estimator of the render,
+/// a literal at each scatter pass's call, so that each is compiled apart.
+#[derive(Clone, Copy, Debug, PartialEq, Eq)]
+enum Dirs {
+    /// The material's density (`bsdf`).
+    Bsdf,
+    /// The book's mixture.
+    Book,
+    /// The material's density, and a light sample on the shadow queue (`nee-mis`).
+    Nee,
+}
+
+/// The power heuristic's weight of the lights a packet of queued paths hit
+/// (`nee-mis`): each lane's light density in its path's direction from the
+/// ray's origin, against the density its direction was drawn with.
+#[inline(never)]
+fn light_weight<W: Wide, const M: bool>(prep: &Prepared, ws: &Workspace, idx: &W::Idx) -> W {
+    let hit = W::gather_u_pow2(&ws.hit, idx);
+    let e = &prep.emitters;
+    let shape = W::u_from_fn(|k| e.of_row[material_row::<M>(prep, W::lane_u(hit, k))]);
+    let o = v3_gather::<W>(&ws.cur.o, idx);
+    let d = v3_gather::<W>(&ws.cur.d, idx);
+    mis_bsdf(W::gather_pow2(&ws.cur.pdf, idx), e.pdf_of(o, d, shape))
+}
+
+/// The shadow rays of the bounce (`nee-mis`), W contiguous rays per packet:
+/// any-hit queries ([`Prepared::occluded`]); what an unblocked one carries
+/// (times the media's transmittance, in a scene with media) is added to its
+/// path's result. Out of line: it runs once per bounce.
+#[inline(never)]
+fn shadow_pass<W: Wide, P: Probe, const M: bool>(prep: &Prepared, ws: &mut Workspace, probe: &mut P) {
+    let n = ws.shadows.len;
+    for i in (0..n).step_by(W::LANES) {
+        let sh = &ws.shadows;
+        let live = low_bits((n - i).min(W::LANES));
+        let (o, d) = (Paths::v3::<W>(&sh.o, i), Paths::v3::<W>(&sh.d, i));
+        let tmax = W::load_pow2(&sh.tmax, i);
+        let blocked = prep.occluded::<W, P, M>(o, d, tmax, live, || W::load_pow2(&sh.time, i), probe);
+        probe.lanes(Stage::Intersect, live.count_ones(), W::LANES as u32);
+        let c = Paths::v3::<W>(&sh.c, i);
+        let c = if prep.media.is_empty() { c } else { c * transmittance(&prep.media, o, d, tmax) };
+        let lanes = live & !W::mask_bits(blocked);
+        let slot = W::load_u_pow2(&sh.slot, i);
+        write_lanes::<W, true>(&mut ws.result, slot, lanes, c);
+    }
+    ws.shadow_rays += n as u64;
 }
 
 /// The closest hits of the first `n` paths, W contiguous rays per packet,
@@ -602,16 +748,25 @@ fn isotropic_pass<W: Wide, P: Probe, S: PathSampler, const M: bool>(
         }));
         rng.seek(prep.bounces.scatter(depth));
         let dir = unit_vector(&mut rng);
+        let thr = v3_gather::<W>(&cur.thr, idx);
+        let nee = prep.plan.nee > 0;
         let (dir, albedo) = if prep.plan.sample_toward == 0 {
+            if nee && depth + 1 < prep.settings.max_depth {
+                let (ld, t, carry) =
+                    next_event(&prep.emitters, p, |_| W::splat(ISOTROPIC_PDF), prep.bounces.light(depth), &mut rng);
+                let c = thr.mul_elem(albedo.mul_elem(carry));
+                queue_shadow::<W, M>(ws, idx, active, Shadow { o: p, d: ld, tmax: shadow_tmax(t, W::splat(0.0)), c });
+            }
             (dir, albedo)
         } else {
             let (dir, w) =
                 book_mixture(&prep.lights, p, dir, |_| W::splat(ISOTROPIC_PDF), prep.bounces.light(depth), &mut rng);
             (dir, albedo * w)
         };
-        let thr = v3_gather::<W>(&cur.thr, idx).mul_elem(albedo);
+        let thr = thr.mul_elem(albedo);
         let all = W::mask_from_bits(u32::MAX);
-        continue_paths::<W, S, M>(prep, ws, idx, active, depth, prep.bounces, rng, thr, all, p, dir);
+        let pdf = nee.then(|| W::splat(ISOTROPIC_PDF));
+        continue_paths::<W, S, M>(prep, ws, idx, active, depth, prep.bounces, rng, thr, all, p, dir, pdf);
     });
 }
 
@@ -619,8 +774,10 @@ fn isotropic_pass<W: Wide, P: Probe, S: PathSampler, const M: bool>(
 /// in path order: their throughput and directions are loaded, not gathered
 /// through a queue. (Out of line: it runs once per bounce, and inlined into
 /// the wavefront's loop it costs the traversal's code registers.)
+/// `ADD`: added to the result (`nee-mis`, whose light samples may have
+/// added to it), else written.
 #[inline(never)]
-fn shade_misses<W: Wide>(prep: &Prepared, ws: &mut Workspace, n: usize) {
+fn shade_misses<W: Wide, const ADD: bool>(prep: &Prepared, ws: &mut Workspace, n: usize) {
     for i in (0..n).step_by(W::LANES) {
         let hit = W::load_u_pow2(&ws.hit, i);
         let missed = W::mask_bits(!W::u_lt(hit, W::u_splat(MISS))) & low_bits(n - i);
@@ -628,7 +785,7 @@ fn shade_misses<W: Wide>(prep: &Prepared, ws: &mut Workspace, n: usize) {
             let d = Paths::v3::<W>(&ws.cur.d, i);
             let c = Paths::v3::<W>(&ws.cur.thr, i).mul_elem(background(&prep.sky, d));
             let slot = W::load_u_pow2(&ws.cur.slot, i);
-            write_lanes::<W>(&mut ws.result, slot, missed, c);
+            write_lanes::<W, ADD>(&mut ws.result, slot, missed, c);
         }
     }
 }
@@ -678,9 +835,15 @@ fn textured_lambertian_pass<W: Wide, P: Probe, S: PathSampler, const M: bool>(
         });
     }
     ws.tex_queue = Some(tq);
+    let dirs = if prep.plan.sample_toward > 0 {
+        Dirs::Book
+    } else if prep.plan.nee > 0 {
+        Dirs::Nee
+    } else {
+        Dirs::Bsdf
+    };
     for_packets::<W, P>(queue, len, probe, |idx, active, probe| {
-        let book = prep.plan.sample_toward > 0;
-        scatter::<W, P, S, M>(prep, sampler, ws, Kind::Lambertian, depth, idx, active, true, book, probe)
+        scatter::<W, P, S, M>(prep, sampler, ws, Kind::Lambertian, depth, idx, active, true, dirs, probe)
     });
 }
 
@@ -721,21 +884,23 @@ fn for_packets<W: Wide, P: Probe>(
 }
 
 #[inline(always)]
-fn write_results<W: Wide>(ws: &mut Workspace, idx: &W::Idx, active: usize, c: V3<W>) {
+fn write_results<W: Wide, const ADD: bool>(ws: &mut Workspace, idx: &W::Idx, active: usize, c: V3<W>) {
     let slot = W::gather_u_pow2(&ws.cur.slot, idx);
-    write_lanes::<W>(&mut ws.result, slot, low_bits(active), c);
+    write_lanes::<W, ADD>(&mut ws.result, slot, low_bits(active), c);
 }
 
-/// `result[slot[k]] = c[k]` for the lanes k set in `lanes`.
+/// `result[slot[k]] = c[k]` (`ADD`: `+= c[k]`) for the lanes k set in `lanes`.
 #[inline(always)]
-fn write_lanes<W: Wide>(result: &mut Arr<[f32; 3]>, slot: W::U32, mut lanes: u32, c: V3<W>) {
+fn write_lanes<W: Wide, const ADD: bool>(result: &mut Arr<[f32; 3]>, slot: W::U32, mut lanes: u32, c: V3<W>) {
     let slot = W::idx_of(slot);
     while lanes != 0 {
         let k = lanes.trailing_zeros() as usize;
         lanes &= lanes - 1;
         let s = slot.as_ref()[k] as usize;
         debug_assert!(s < MAX_PATHS);
-        result[s & MASK] = [c.x.lane(k), c.y.lane(k), c.z.lane(k)];
+        let c = [c.x.lane(k), c.y.lane(k), c.z.lane(k)];
+        let r = &mut result[s & MASK];
+        *r = if ADD { [r[0] + c[0], r[1] + c[1], r[2] + c[2]] } else { c };
     }
 }
 
@@ -845,7 +1010,7 @@ fn debug_shade<W: Wide, P: Probe, const M: bool>(
         // The flat colour (`MaterialTables::flat_colour`): the albedo, white for glass.
         Mode::Flat | Mode::Gradient | Mode::Path => hits.albedo,
     };
-    write_results(ws, idx, active, c);
+    write_results::<W, false>(ws, idx, active, c);
 }
 
 /// Scatters a packet of paths that hit material `kind`; survivors join the next bounce.
@@ -861,13 +1026,15 @@ fn scatter<W: Wide, P: Probe, S: PathSampler, const M: bool>(
     idx: &W::Idx,
     active: usize,
     textured: bool,
-    book: bool,
+    dirs: Dirs,
     probe: &mut P,
 ) {
-    // `book`: the plan's book estimator (its sampler layout, its mixture at
-    // lambertian vertices); a literal at the call, so each is compiled apart.
-    debug_assert_eq!(book, prep.plan.sample_toward > 0);
-    let dims = if book { prep.bounces } else { Bounces::BSDF };
+    // `dirs`: the plan's estimator (its sampler layout, its mixture or its
+    // light sample at lambertian vertices); a literal at the call, so each
+    // is compiled apart.
+    debug_assert_eq!(dirs == Dirs::Book, prep.plan.sample_toward > 0);
+    debug_assert_eq!(dirs == Dirs::Nee, prep.plan.nee > 0);
+    let dims = if dirs == Dirs::Bsdf { Bounces::BSDF } else { prep.bounces };
     let Hits { d, srf, albedo, param } = surfaces::<W, P, M>(prep, ws, idx, active, probe);
     // A textured lambertian's record has parameter 1: its albedo is the one
     // its texture pass wrote.
@@ -883,15 +1050,27 @@ fn scatter<W: Wide, P: Probe, S: PathSampler, const M: bool>(
     }));
     rng.seek(dims.scatter(depth));
     let all = W::mask_from_bits(u32::MAX);
+    let thr = v3_gather::<W>(&ws.cur.thr, idx);
     let (dir, alive, albedo) = match kind {
         Kind::Lambertian => {
             let dir = lambertian(srf.n, &mut rng);
-            if !book {
-                (dir, all, albedo)
-            } else {
-                let (dir, w) =
-                    book_mixture(&prep.lights, srf.p, dir, |d| cosine_pdf(srf.n, d), dims.light(depth), &mut rng);
-                (dir, all, albedo * w)
+            match dirs {
+                Dirs::Bsdf => (dir, all, albedo),
+                Dirs::Book => {
+                    let (dir, w) =
+                        book_mixture(&prep.lights, srf.p, dir, |d| cosine_pdf(srf.n, d), dims.light(depth), &mut rng);
+                    (dir, all, albedo * w)
+                }
+                Dirs::Nee => {
+                    if depth + 1 < prep.settings.max_depth {
+                        let (ld, t, carry) =
+                            next_event(&prep.emitters, srf.p, |d| cosine_pdf(srf.n, d), dims.light(depth), &mut rng);
+                        let c = thr.mul_elem(albedo.mul_elem(carry));
+                        let shadow = Shadow { o: spawn(&srf, ld), d: ld, tmax: shadow_tmax(t, srf.offset), c };
+                        queue_shadow::<W, M>(ws, idx, active, shadow);
+                    }
+                    (dir, all, albedo)
+                }
             }
         }
         Kind::Metal => {
@@ -903,8 +1082,36 @@ fn scatter<W: Wide, P: Probe, S: PathSampler, const M: bool>(
         Kind::DiffuseLight | Kind::Isotropic => (d, !all, albedo),
     };
     // The albedo of a dielectric's record is white, as the scalar kernel's [1; 3].
-    let thr = v3_gather::<W>(&ws.cur.thr, idx).mul_elem(albedo);
-    continue_paths::<W, S, M>(prep, ws, idx, active, depth, dims, rng, thr, alive, spawn(&srf, dir), dir);
+    let thr = thr.mul_elem(albedo);
+    // Under nee-mis, the density of the direction, for the weight of a light
+    // it reaches: the cosine lobe's, 0 for a specular bounce.
+    let pdf =
+        (dirs == Dirs::Nee).then(|| if kind == Kind::Lambertian { cosine_pdf(srf.n, dir) } else { W::splat(0.0) });
+    continue_paths::<W, S, M>(prep, ws, idx, active, depth, dims, rng, thr, alive, spawn(&srf, dir), dir, pdf);
+}
+
+/// A packet's light samples (`nee-mis`): shadow rays from `o` along `d` to
+/// `tmax`, each carrying `c` to its path's result if nothing blocks it.
+struct Shadow<W: Wide> {
+    o: V3<W>,
+    d: V3<W>,
+    tmax: W,
+    c: V3<W>,
+}
+
+/// Appends the real lanes of a packet's light samples that carry anything
+/// to the shadow queue, as the scalar kernel traces exactly those.
+#[inline(always)]
+fn queue_shadow<W: Wide, const M: bool>(ws: &mut Workspace, idx: &W::Idx, active: usize, sh: Shadow<W>) {
+    let zero = W::splat(0.0);
+    let carries = sh.c.x.gt(zero) | sh.c.y.gt(zero) | sh.c.z.gt(zero);
+    let keep = W::mask_bits(carries) & low_bits(active);
+    if keep == 0 {
+        return;
+    }
+    let slot = W::gather_u_pow2(&ws.cur.slot, idx);
+    let time = if M { Some(W::gather_pow2(&ws.cur.time, idx)) } else { None };
+    ws.shadows.append::<W>(keep, sh.o, sh.d, sh.tmax, sh.c, slot, time);
 }
 
 /// The end of every scatter pass: paths whose throughput is zero die, then
@@ -926,6 +1133,7 @@ fn continue_paths<W: Wide, S: PathSampler, const M: bool>(
     alive: <W as crate::real::Real>::Mask,
     o: V3<W>,
     dir: V3<W>,
+    pdf: Option<W>,
 ) {
     let zero = W::splat(0.0);
     let dark = thr.x.eq(zero) & thr.y.eq(zero) & thr.z.eq(zero);
@@ -941,5 +1149,5 @@ fn continue_paths<W: Wide, S: PathSampler, const M: bool>(
     let cur = &ws.cur;
     let slot = W::gather_u_pow2(&cur.slot, idx);
     let time = if M { Some(W::gather_pow2(&cur.time, idx)) } else { None };
-    ws.next.append::<W, S>(alive, o, dir, thr, S::lane_words::<W>(&rng), slot, time);
+    ws.next.append::<W, S>(alive, o, dir, thr, S::lane_words::<W>(&rng), slot, time, pdf);
 }

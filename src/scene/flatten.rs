@@ -183,6 +183,13 @@ impl Scene {
         if !self.sample_toward.is_empty() {
             return self.sample_toward.clone();
         }
+        Scene::emitter_shapes(flat)
+    }
+
+    /// The scene's lights that can be sampled: its static spheres and quads
+    /// of `diffuse_light` (groups' included, in world space, from `flat`),
+    /// quads first. Moving lights are reached by scattered directions only.
+    pub fn emitter_shapes(flat: &Flat) -> Vec<Shape> {
         let light = |m: &Material| matches!(m, Material::DiffuseLight { .. });
         let quads = flat.quads.iter().filter(|q| light(&q.material)).map(|q| Shape::Quad { q: q.q, u: q.u, v: q.v });
         let spheres = flat

@@ -79,7 +79,7 @@ impl Variant {
                 }
                 _ => {
                     return Err(bad(format!(
-                        "unknown or repeated variant '{part}' in '{text}' (use plain, rr, rr:N, adaptive, adaptive:THRESHOLD, sobol, bsdf, book, or e.g. sobol+rr+adaptive:0.05)"
+                        "unknown or repeated variant '{part}' in '{text}' (use plain, rr, rr:N, adaptive, adaptive:THRESHOLD, sobol, bsdf, book, nee-mis, or e.g. sobol+rr+adaptive:0.05)"
                     )))
                 }
             }
