@@ -312,7 +312,9 @@ pub mod layout {
     impl Bounces {
         /// The `bsdf` estimator's: [`scatter`], [`roulette`] (every documented image).
         pub const BSDF: Bounces = Bounces { per_bounce: PER_BOUNCE };
-        /// The `book` estimator's: scattering, roulette, then 3 light dimensions.
+        /// The `book` and `nee-mis` estimators': scattering, roulette, then 3
+        /// light dimensions (the mixture's choice or the light's pick, then
+        /// the point on the shape).
         pub const BOOK: Bounces = Bounces { per_bounce: PER_BOUNCE + 3 };
 
         /// The first of the two scattering dimensions of bounce `depth`.
@@ -328,7 +330,7 @@ pub mod layout {
         }
 
         /// The first of the three light-sample dimensions of bounce `depth`
-        /// (the `book` layout only).
+        /// (the `book` layout only, which `nee-mis` shares).
         #[inline(always)]
         pub const fn light(self, depth: u32) -> u32 {
             self.scatter(depth).wrapping_add(3)

@@ -201,18 +201,22 @@ impl Scene {
     }
 
     /// The estimator a render of this scene takes when neither its render
-    /// table nor an override names one: `book` for a path-traced scene with
-    /// shapes to sample toward (its lights, at most
-    /// [`crate::limits::MAX_SAMPLED_SHAPES`], or a `sample_toward` list),
-    /// which measured faster to every error than `bsdf` on the scenes with
-    /// lights (docs/sampling.md); `bsdf` for the others (book one's scenes,
-    /// lit by the sky, keep their images).
+    /// table nor an override names one: `nee-mis` for a path-traced scene
+    /// with lights (at most [`crate::limits::MAX_SAMPLED_SHAPES`] static
+    /// ones), measured the fastest to `bsdf`'s error on four of the five
+    /// scenes with lights measured (docs/sampling.md; `nw-final`, the fifth,
+    /// names `book` in its render table); `book` for one with a
+    /// `sample_toward` list and no lights to sample; `bsdf` for the others
+    /// (book one's scenes, lit by the sky, keep their images).
     pub fn default_estimator(&self) -> EstimatorChoice {
         if self.mode != Mode::Path {
             return EstimatorChoice::Bsdf;
         }
-        let n = self.sampled_shapes(&self.flatten()).len();
-        if n > 0 && n <= crate::limits::MAX_SAMPLED_SHAPES {
+        let flat = self.flatten();
+        let fits = |n: usize| n > 0 && n <= crate::limits::MAX_SAMPLED_SHAPES;
+        if fits(Scene::emitter_shapes(&flat).len()) {
+            EstimatorChoice::NeeMis
+        } else if fits(self.sampled_shapes(&flat).len()) {
             EstimatorChoice::Book
         } else {
             EstimatorChoice::Bsdf
