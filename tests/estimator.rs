@@ -269,12 +269,39 @@ fn the_book_estimator_keeps_the_mean() {
         ("nw-simple-light", preset("nw-simple-light").unwrap(), 16, 9, 256),
         ("inside a sampled sphere", inside_a_sampled_sphere(), 16, 9, 256),
     ];
+    keeps_the_mean(cases, book, |j| j.plan().sample_toward > 0);
+}
+
+/// For each case (name, scene, width, height, paths per pixel): the scene
+/// under `estimator`'s settings (checked by `runs`, say, that its samples
+/// run) has the bsdf estimator's expected image ([`same_mean`]).
+fn keeps_the_mean<const N: usize>(
+    cases: [(&str, Scene, u32, u32, u32); N],
+    estimator: fn(Settings) -> Settings,
+    runs: fn(&rtow::Job) -> bool,
+) {
     for (name, sc, w, h, n) in cases {
         let plain = job(&sc, settings(w, h, n, 11), RenderOptions::default());
-        let mixed = job(&sc, book(settings(w, h, n, 12)), RenderOptions::default());
-        assert!(mixed.plan().sample_toward > 0, "{name}: the mixture runs");
-        same_mean(name, plain.prepared(), mixed.prepared(), n);
+        let other = job(&sc, estimator(settings(w, h, n, 12)), RenderOptions::default());
+        assert!(runs(&other), "{name}: the estimator runs");
+        same_mean(name, plain.prepared(), other.prepared(), n);
     }
+}
+
+/// `sc` rendered by the scalar kernel, simd8 and simd16 under `s`: the
+/// same image bit for bit, the same rays and shadow rays, no sample
+/// rejected; returns the scalar render.
+fn same_in_every_kernel(name: &str, sc: &Scene, s: Settings) -> Rendered {
+    let runs: Vec<Rendered> = [KernelChoice::Scalar, KernelChoice::Simd8, KernelChoice::Simd16]
+        .into_iter()
+        .map(|kernel| render(&job(sc, s, RenderOptions { kernel, ..opts(kernel, false, None) }), None).unwrap())
+        .collect();
+    assert_eq!(runs[0].stats.rejected_samples, 0, "{name}");
+    for r in &runs[1..] {
+        assert_same(&runs[0], r, &format!("{name} {:?} {}", s.sampler, r.stats.kernel));
+        assert_eq!(runs[0].stats.shadow_rays, r.stats.shadow_rays, "{name}: shadow rays");
+    }
+    runs.into_iter().next().unwrap()
 }
 
 /// What the mixture is for: on the book's Cornell box (a small light) it
@@ -306,16 +333,7 @@ fn the_book_estimator_is_bit_identical_across_kernels() {
             let s = Settings { sampler, ..book(common::settings(24, 20, 3, 12, 4)) };
             let j = job(&sc, s, RenderOptions::default());
             assert!(j.plan().sample_toward > 0, "{name}");
-            let runs: Vec<Rendered> = [KernelChoice::Scalar, KernelChoice::Simd8, KernelChoice::Simd16]
-                .into_iter()
-                .map(|kernel| {
-                    render(&job(&sc, s, RenderOptions { kernel, ..opts(kernel, false, None) }), None).unwrap()
-                })
-                .collect();
-            assert_eq!(runs[0].stats.rejected_samples, 0, "{name}");
-            for r in &runs[1..] {
-                assert_same(&runs[0], r, &format!("{name} {sampler:?} {}", r.stats.kernel));
-            }
+            same_in_every_kernel(name, &sc, s);
         }
     }
 }
@@ -382,12 +400,7 @@ fn the_nee_mis_estimator_keeps_the_mean() {
         ("nw-simple-light", preset("nw-simple-light").unwrap(), 16, 9, 256),
         ("a moving light", moving_light(), 16, 9, 256),
     ];
-    for (name, sc, w, h, n) in cases {
-        let plain = job(&sc, settings(w, h, n, 11), RenderOptions::default());
-        let with_nee = job(&sc, nee(settings(w, h, n, 12)), RenderOptions::default());
-        assert!(with_nee.plan().nee > 0, "{name}: light samples run");
-        same_mean(name, plain.prepared(), with_nee.prepared(), n);
-    }
+    keeps_the_mean(cases, nee, |j| j.plan().nee > 0);
 }
 
 /// What it is for: on the book's Cornell box it has less variance than the
@@ -422,18 +435,8 @@ fn the_nee_mis_estimator_is_bit_identical_across_kernels() {
         let sc = common::self_contained(&sc);
         for sampler in [Sampler::Independent, Sampler::SOBOL] {
             let s = Settings { sampler, ..nee(common::settings(24, 20, 3, 12, 4)) };
-            let runs: Vec<Rendered> = [KernelChoice::Scalar, KernelChoice::Simd8, KernelChoice::Simd16]
-                .into_iter()
-                .map(|kernel| {
-                    render(&job(&sc, s, RenderOptions { kernel, ..opts(kernel, false, None) }), None).unwrap()
-                })
-                .collect();
-            assert_eq!(runs[0].stats.rejected_samples, 0, "{name}");
-            assert!(runs[0].stats.shadow_rays > 0, "{name}: shadow rays traced");
-            for r in &runs[1..] {
-                assert_same(&runs[0], r, &format!("{name} {sampler:?} {}", r.stats.kernel));
-                assert_eq!(runs[0].stats.shadow_rays, r.stats.shadow_rays, "{name}: shadow rays");
-            }
+            let scalar = same_in_every_kernel(name, &sc, s);
+            assert!(scalar.stats.shadow_rays > 0, "{name}: shadow rays traced");
         }
     }
 }

@@ -169,20 +169,73 @@ pub fn closest_moving_hit<R: Real, P: Probe>(
     best: &mut Closest<R>,
     probe: &mut P,
 ) {
-    let mut tally = WorkTally::<P>::new();
-    for i in 0..m.len() {
-        let c = centre_at(V3::splat3(m.c0(i)), V3::splat3(m.v(i)), time);
-        best.test(o, d, c, R::splat(m.s.r2[i]), MOVING_BASE + i as u32, &mut tally);
-    }
-    tally.flush(probe);
+    moving_brute::<R, P, false>(m, o, d, time, best, probe)
 }
 
 /// Every quad against the rays (brute force), improving `best`.
 #[inline]
 pub fn closest_quad_hit<R: Real, P: Probe>(q: &Quads, o: V3<R>, d: V3<R>, best: &mut Closest<R>, probe: &mut P) {
+    quads_brute::<R, P, false>(q, o, d, best, probe)
+}
+
+/// The brute-force loops of the closest-hit searches and (`ANY`) of the
+/// any-hit queries, which stop once every lane found a hit
+/// ([`Closest::leave_found`]).
+#[inline(always)]
+fn spheres_brute<R: Real, P: Probe, const ANY: bool>(
+    s: &Spheres,
+    o: V3<R>,
+    d: V3<R>,
+    best: &mut Closest<R>,
+    probe: &mut P,
+) {
+    let mut tally = WorkTally::<P>::new();
+    for i in 0..s.len {
+        let c = V3::new(R::splat(s.cx[i]), R::splat(s.cy[i]), R::splat(s.cz[i]));
+        best.test(o, d, c, R::splat(s.r2[i]), i as u32, &mut tally);
+        if ANY && best.leave_found() {
+            break;
+        }
+    }
+    tally.flush(probe);
+}
+
+/// [`spheres_brute`] over the quads.
+#[inline(always)]
+fn quads_brute<R: Real, P: Probe, const ANY: bool>(
+    q: &Quads,
+    o: V3<R>,
+    d: V3<R>,
+    best: &mut Closest<R>,
+    probe: &mut P,
+) {
     let mut tally = WorkTally::<P>::new();
     for (i, rec) in q.rec[..q.len].iter().enumerate() {
         best.test_quad(o, d, rec, QUAD_BASE + i as u32, &mut tally);
+        if ANY && best.leave_found() {
+            break;
+        }
+    }
+    tally.flush(probe);
+}
+
+/// [`spheres_brute`] over the moving spheres at the rays' times.
+#[inline(always)]
+fn moving_brute<R: Real, P: Probe, const ANY: bool>(
+    m: &MovingSpheres,
+    o: V3<R>,
+    d: V3<R>,
+    time: R,
+    best: &mut Closest<R>,
+    probe: &mut P,
+) {
+    let mut tally = WorkTally::<P>::new();
+    for i in 0..m.len() {
+        let c = centre_at(V3::splat3(m.c0(i)), V3::splat3(m.v(i)), time);
+        best.test(o, d, c, R::splat(m.s.r2[i]), MOVING_BASE + i as u32, &mut tally);
+        if ANY && best.leave_found() {
+            break;
+        }
     }
     tally.flush(probe);
 }
@@ -193,12 +246,7 @@ pub fn closest_quad_hit<R: Real, P: Probe>(q: &Quads, o: V3<R>, d: V3<R>, best: 
 #[inline]
 pub fn closest_hit<R: Real, P: Probe>(s: &Spheres, o: V3<R>, d: V3<R>, probe: &mut P) -> (R::U32, R) {
     let mut best = Closest::none();
-    let mut tally = WorkTally::<P>::new();
-    for i in 0..s.len {
-        let c = V3::new(R::splat(s.cx[i]), R::splat(s.cy[i]), R::splat(s.cz[i]));
-        best.test(o, d, c, R::splat(s.r2[i]), i as u32, &mut tally);
-    }
-    tally.flush(probe);
+    spheres_brute::<R, P, false>(s, o, d, &mut best, probe);
     (best.index, best.t)
 }
 
@@ -206,28 +254,13 @@ pub fn closest_hit<R: Real, P: Probe>(s: &Spheres, o: V3<R>, d: V3<R>, probe: &m
 /// (brute force): as [`closest_hit`], stopping once every lane found one.
 #[inline]
 pub fn any_sphere_hit<R: Real, P: Probe>(s: &Spheres, o: V3<R>, d: V3<R>, best: &mut Closest<R>, probe: &mut P) {
-    let mut tally = WorkTally::<P>::new();
-    for i in 0..s.len {
-        let c = V3::new(R::splat(s.cx[i]), R::splat(s.cy[i]), R::splat(s.cz[i]));
-        best.test(o, d, c, R::splat(s.r2[i]), i as u32, &mut tally);
-        if best.leave_found() {
-            break;
-        }
-    }
-    tally.flush(probe);
+    spheres_brute::<R, P, true>(s, o, d, best, probe)
 }
 
 /// Any hit of the rays below `best.t` among the quads (brute force).
 #[inline]
 pub fn any_quad_hit<R: Real, P: Probe>(q: &Quads, o: V3<R>, d: V3<R>, best: &mut Closest<R>, probe: &mut P) {
-    let mut tally = WorkTally::<P>::new();
-    for (i, rec) in q.rec[..q.len].iter().enumerate() {
-        best.test_quad(o, d, rec, QUAD_BASE + i as u32, &mut tally);
-        if best.leave_found() {
-            break;
-        }
-    }
-    tally.flush(probe);
+    quads_brute::<R, P, true>(q, o, d, best, probe)
 }
 
 /// Any hit of the rays below `best.t` among the moving spheres at `time` (brute force).
@@ -240,15 +273,7 @@ pub fn any_moving_hit<R: Real, P: Probe>(
     best: &mut Closest<R>,
     probe: &mut P,
 ) {
-    let mut tally = WorkTally::<P>::new();
-    for i in 0..m.len() {
-        let c = centre_at(V3::splat3(m.c0(i)), V3::splat3(m.v(i)), time);
-        best.test(o, d, c, R::splat(m.s.r2[i]), MOVING_BASE + i as u32, &mut tally);
-        if best.leave_found() {
-            break;
-        }
-    }
-    tally.flush(probe);
+    moving_brute::<R, P, true>(m, o, d, time, best, probe)
 }
 
 /// What the shading needs to know about a hit.

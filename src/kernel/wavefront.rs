@@ -136,10 +136,7 @@ impl Paths {
     ) {
         let at = self.len;
         debug_assert!(at <= MAX_PATHS);
-        let put = |v: &mut Arr<f32>, x: W| {
-            let v: &mut [u32; CAP] = bytemuck::cast_slice_mut(&mut v[..]).try_into().unwrap();
-            W::compress_store_u_pow2(x.to_bits(), alive, v, at)
-        };
+        let put = |v: &mut Arr<f32>, x: W| compress_f32(v, x, alive, at);
         for (a, (ov, dv, tv)) in [(o.x, d.x, thr.x), (o.y, d.y, thr.y), (o.z, d.z, thr.z)].into_iter().enumerate() {
             put(&mut self.o[a], ov);
             put(&mut self.d[a], dv);
@@ -161,6 +158,14 @@ impl Paths {
     fn v3<W: Wide>(v: &[Arr<f32>; 3], i: usize) -> V3<W> {
         V3::new(W::load_pow2(&v[0], i), W::load_pow2(&v[1], i), W::load_pow2(&v[2], i))
     }
+}
+
+/// Stores the lanes of `keep` (a bitmask) of `x` at `v[at..]`, in lane
+/// order (SIMD stream compaction of a per-path f32 array).
+#[inline(always)]
+fn compress_f32<W: Wide>(v: &mut Arr<f32>, x: W, keep: u32, at: usize) -> usize {
+    let v: &mut [u32; CAP] = bytemuck::cast_slice_mut(&mut v[..]).try_into().unwrap();
+    W::compress_store_u_pow2(x.to_bits(), keep, v, at)
 }
 
 /// The shadow rays of a bounce (`nee-mis`), structure of arrays: at most
@@ -198,10 +203,7 @@ impl Shadows {
     fn append<W: Wide>(&mut self, keep: u32, o: V3<W>, d: V3<W>, tmax: W, c: V3<W>, slot: W::U32, time: Option<W>) {
         let at = self.len;
         debug_assert!(at + keep.count_ones() as usize <= MAX_PATHS);
-        let put = |v: &mut Arr<f32>, x: W| {
-            let v: &mut [u32; CAP] = bytemuck::cast_slice_mut(&mut v[..]).try_into().unwrap();
-            W::compress_store_u_pow2(x.to_bits(), keep, v, at)
-        };
+        let put = |v: &mut Arr<f32>, x: W| compress_f32(v, x, keep, at);
         for (a, (ov, dv, cv)) in [(o.x, d.x, c.x), (o.y, d.y, c.y), (o.z, d.z, c.z)].into_iter().enumerate() {
             put(&mut self.o[a], ov);
             put(&mut self.d[a], dv);
