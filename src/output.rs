@@ -391,7 +391,7 @@ impl Outputs {
     /// Renames every staged output into place; all or none (see the module
     /// documentation). Every output must have been staged.
     pub fn commit(mut self) -> Result<()> {
-        // Test hook (tests/hostile.rs): hold the staged files for a while so a
+        // Test hook (tests/suite/hostile.rs): hold the staged files for a while so a
         // test can signal the process between staging and commit.
         if let Some(ms) = std::env::var("RTOW_TEST_PAUSE_BEFORE_COMMIT_MS").ok().and_then(|v| v.parse().ok()) {
             std::thread::sleep(std::time::Duration::from_millis(ms));

@@ -10,7 +10,7 @@
 //! ([`super::sphere_disc`], [`super::sphere_t`]) with that centre, and the
 //! surface is [`super::surface`] with that centre: the hit of a moving sphere
 //! at time `t` *is* the hit of the static sphere at `c(t)`, bit for bit
-//! (`tests/motion.rs`). At `t = 0`, `c0 + 0 v` is exactly `c0`.
+//! (`tests/suite/motion.rs`). At `t = 0`, `c0 + 0 v` is exactly `c0`.
 //!
 //! The hit index of moving sphere `i` is `MOVING_BASE + i`: after every
 //! sphere and every quad in the one order of the closest-hit tie rule, below

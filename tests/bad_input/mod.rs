@@ -1,5 +1,5 @@
-//! Bad scene files, shared by `tests/cli.rs` (through the binary) and
-//! `tests/scene_files.rs` (through the library).
+//! Bad scene files, shared by `tests/suite/cli.rs` (through the binary) and
+//! `tests/suite/scene_files.rs` (through the library).
 #![allow(dead_code)]
 
 /// One bad scene file and what its error must say.

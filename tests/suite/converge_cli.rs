@@ -1,6 +1,6 @@
 //! `rtow converge` and the estimator flags of `rtow render`, through the binary.
 
-mod common;
+use crate::common;
 
 use common::{rtow, Run};
 use std::path::Path;

@@ -4,7 +4,7 @@
 //! scattered rays, `nw-bouncing-spheres` bit for bit across kernels and
 //! samplers, and bad input named.
 
-mod common;
+use crate::common;
 use common::*;
 use glam::DVec3;
 use proptest::prelude::*;

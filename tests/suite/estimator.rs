@@ -5,7 +5,7 @@
 //! unbiased, less noisy where lights are small, the same bits in every
 //! kernel.
 
-mod common;
+use crate::common;
 
 use common::job;
 use rtow::instruments::probe::PathId;

@@ -3,7 +3,7 @@
 //! book's mist, a medium of density 0 that changes no bit, the smoke preset
 //! bit for bit across kernels and samplers, and bad media named.
 
-mod common;
+use crate::common;
 use common::*;
 use rtow::internals::sampling::layout;
 use rtow::scene::{self, Background, Camera, Group, Material, Medium, MediumBoundary, Mode, Quad, Scene, Sky, Sphere};

@@ -1,6 +1,6 @@
 //! Physics: tests that a wrong renderer fails.
 
-mod common;
+use crate::common;
 use common::*;
 use glam::DVec3;
 use rtow::scene::{self, Camera, Material, Mode, Scene, Sky, Sphere};

@@ -2,7 +2,7 @@
 //! rtow, each of which fails on the code before the fix. The table of
 //! docs/reliability.md maps every class to these tests.
 
-mod common;
+use crate::common;
 
 use common::{failure, listing, rtow, Run, BIN};
 use rtow::scene::{self, Format};
@@ -288,7 +288,7 @@ fn class3_a_render_of_mostly_nonfinite_samples_fails_instead_of_writing_black() 
 }
 
 // ---------------------------------------------------------------------------
-// 4. Resource flags are bounded (also in tests/cli.rs).
+// 4. Resource flags are bounded (also in tests/suite/cli.rs).
 
 #[test]
 fn class4_absurd_thread_counts_are_refused_at_once() {

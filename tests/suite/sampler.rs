@@ -4,7 +4,7 @@
 //! Sobol sampler is what a render uses by default; the choice reaches the
 //! stats and is read from scene files.
 
-mod common;
+use crate::common;
 use common::*;
 use rtow::scene::{self, scene_from_str, Format};
 use rtow::KernelChoice::{Scalar, Simd, Simd8};

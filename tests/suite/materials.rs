@@ -3,7 +3,7 @@
 //! reflectance (each decision at the exact threshold); the metal's fuzz sample
 //! uniform on the unit sphere; the lens sample uniform in the unit disk.
 
-mod common;
+use crate::common;
 use common::stats::{chi2, chi2_critical};
 use glam::DVec3;
 use rtow::internals::material::dielectric;

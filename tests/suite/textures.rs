@@ -3,7 +3,7 @@
 //! scalar bits, textured scenes bit for bit across kernels, the plan, and
 //! scene files (round trips, errors that name the field).
 
-mod common;
+use crate::common;
 use common::*;
 use proptest::prelude::*;
 use rtow::internals::math::SIN_MAX_ARG;

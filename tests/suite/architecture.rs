@@ -120,7 +120,7 @@ fn every_module_has_a_layer() {
     let missing: Vec<&String> = g.edges.keys().filter(|m| layer_of(m).is_none()).collect();
     assert!(
         missing.is_empty(),
-        "modules without a layer in tests/architecture.rs (and docs/architecture.md): {missing:?}"
+        "modules without a layer in tests/suite/architecture.rs (and docs/architecture.md): {missing:?}"
     );
 }
 

@@ -7,7 +7,7 @@
 //! the same probability, and Pearson's statistic over them follows a
 //! chi-square law with (cells - 1) degrees of freedom.
 
-mod common;
+use crate::common;
 use common::stats::{chi2, chi2_critical, normal_quantile};
 use rtow::internals::material::lambertian;
 use rtow::internals::sampling::{ScalarStream, Stream};

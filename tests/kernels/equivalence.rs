@@ -2,7 +2,7 @@
 //! kernel bit for bit, on every preset and on random scenes; and images do not
 //! depend on thread count or tile size.
 
-mod common;
+use crate::common;
 use common::*;
 use proptest::prelude::*;
 use rtow::scene::{self, Background, Camera, Group, Material, Mode, Quad, QuadBox, Scene, Sky, Sphere};

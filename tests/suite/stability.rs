@@ -2,7 +2,7 @@
 //! oracle of `rtow::instruments::stress`, the ray offset, NaN-free films, and the quick form of
 //! `rtow stress` (sweeps, stress scenes, image comparisons) with both kernels.
 
-mod common;
+use crate::common;
 use common::self_contained;
 use glam::DVec3;
 use proptest::prelude::*;

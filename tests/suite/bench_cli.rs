@@ -2,7 +2,7 @@
 //! Exit status 0 when throughput held and the image is the same; 1 when the
 //! image changed or throughput fell by more than the tolerance.
 
-mod common;
+use crate::common;
 
 use common::{rtow, rtow_env, Run};
 use std::path::Path;

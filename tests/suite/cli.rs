@@ -3,8 +3,8 @@
 //! render the identical image; `--version`, `scenes` and `--stats-json` say
 //! what they promise.
 
-mod bad_input;
-mod common;
+use crate::bad_input;
+use crate::common;
 
 use common::{failure, listing, rtow, rtow_env, self_contained, test_images, Run};
 use rtow::scene;

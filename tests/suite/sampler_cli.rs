@@ -1,7 +1,7 @@
 //! `--sampler` through the binary: render, scene files, bench and converge.
 #![cfg(feature = "cli")]
 
-mod common;
+use crate::common;
 
 use common::{rtow, Run};
 use rtow::{render, Job, KernelChoice, Overrides, RenderOptions, Sampler};

@@ -3,7 +3,7 @@
 //! corners, grazing rays, leaks, self-hits), the Cornell box bit for bit
 //! across kernels, and scenes that survive export.
 
-mod common;
+use crate::common;
 use common::*;
 use glam::DVec3;
 use proptest::prelude::*;

@@ -2,8 +2,8 @@
 //! names the field (and its line and column where the parser can place it),
 //! never a panic; writing scene files fails cleanly; valid scenes round-trip.
 
-mod bad_input;
-mod common;
+use crate::bad_input;
+use crate::common;
 
 use proptest::prelude::*;
 use rtow::scene::{self, Camera, Format, Material, RenderTable, Scene, Sky, Sphere};

@@ -4,7 +4,7 @@
 //! unbounded or unnamed error messages). Each test fails on the code before
 //! the fix; docs/reliability.md maps every class to its test.
 
-mod common;
+use crate::common;
 
 use common::{failure, listing, rtow, rtow_env, BIN};
 use std::path::Path;

@@ -1,0 +1,11 @@
+//! The kernels' tests, one binary: bit-identical images across kernels,
+//! widths and accelerators (`equivalence`), the BVH against brute force
+//! (`bvh`), the width-generic numerics against f64 (`math`). CI runs them
+//! also on the baseline instruction set (SSE2) with debug assertions on.
+
+#[path = "../common/mod.rs"]
+mod common;
+
+mod bvh;
+mod equivalence;
+mod math;
