@@ -83,6 +83,37 @@ impl<P: Probe> Probe for WorkTally<P> {
     }
 }
 
+/// Where a term of a path's radiance came from: the strategies whose
+/// variances `rtow converge --split` tells apart.
+#[derive(Clone, Copy, Debug, PartialEq, Eq)]
+#[repr(u8)]
+pub enum Strategy {
+    /// The background, seen by a ray that left the scene.
+    Background,
+    /// A light seen by a camera ray or through specular bounces (weight 1 under every estimator).
+    Specular,
+    /// A light reached by a direction that a diffuse or isotropic vertex
+    /// sampled: `bsdf`'s cosine lobe, `book`'s mixture, or under `nee-mis`
+    /// the material's density, weighted against the light sample.
+    Scattered,
+    /// An unblocked light sample (a shadow ray of `nee-mis`), weighted.
+    LightSample,
+}
+
+impl Strategy {
+    pub const ALL: [Strategy; 4] =
+        [Strategy::Background, Strategy::Specular, Strategy::Scattered, Strategy::LightSample];
+
+    pub fn name(self) -> &'static str {
+        match self {
+            Strategy::Background => "background",
+            Strategy::Specular => "specular",
+            Strategy::Scattered => "scattered",
+            Strategy::LightSample => "light sample",
+        }
+    }
+}
+
 /// The kernel stages whose SIMD lane occupancy is measured.
 #[derive(Clone, Copy, Debug, PartialEq, Eq)]
 pub enum Stage {
@@ -115,6 +146,16 @@ pub trait Probe {
     #[inline(always)]
     fn shaded<R: Real>(&mut self, _id: PathId<R>, _sphere: R::U32, _radius: R, _n: V3<R>, _front: R::Mask, _live: u32) {
     }
+
+    /// A term `c` was added to the radiance of path `id`: exactly the value
+    /// the kernel adds (throughput, attenuation and MIS weight included), from
+    /// a path of `length` segments (1: a camera ray that saw a light or the
+    /// background; a light sample at the vertex after `k` rays: `k + 1`), by
+    /// `strategy`. The terms of a path add up to its radiance, in this order.
+    /// Called by the scalar kernel, the reference that every kernel matches
+    /// bit for bit, and only when [`Probe::PATHS`].
+    #[inline(always)]
+    fn contributed(&mut self, _id: PathId<f32>, _length: u32, _strategy: Strategy, _c: V3<f32>) {}
 
     /// `n` rays are traced next, each the `depth`-th of its path (0: camera rays).
     #[inline(always)]

@@ -46,6 +46,14 @@ pub struct ConvergeArgs {
     /// (N from --spp-list).
     #[arg(long, allow_negative_numbers = true, value_name = "N")]
     at_spp: Option<u32>,
+    /// Also split every variant's error at N spp (N from --spp-list) by path length and by strategy
+    /// (background, specular, scattered, light sample): --split-seeds renders with the scalar kernel,
+    /// written to <scene>.md and <scene>-split.csv
+    #[arg(long, allow_negative_numbers = true, value_name = "N")]
+    split: Option<u32>,
+    /// The renders (independent seeds) of --split.
+    #[arg(long, allow_negative_numbers = true, value_name = "R", default_value_t = converge::DEFAULT_SPLIT_SEEDS)]
+    split_seeds: u32,
 }
 
 /// `--variants`' help, naming the library's defaults.
@@ -94,6 +102,8 @@ pub fn run(a: ConvergeArgs) -> Result<()> {
         repeat: a.repeat,
         adaptive_min: a.adaptive_min,
         at_spp: a.at_spp,
+        split: a.split,
+        split_seeds: a.split_seeds,
     };
     cfg.validate()?;
     // Every file the run writes is checked now, before any rendering, and
@@ -106,7 +116,7 @@ pub fn run(a: ConvergeArgs) -> Result<()> {
         check_extension(r, &["pfm", "exr"], "reference")?;
         inputs.push((r, "reference"));
     }
-    let files = ReportFiles::check(&a.out, name, a.reference.is_none(), &inputs)?;
+    let files = ReportFiles::check(&a.out, name, a.reference.is_none(), a.split.is_some(), &inputs)?;
     say!("{name}: {}x{}, depth {}, seed {}", s.width, s.height, s.max_depth, s.seed);
     let px = s.width as f64 * s.height as f64;
     let mut header = false;
@@ -129,6 +139,19 @@ fn show(e: Event, px: f64, header: &mut bool) {
     match e {
         Event::ReferenceStart { spp, seed } => say!("reference: {spp} spp with seed {seed} ..."),
         Event::ReferenceDone { seconds } => say!("reference: done in {seconds:.2} s"),
+        Event::SplitStart { variant, spp, seeds } => {
+            say!("split: {} at {spp} spp, {seeds} scalar renders ...", variant.name())
+        }
+        Event::SplitDone(sp) => {
+            let c = sp.covariance();
+            say!(
+                "split: {}: MSE {:.3e}, of which {:.1}% covariance; largest length: {}",
+                sp.variant.name(),
+                sp.total_var,
+                100.0 * c / sp.total_var.max(f64::MIN_POSITIVE),
+                largest_length(sp)
+            )
+        }
         Event::Measured(r) => {
             if !std::mem::replace(header, true) {
                 say!(
@@ -148,6 +171,13 @@ fn show(e: Event, px: f64, header: &mut bool) {
             say!("  {}", r.cells(px).iter().enumerate().map(|(i, c)| pad(i, c)).collect::<Vec<_>>().join(" "));
         }
     }
+}
+
+/// The path length with the largest share of a split's variance.
+fn largest_length(sp: &converge::Split) -> String {
+    let (l, v) =
+        (0..converge::LENGTHS).map(|l| (l, sp.by_length(l).1)).fold((0, -1.0), |a, b| if b.1 > a.1 { b } else { a });
+    format!("{} ({:.1}% of the MSE)", converge::length_label(l), 100.0 * v / sp.total_var.max(f64::MIN_POSITIVE))
 }
 
 /// Cell `i` of a row, padded as the header is.

@@ -12,7 +12,7 @@ use crate::geometry::{
 };
 use crate::material::{dielectric, emission, lambertian, metal, Kind};
 use crate::plan::Prepared;
-use crate::probe::{PathId, Probe};
+use crate::probe::{PathId, Probe, Strategy};
 use crate::sampling::{layout, unit_vector, PathSampler, Stream};
 use crate::texture::TexKind;
 use crate::vec3::V3;
@@ -235,6 +235,9 @@ fn trace_in<P: Probe, const M: bool>(
     // camera's, or a specular bounce's), for the weight of a light it hits.
     let mut pdf = 0.0f32;
     let mut shadow_rays = 0;
+    // Whether the path's last direction was sampled at a diffuse or
+    // isotropic vertex (for the probe's [`Strategy`] only).
+    let mut scattered = false;
     for depth in 0..prep.settings.max_depth {
         let rays = depth + 1;
         // A light sample at this bounce's vertex stands for one more ray.
@@ -248,7 +251,11 @@ fn trace_in<P: Probe, const M: bool>(
         let (hit, t) =
             if prep.media.is_empty() { (hit, t) } else { sample_media(&prep.media, o, d, hit, t, depth, rng) };
         if hit == MISS {
-            return ((sum + thr.mul_elem(background(&prep.sky, d))).to_array(), rays, shadow_rays);
+            let c = thr.mul_elem(background(&prep.sky, d));
+            if P::PATHS {
+                probe.contributed(id, rays, Strategy::Background, c);
+            }
+            return ((sum + c).to_array(), rays, shadow_rays);
         }
         let (next_o, dir, atten, shadow) = if hit >= MEDIUM_BASE {
             // Isotropic scattering inside medium k: a uniform direction.
@@ -256,6 +263,7 @@ fn trace_in<P: Probe, const M: bool>(
             let dir = unit_vector(rng);
             let p = o + d * t;
             let albedo = prep.media.albedo[(hit - MEDIUM_BASE) as usize];
+            scattered = true;
             if prep.plan.sample_toward == 0 {
                 pdf = ISOTROPIC_PDF;
                 let shadow = light_sample(prep, nee, p, None, |_| ISOTROPIC_PDF, albedo, depth, rng);
@@ -265,12 +273,19 @@ fn trace_in<P: Probe, const M: bool>(
                 (p, dir, albedo.map(|a| a * w), None)
             }
         } else {
-            let (dir, atten, srf, dir_pdf, shadow) =
+            let (dir, atten, srf, dir_pdf, shadow, diffuse) =
                 match shade::<P, M>(prep, o, d, t, time, hit, id, depth, thr, pdf, nee, rng, probe) {
                     Ok(s) => s,
-                    Err(c) => return ((sum + c).to_array(), rays, shadow_rays),
+                    Err(c) => {
+                        if P::PATHS {
+                            let how = if scattered { Strategy::Scattered } else { Strategy::Specular };
+                            probe.contributed(id, rays, how, c);
+                        }
+                        return ((sum + c).to_array(), rays, shadow_rays);
+                    }
                 };
             pdf = dir_pdf;
+            scattered = diffuse;
             (spawn(&srf, dir), dir, atten, shadow)
         };
         if let Some(sh) = shadow {
@@ -279,6 +294,9 @@ fn trace_in<P: Probe, const M: bool>(
                 shadow_rays += 1;
                 if !prep.occluded_one::<P, M>(sh.o, sh.d, sh.tmax, time, probe) {
                     let c = if prep.media.is_empty() { c } else { c * transmittance(&prep.media, sh.o, sh.d, sh.tmax) };
+                    if P::PATHS {
+                        probe.contributed(id, rays + 1, Strategy::LightSample, c);
+                    }
                     sum = sum + c;
                 }
             }
@@ -302,8 +320,9 @@ fn trace_in<P: Probe, const M: bool>(
 }
 
 /// A scattered path: its new direction, the attenuation, the surface it
-/// leaves, the direction's density (0: specular), its light sample.
-type Scattered = (V3<f32>, [f32; 3], Surface<f32>, f32, Option<Shadow>);
+/// leaves, the direction's density (0: specular), its light sample, and
+/// whether the vertex is diffuse.
+type Scattered = (V3<f32>, [f32; 3], Surface<f32>, f32, Option<Shadow>, bool);
 
 /// The surface hit `hit` at `t` along `o + t d`: the scattered direction, the
 /// attenuation and the surface, or the path's last term (a light, weighted
@@ -370,5 +389,5 @@ fn shade<P: Probe, const M: bool>(
         },
     };
     let (dir, atten, dir_pdf, shadow) = dir_atten;
-    Ok((dir, atten, srf, dir_pdf, shadow))
+    Ok((dir, atten, srf, dir_pdf, shadow, kind == Kind::Lambertian))
 }

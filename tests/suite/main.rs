@@ -30,6 +30,7 @@ mod sampler;
 mod sampler_cli;
 mod scene_files;
 mod shards;
+mod split;
 mod stability;
 mod textures;
 mod trust;

@@ -19,11 +19,13 @@ mod metrics;
 #[cfg(feature = "plot")]
 mod plot;
 mod report;
+mod split;
 mod variant;
 
 pub use curve::{compare, Cost, Curve, CurveComparison};
 pub use metrics::{error_metrics, ConvergeRow, Metrics, RELMSE_EPSILON, SIGNED_EPSILON};
 pub use report::ReportFiles;
+pub use split::{comparison_markdown, length_label, split_seed, Split, LENGTHS, MAX_SPLIT_PIXELS, MAX_SPLIT_SEEDS};
 pub use variant::{Variant, DEFAULT_ADAPTIVE_THRESHOLD};
 
 use crate::choice::{EstimatorChoice, KernelChoice};
@@ -63,7 +65,14 @@ pub struct ConvergeConfig {
     /// Also compare every configuration at the error the baseline reaches at
     /// this sample count (one of `spp_list`).
     pub at_spp: Option<u32>,
+    /// Also split every variant's error at this sample count (one of
+    /// `spp_list`) by path length and strategy ([`Split`]), over `split_seeds` renders.
+    pub split: Option<u32>,
+    pub split_seeds: u32,
 }
+
+/// The renders of a split when none is given.
+pub const DEFAULT_SPLIT_SEEDS: u32 = 8;
 
 /// One measurement of a run: a kernel, a variant, a sample count, and the job that renders it.
 struct Measurement {
@@ -119,6 +128,20 @@ impl ConvergeConfig {
         if let Some(n) = self.at_spp {
             if !self.spp_list.contains(&n) {
                 return Err(Error::invalid("at_spp", format!("{n} is not one of the sample counts measured")));
+            }
+        }
+        if let Some(n) = self.split {
+            if !self.spp_list.contains(&n) {
+                return Err(Error::invalid("split", format!("{n} is not one of the sample counts measured")));
+            }
+            if let Some(v) = self.variants.iter().find(|v| v.adaptive.is_some()) {
+                return Err(Error::invalid(
+                    "split",
+                    format!("'{}' is adaptive: its pixels stop at different sample counts; split without it", v.name()),
+                ));
+            }
+            if !(2..=MAX_SPLIT_SEEDS).contains(&self.split_seeds) {
+                return Err(Error::invalid("split_seeds", format!("must be from 2 to {MAX_SPLIT_SEEDS}")));
             }
         }
         if self.repeat == 0 {
@@ -212,6 +235,8 @@ pub struct ConvergeReport {
     /// The build, machine, date and command of the run (written to `<scene>.json`).
     pub provenance: crate::provenance::Provenance,
     pub rows: Vec<ConvergeRow>,
+    /// With [`ConvergeConfig::split`]: each variant's error split.
+    pub splits: Vec<Split>,
 }
 
 /// What a run tells its caller as it goes.
@@ -225,6 +250,13 @@ pub enum Event<'a> {
         seconds: f64,
     },
     Measured(&'a ConvergeRow),
+    /// A variant's split starts: `seeds` scalar renders at `spp`.
+    SplitStart {
+        variant: &'a Variant,
+        spp: u32,
+        seeds: u32,
+    },
+    SplitDone(&'a Split),
 }
 
 /// The reference: a float image of the job's size, or rendered by `job` (seconds reported).
@@ -252,6 +284,9 @@ fn load_reference(path: &std::path::Path, width: u32, height: u32) -> Result<Ima
 pub fn run(job: &Job, name: &str, cfg: &ConvergeConfig, mut on: impl FnMut(Event)) -> Result<ConvergeReport> {
     cfg.validate()?;
     let s = *job.settings();
+    if cfg.split.is_some() {
+        split::check(s.width, s.height, cfg.split_seeds)?;
+    }
     // Every job is resolved (and so checked) before anything renders.
     let plan = cfg.measurements(job)?;
     let reference_job = match &cfg.reference {
@@ -270,6 +305,21 @@ pub fn run(job: &Job, name: &str, cfg: &ConvergeConfig, mut on: impl FnMut(Event
         (Reference::Spp(_), None) => unreachable!("a rendered reference has its job"),
     };
     let (rows, threads) = measure(&plan, cfg.repeat, &reference, &mut on)?;
+    let mut splits = Vec::new();
+    if let Some(n) = cfg.split {
+        // The first kernel's measurement of each variant at `n` spp.
+        for v in &cfg.variants {
+            let (m, row) = plan
+                .iter()
+                .zip(&rows)
+                .find(|(m, _)| m.kernel == cfg.kernels[0] && m.variant == *v && m.spp == n)
+                .expect("every variant is measured at every sample count");
+            on(Event::SplitStart { variant: v, spp: n, seeds: cfg.split_seeds });
+            let sp = split::split(&m.job, *v, cfg.split_seeds, row.seconds, &row.image_hash)?;
+            on(Event::SplitDone(&sp));
+            splits.push(sp);
+        }
+    }
     Ok(ConvergeReport {
         scene: name.to_string(),
         width: s.width,
@@ -283,6 +333,7 @@ pub fn run(job: &Job, name: &str, cfg: &ConvergeConfig, mut on: impl FnMut(Event
         rendered_reference: rendered.then_some(reference),
         provenance: crate::provenance::Provenance::collect(),
         rows,
+        splits,
     })
 }
 
@@ -452,6 +503,7 @@ mod tests {
             provenance: crate::provenance::Provenance::collect(),
             rendered_reference: None,
             rows,
+            splits: vec![],
         };
         let t = report.comparisons_by(Cost::Seconds);
         let r = report.comparisons_by(Cost::Rays);
@@ -516,6 +568,8 @@ mod tests {
             repeat: 1,
             adaptive_min: 16,
             at_spp: None,
+            split: None,
+            split_seeds: DEFAULT_SPLIT_SEEDS,
         };
         good.validate().unwrap();
         type Break = Box<dyn Fn(&mut ConvergeConfig)>;
@@ -530,6 +584,21 @@ mod tests {
             ("reference_spp", Box::new(|c| c.reference = Reference::Spp(0))),
             ("repeat", Box::new(|c| c.repeat = 0)),
             ("at_spp", Box::new(|c| c.at_spp = Some(3))),
+            ("split", Box::new(|c| c.split = Some(3))),
+            (
+                "split",
+                Box::new(|c| {
+                    c.split = Some(2);
+                    c.variants = vec![Variant::parse("adaptive").unwrap()];
+                }),
+            ),
+            (
+                "split_seeds",
+                Box::new(|c| {
+                    c.split = Some(2);
+                    c.split_seeds = 1;
+                }),
+            ),
             (
                 "adaptive_min",
                 Box::new(|c| {

@@ -1,6 +1,7 @@
 //! The outputs of `rtow converge`: CSV, markdown, the comparison lines, files.
 
 use super::curve::{compare, Cost, Curve, CurveComparison};
+use super::split::comparison_markdown;
 use super::ConvergeReport;
 use crate::choice::KernelChoice;
 use crate::error::{Error, Result};
@@ -193,6 +194,32 @@ impl ConvergeReport {
                 let _ = writeln!(s, "- {l}");
             }
         }
+        if let Some(first) = self.splits.first() {
+            let _ = write!(
+                s,
+                "\n## Where the error lives: {} spp, {} seeds\n\nEach variant rendered {} times at {} spp with \
+                 independent seeds by the scalar kernel, every term of every pixel added into its bucket: path length \
+                 (segments from the camera to the light or background) and strategy. Variance: across the seeds, of \
+                 a bucket's pixel values, averaged over pixels and channels; the image's is its MSE at {} spp. \
+                 Covariance: what the buckets leave of the MSE. MSE x s: times the variant's measured seconds.\n\n",
+                first.spp, first.seeds, first.seeds, first.spp, first.spp
+            );
+            s += "MSE x seconds by path length (lower is faster to a given error):\n\n";
+            s += &comparison_markdown(&self.splits);
+            for sp in &self.splits {
+                s += "\n";
+                s += &sp.markdown();
+            }
+        }
+        s
+    }
+
+    /// The splits' buckets as CSV (`<scene>-split.csv`).
+    pub fn split_csv(&self) -> String {
+        let mut s = String::from("scene,variant,spp,seeds,length,strategy,mean,variance,mse_seconds,seconds\n");
+        for sp in &self.splits {
+            sp.csv_rows(&self.scene, &mut s);
+        }
         s
     }
     /// The run's description beside its tables: what was measured, the
@@ -217,8 +244,9 @@ impl ConvergeReport {
 
     /// Writes the report into the files checked by [`ReportFiles::check`]:
     /// `<scene>.csv`, `<scene>.md`, (with the `plot` feature) `<scene>.svg`,
-    /// `<scene>.json` and, if the run rendered its reference,
-    /// `<scene>-reference.exr`; all of them or none. Returns their paths.
+    /// `<scene>.json`, with a split `<scene>-split.csv` and, if the run
+    /// rendered its reference, `<scene>-reference.exr`; all of them or none.
+    /// Returns their paths.
     pub fn write(&self, mut files: ReportFiles) -> Result<Vec<PathBuf>> {
         #[cfg(feature = "plot")]
         let svg = Some(self.svg()?);
@@ -227,7 +255,7 @@ impl ConvergeReport {
         let names: Vec<String> = files
             .slots
             .iter()
-            .filter(|s| matches!(s.kind, Kind::Csv | Kind::Markdown | Kind::Svg))
+            .filter(|s| matches!(s.kind, Kind::Csv | Kind::Markdown | Kind::Svg | Kind::SplitCsv))
             .map(|s| file_name(&s.path))
             .collect();
         for i in 0..files.slots.len() {
@@ -237,6 +265,7 @@ impl ConvergeReport {
                 Kind::Markdown => self.markdown().into_bytes(),
                 Kind::Svg => svg.clone().unwrap_or_default().into_bytes(),
                 Kind::Json => self.json(&names).into_bytes(),
+                Kind::SplitCsv => self.split_csv().into_bytes(),
                 Kind::Reference => match &self.rendered_reference {
                     Some(img) => img.file_bytes(&files.slots[i].path, 1.0, "reference")?,
                     None => return Err(Error::Input("the run rendered no reference to write (internal error)".into())),
@@ -263,6 +292,7 @@ enum Kind {
     Svg,
     Json,
     Reference,
+    SplitCsv,
 }
 
 struct Slot {
@@ -284,9 +314,16 @@ pub struct ReportFiles {
 
 impl ReportFiles {
     /// Checks the files that a run on scene `scene` writes into `dir`
-    /// (`with_reference`: the run renders its reference, and writes it);
-    /// `inputs` are the run's input files with what they are.
-    pub fn check(dir: &Path, scene: &str, with_reference: bool, inputs: &[(&Path, &str)]) -> Result<ReportFiles> {
+    /// (`with_reference`: the run renders its reference, and writes it;
+    /// `with_split`: it splits the error, `<scene>-split.csv`); `inputs` are
+    /// the run's input files with what they are.
+    pub fn check(
+        dir: &Path,
+        scene: &str,
+        with_reference: bool,
+        with_split: bool,
+        inputs: &[(&Path, &str)],
+    ) -> Result<ReportFiles> {
         let out_err = |m: String| Error::Output { path: dir.to_path_buf(), message: m };
         let mut created_dir = None;
         if !dir.exists() {
@@ -316,8 +353,12 @@ impl ReportFiles {
             kinds.push((Kind::Svg, "svg"));
         }
         kinds.push((Kind::Json, "json"));
+        if with_split {
+            kinds.push((Kind::SplitCsv, "split.csv"));
+        }
         for (kind, ext) in kinds {
-            let path = dir.join(format!("{stem}.{ext}"));
+            let sep = if kind == Kind::SplitCsv { "-" } else { "." };
+            let path = dir.join(format!("{stem}{sep}{ext}"));
             let id = files.outputs.add(&path, "--out")?;
             files.slots.push(Slot { kind, path, id });
         }
