@@ -178,9 +178,27 @@ pub fn closest_quad_hit<R: Real, P: Probe>(q: &Quads, o: V3<R>, d: V3<R>, best: 
     quads_brute::<R, P, false>(q, o, d, best, probe)
 }
 
-/// The brute-force loops of the closest-hit searches and (`ANY`) of the
-/// any-hit queries, which stop once every lane found a hit
-/// ([`Closest::leave_found`]).
+/// The brute-force loop of the closest-hit searches and (`ANY`) of the
+/// any-hit queries: `test(i, ..)` for each of `n` primitives in index
+/// order, stopping once every lane found a hit ([`Closest::leave_found`]).
+#[inline(always)]
+fn brute<R: Real, P: Probe, const ANY: bool>(
+    n: usize,
+    best: &mut Closest<R>,
+    probe: &mut P,
+    mut test: impl FnMut(usize, &mut Closest<R>, &mut WorkTally<P>),
+) {
+    let mut tally = WorkTally::<P>::new();
+    for i in 0..n {
+        test(i, best, &mut tally);
+        if ANY && best.leave_found() {
+            break;
+        }
+    }
+    tally.flush(probe);
+}
+
+/// [`brute`] over the static spheres.
 #[inline(always)]
 fn spheres_brute<R: Real, P: Probe, const ANY: bool>(
     s: &Spheres,
@@ -189,18 +207,13 @@ fn spheres_brute<R: Real, P: Probe, const ANY: bool>(
     best: &mut Closest<R>,
     probe: &mut P,
 ) {
-    let mut tally = WorkTally::<P>::new();
-    for i in 0..s.len {
+    brute::<R, P, ANY>(s.len, best, probe, |i, best, tally| {
         let c = V3::new(R::splat(s.cx[i]), R::splat(s.cy[i]), R::splat(s.cz[i]));
-        best.test(o, d, c, R::splat(s.r2[i]), i as u32, &mut tally);
-        if ANY && best.leave_found() {
-            break;
-        }
-    }
-    tally.flush(probe);
+        best.test(o, d, c, R::splat(s.r2[i]), i as u32, tally);
+    });
 }
 
-/// [`spheres_brute`] over the quads.
+/// [`brute`] over the quads.
 #[inline(always)]
 fn quads_brute<R: Real, P: Probe, const ANY: bool>(
     q: &Quads,
@@ -209,17 +222,13 @@ fn quads_brute<R: Real, P: Probe, const ANY: bool>(
     best: &mut Closest<R>,
     probe: &mut P,
 ) {
-    let mut tally = WorkTally::<P>::new();
-    for (i, rec) in q.rec[..q.len].iter().enumerate() {
-        best.test_quad(o, d, rec, QUAD_BASE + i as u32, &mut tally);
-        if ANY && best.leave_found() {
-            break;
-        }
-    }
-    tally.flush(probe);
+    let recs = &q.rec[..q.len];
+    brute::<R, P, ANY>(recs.len(), best, probe, |i, best, tally| {
+        best.test_quad(o, d, &recs[i], QUAD_BASE + i as u32, tally);
+    });
 }
 
-/// [`spheres_brute`] over the moving spheres at the rays' times.
+/// [`brute`] over the moving spheres at the rays' times.
 #[inline(always)]
 fn moving_brute<R: Real, P: Probe, const ANY: bool>(
     m: &MovingSpheres,
@@ -229,15 +238,10 @@ fn moving_brute<R: Real, P: Probe, const ANY: bool>(
     best: &mut Closest<R>,
     probe: &mut P,
 ) {
-    let mut tally = WorkTally::<P>::new();
-    for i in 0..m.len() {
+    brute::<R, P, ANY>(m.len(), best, probe, |i, best, tally| {
         let c = centre_at(V3::splat3(m.c0(i)), V3::splat3(m.v(i)), time);
-        best.test(o, d, c, R::splat(m.s.r2[i]), MOVING_BASE + i as u32, &mut tally);
-        if ANY && best.leave_found() {
-            break;
-        }
-    }
-    tally.flush(probe);
+        best.test(o, d, c, R::splat(m.s.r2[i]), MOVING_BASE + i as u32, tally);
+    });
 }
 
 /// The closest hits of a group of rays (one ray: the scalar kernel; a packet:
