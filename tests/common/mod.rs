@@ -12,15 +12,21 @@ use std::sync::OnceLock;
 
 /// A folder of image textures generated for the tests (rtow ships none):
 /// `earthmap.jpg`, a 64 x 32 JPEG of gradients, the name the `nw-earth`
-/// preset reads from `RTOW_IMAGES`. One per test process.
+/// preset reads from `RTOW_IMAGES`. It lives in cargo's folder for the
+/// integration tests' files (under `target/`), so no test run leaves a
+/// folder behind in the system's temporary folder; each test process writes
+/// the same map under a name of its own, then renames it into place, so test
+/// processes running at once each read a whole file.
 pub fn test_images() -> &'static Path {
     static DIR: OnceLock<PathBuf> = OnceLock::new();
     DIR.get_or_init(|| {
-        let dir = std::env::temp_dir().join(format!("rtow-test-images-{}", std::process::id()));
-        std::fs::create_dir_all(&dir).expect("a temporary folder");
+        let dir = Path::new(env!("CARGO_TARGET_TMPDIR")).join("test-images");
+        std::fs::create_dir_all(&dir).expect("the tests' image folder");
         let map =
             image::RgbImage::from_fn(64, 32, |x, y| image::Rgb([(x * 4) as u8, (y * 8) as u8, ((x ^ y) * 7) as u8]));
-        map.save(dir.join("earthmap.jpg")).expect("the test map is written");
+        let part = dir.join(format!("earthmap.{}.jpg", std::process::id()));
+        map.save(&part).expect("the test map is written");
+        std::fs::rename(&part, dir.join("earthmap.jpg")).expect("the test map is put in place");
         dir
     })
 }
