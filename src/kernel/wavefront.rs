@@ -525,19 +525,7 @@ fn bounce<W: Wide, P: Probe, S: PathSampler, const M: bool>(
             Mode::Path => prep.plan.kinds,
             Mode::Flat | Mode::Normals | Mode::Gradient => KindSet::all(),
         };
-        let iota = W::u_from_fn(|k| k as u32);
-        for i in (0..n).step_by(W::LANES) {
-            let hit = W::load_u_pow2(&ws.hit, i);
-            let hits = W::mask_bits(W::u_lt(hit, W::u_splat(MISS))) & low_bits(n - i);
-            let kind = W::u_from_fn(|k| prep.spheres.kind[W::lane_u(hit, k) as usize & kind_mask] as u32);
-            let idx = iota.wrapping_add(W::u_splat(i as u32));
-            // (No medium here: the scene has none.)
-            for k in kinds.surfaces() {
-                let q = k as usize;
-                let keep = W::mask_bits(W::u_eq(kind, W::u_splat(k as u32))) & hits;
-                len[q] += W::compress_store_u_pow2(idx, keep, &mut queues[q], len[q]);
-            }
-        }
+        classify_packets::<W>(&prep.spheres.kind, &ws.hit, n, kinds, &mut queues, &mut len);
         debug_assert!(
             ws.hit[..n].iter().filter(|&&h| h != MISS).count() == len.iter().sum::<usize>(),
             "the plan left out a kind that was hit"
@@ -618,6 +606,46 @@ fn bounce<W: Wide, P: Probe, S: PathSampler, const M: bool>(
     }
     std::mem::swap(&mut ws.cur, &mut ws.next);
     n as u64
+}
+
+/// The classification of a scene of spheres only, W paths at a time: the
+/// packet's material kinds (one lookup per lane in `kind_of`, whose length
+/// is a power of two above every hit index), then, per kind in `kinds`, the
+/// indices of its lanes compressed onto its queue, in path order as one path
+/// at a time would append them. Misses join no queue (their pass is
+/// `shade_misses`). The surface kinds are a constant each (the loop over them
+/// is unrolled), so each queue's length stays in a register and a kind the
+/// scene does not have costs one predictable branch.
+#[inline(always)]
+fn classify_packets<W: Wide>(
+    kind_of: &[Kind],
+    hit: &Arr<u32>,
+    n: usize,
+    kinds: KindSet,
+    queues: &mut [Arr<u32>; MISS_QUEUE + 1],
+    len: &mut [usize; MISS_QUEUE + 1],
+) {
+    const S: usize = Kind::SURFACES.len();
+    let kind_mask = kind_of.len().wrapping_sub(1);
+    let want: [bool; S] = Kind::SURFACES.map(|k| kinds.contains(k));
+    let mut lens: [usize; S] = Kind::SURFACES.map(|k| len[k as usize]);
+    let iota = W::u_from_fn(|k| k as u32);
+    for i in (0..n).step_by(W::LANES) {
+        let hit = W::load_u_pow2(hit, i);
+        let hits = W::mask_bits(W::u_lt(hit, W::u_splat(MISS))) & low_bits(n - i);
+        let kind = W::u_from_fn(|k| kind_of[W::lane_u(hit, k) as usize & kind_mask] as u32);
+        let idx = iota.wrapping_add(W::u_splat(i as u32));
+        for s in 0..S {
+            if want[s] {
+                let k = Kind::SURFACES[s];
+                let keep = W::mask_bits(W::u_eq(kind, W::u_splat(k as u32))) & hits;
+                lens[s] += W::compress_store_u_pow2(idx, keep, &mut queues[k as usize], lens[s]);
+            }
+        }
+    }
+    for (s, k) in Kind::SURFACES.into_iter().enumerate() {
+        len[k as usize] = lens[s];
+    }
 }
 
 /// How a diffuse vertex chooses its direction: the estimator of the render,
@@ -894,13 +922,18 @@ fn write_results<W: Wide, const ADD: bool>(ws: &mut Workspace, idx: &W::Idx, act
 /// `result[slot[k]] = c[k]` (`ADD`: `+= c[k]`) for the lanes k set in `lanes`.
 #[inline(always)]
 fn write_lanes<W: Wide, const ADD: bool>(result: &mut Arr<[f32; 3]>, slot: W::U32, mut lanes: u32, c: V3<W>) {
+    // The lanes as arrays once (a lane taken from a vector one at a time
+    // was stored whole to the stack each time), indexed below `LANES`.
+    debug_assert!(lanes < 1 << W::LANES as u64);
     let slot = W::idx_of(slot);
+    let (cx, cy, cz) = (W::idx_of(c.x.to_bits()), W::idx_of(c.y.to_bits()), W::idx_of(c.z.to_bits()));
+    let (slot, cx, cy, cz) = (slot.as_ref(), cx.as_ref(), cy.as_ref(), cz.as_ref());
     while lanes != 0 {
-        let k = lanes.trailing_zeros() as usize;
+        let k = lanes.trailing_zeros() as usize & (W::LANES - 1);
         lanes &= lanes - 1;
-        let s = slot.as_ref()[k] as usize;
+        let s = slot[k] as usize;
         debug_assert!(s < MAX_PATHS);
-        let c = [c.x.lane(k), c.y.lane(k), c.z.lane(k)];
+        let c = [f32::from_bits(cx[k]), f32::from_bits(cy[k]), f32::from_bits(cz[k])];
         let r = &mut result[s & MASK];
         *r = if ADD { [r[0] + c[0], r[1] + c[1], r[2] + c[2]] } else { c };
     }
