@@ -9,7 +9,10 @@
 //! loop until no path is alive or max_depth rays were traced:
 //!     intersect: W contiguous rays per packet (brute force or the BVH, as planned)
 //!     misses:    W contiguous paths at a time, throughput x background (sky or constant) -> results
-//!     classify:  each path that hit joins the queue of its hit's material kind
+//!     classify:  each path that hit joins the queue of its hit's material kind,
+//!                but a packet of contiguous paths whose hits share a kind
+//!                (three quarters of its lanes at least; sphere-only scenes,
+//!                bsdf estimator) is scattered where it is, without a queue
 //!     light pass (scenes with lights): throughput x emission -> the result; the path ends
 //!     texture passes (scenes with textures): one per texture kind, over the
 //!         lambertian hits of that kind, writing each path's albedo
@@ -217,9 +220,84 @@ impl Shadows {
     }
 }
 
-#[inline(always)]
-fn v3_gather<W: Wide>(v: &[Arr<f32>; 3], idx: &W::Idx) -> V3<W> {
-    V3::new(W::gather_pow2(&v[0], idx), W::gather_pow2(&v[1], idx), W::gather_pow2(&v[2], idx))
+/// Where a packet's W paths are in `cur`, and which of its lanes are real
+/// (`live`, a bitmask): W queued indices, read by gathers ([`Queued`]), or W
+/// contiguous indices, read by whole-vector loads ([`Run`]). The scatter
+/// passes are written once over both.
+trait Packet<W: Wide>: Copy {
+    /// The packet's lanes of a per-path array.
+    fn f(self, v: &Arr<f32>) -> W;
+    fn u(self, v: &Arr<u32>) -> W::U32;
+    fn v3(self, v: &[Arr<f32>; 3]) -> V3<W> {
+        V3::new(self.f(&v[0]), self.f(&v[1]), self.f(&v[2]))
+    }
+    /// The paths' indices (probes, and the passes that write lane by lane).
+    fn idx(self) -> W::Idx;
+    /// The real lanes.
+    fn live(self) -> u32;
+}
+
+/// W queued indices, masked below `CAP` (the last packet of a queue padded
+/// with a real path's index), and the real lanes.
+struct Queued<W: Wide> {
+    idx: W::Idx,
+    live: u32,
+}
+
+impl<W: Wide> Clone for Queued<W> {
+    fn clone(&self) -> Self {
+        *self
+    }
+}
+impl<W: Wide> Copy for Queued<W> {}
+
+impl<W: Wide> Packet<W> for Queued<W> {
+    #[inline(always)]
+    fn f(self, v: &Arr<f32>) -> W {
+        W::gather_pow2(v, &self.idx)
+    }
+    #[inline(always)]
+    fn u(self, v: &Arr<u32>) -> W::U32 {
+        W::gather_u_pow2(v, &self.idx)
+    }
+    #[inline(always)]
+    fn idx(self) -> W::Idx {
+        self.idx
+    }
+    #[inline(always)]
+    fn live(self) -> u32 {
+        self.live
+    }
+}
+
+/// The W contiguous paths `i..i + W` (`i` a multiple of W below
+/// `MAX_PATHS`), of which the lanes `live` are real: a packet scattered
+/// where the classification found it, without a queue. Lanes outside `live`
+/// (misses, or past the bounce's last path) hold stale values: they compute
+/// what they compute and nothing of theirs is written.
+#[derive(Clone, Copy)]
+struct Run {
+    i: usize,
+    live: u32,
+}
+
+impl<W: Wide> Packet<W> for Run {
+    #[inline(always)]
+    fn f(self, v: &Arr<f32>) -> W {
+        W::load_pow2(v, self.i)
+    }
+    #[inline(always)]
+    fn u(self, v: &Arr<u32>) -> W::U32 {
+        W::load_u_pow2(v, self.i)
+    }
+    #[inline(always)]
+    fn idx(self) -> W::Idx {
+        index_run::<W>(self.i)
+    }
+    #[inline(always)]
+    fn live(self) -> u32 {
+        self.live
+    }
 }
 
 /// Bits `0..n` set.
@@ -507,6 +585,7 @@ fn bounce<W: Wide, P: Probe, S: PathSampler, const M: bool>(
     }
     let mut len = [0usize; MISS_QUEUE + 1];
     let mut queues = ws.queue.take().expect("the queues are put back after every bounce");
+    ws.next.len = 0;
     // The sphere and quad arrays have a power-of-two length above every hit
     // index (`Spheres::pad`, `Quads::pad`). Quads' hit indices are
     // `QUAD_BASE + i`, above every sphere's and below `MISS`.
@@ -515,19 +594,30 @@ fn bounce<W: Wide, P: Probe, S: PathSampler, const M: bool>(
     let moving_mask = prep.moving.s.kind.len().wrapping_sub(1);
     debug_assert!(prep.spheres.kind.len().is_power_of_two() && prep.quads.kind.len().is_power_of_two());
     // A scene without quads classifies W paths at a time: the packet's
-    // material kinds (one lookup per lane), then, per kind the plan has, the
-    // indices of its lanes compressed onto its queue, in path order as one
+    // material kinds (one lookup per lane); a packet whose hits share a kind
+    // that has a plain scatter pass is scattered where it is; the others'
+    // lanes are compressed onto their kinds' queues, in path order as one
     // path at a time would append them. Misses (shaded above) join no queue.
     if !M && prep.quads.is_empty() && prep.media.is_empty() {
         // The path tracer queues only the kinds it has passes for (the plan's);
         // the debug modes shade every kind.
-        let kinds = match prep.plan.mode {
-            Mode::Path => prep.plan.kinds,
-            Mode::Flat | Mode::Normals | Mode::Gradient => KindSet::all(),
-        };
-        classify_packets::<W>(&prep.spheres.kind, &ws.hit, n, kinds, &mut queues, &mut len);
+        let path = prep.plan.mode == Mode::Path;
+        let kinds = if path { prep.plan.kinds } else { KindSet::all() };
+        // The kinds whose pass is `scatter` alone: not lights, not a
+        // lambertian whose texture passes must run first.
+        let in_place = Kind::SURFACES.map(|k| {
+            path && Dirs::of(prep) == Dirs::Bsdf
+                && prep.plan.kinds.contains(k)
+                && match k {
+                    Kind::Lambertian => prep.plan.textures.is_empty(),
+                    Kind::Metal | Kind::Dielectric => true,
+                    Kind::DiffuseLight | Kind::Isotropic => false,
+                }
+        });
+        let placed =
+            classify_packets::<W, P, S, M>(prep, sampler, ws, n, depth, kinds, in_place, &mut queues, &mut len, probe);
         debug_assert!(
-            ws.hit[..n].iter().filter(|&&h| h != MISS).count() == len.iter().sum::<usize>(),
+            ws.hit[..n].iter().filter(|&&h| h != MISS).count() == len.iter().sum::<usize>() + placed,
             "the plan left out a kind that was hit"
         );
     } else {
@@ -552,19 +642,18 @@ fn bounce<W: Wide, P: Probe, S: PathSampler, const M: bool>(
             len[q] += 1;
         }
     }
-    ws.next.len = 0;
     for kind in Kind::ALL {
         let (q, qlen) = (&queues[kind as usize], len[kind as usize]);
         match prep.plan.mode {
             Mode::Path if kind == Kind::DiffuseLight && prep.plan.kinds.contains(kind) => {
-                for_packets::<W, P>(q, qlen, probe, |idx, active, probe| {
-                    let Hits { srf, albedo: emit, param, .. } = surfaces::<W, P, M>(prep, ws, idx, active, probe);
+                for_packets::<W, P>(q, qlen, probe, |at, probe| {
+                    let Hits { srf, albedo: emit, param, .. } = surfaces::<W, P, M>(prep, ws, at, probe);
                     let one_sided = param.gt(W::splat(0.0));
-                    let c = v3_gather::<W>(&ws.cur.thr, idx).mul_elem(emission(emit, one_sided, srf.front));
+                    let c = at.v3(&ws.cur.thr).mul_elem(emission(emit, one_sided, srf.front));
                     if nee {
-                        write_results::<W, true>(ws, idx, active, c * light_weight::<W, M>(prep, ws, idx));
+                        write_results::<W, true>(ws, at, c * light_weight::<W, M>(prep, ws, at));
                     } else {
-                        write_results::<W, false>(ws, idx, active, c);
+                        write_results::<W, false>(ws, at, c);
                     }
                 });
             }
@@ -578,25 +667,23 @@ fn bounce<W: Wide, P: Probe, S: PathSampler, const M: bool>(
             // estimator's are the ones it always ran (the same instructions
             // per ray).
             Mode::Path if prep.plan.kinds.contains(kind) && prep.plan.sample_toward > 0 => {
-                for_packets::<W, P>(q, qlen, probe, |idx, active, probe| {
-                    scatter::<W, P, S, M>(prep, sampler, ws, kind, depth, idx, active, false, Dirs::Book, probe)
+                for_packets::<W, P>(q, qlen, probe, |at, probe| {
+                    scatter::<W, P, S, M>(prep, sampler, ws, kind, depth, at, false, Dirs::Book, probe)
                 });
             }
             Mode::Path if prep.plan.kinds.contains(kind) && nee => {
-                for_packets::<W, P>(q, qlen, probe, |idx, active, probe| {
-                    scatter::<W, P, S, M>(prep, sampler, ws, kind, depth, idx, active, false, Dirs::Nee, probe)
+                for_packets::<W, P>(q, qlen, probe, |at, probe| {
+                    scatter::<W, P, S, M>(prep, sampler, ws, kind, depth, at, false, Dirs::Nee, probe)
                 });
             }
             Mode::Path if prep.plan.kinds.contains(kind) => {
-                for_packets::<W, P>(q, qlen, probe, |idx, active, probe| {
-                    scatter::<W, P, S, M>(prep, sampler, ws, kind, depth, idx, active, false, Dirs::Bsdf, probe)
+                for_packets::<W, P>(q, qlen, probe, |at, probe| {
+                    scatter::<W, P, S, M>(prep, sampler, ws, kind, depth, at, false, Dirs::Bsdf, probe)
                 });
             }
             Mode::Path => debug_assert!(qlen == 0, "the plan left out a kind that was hit"),
             mode @ (Mode::Flat | Mode::Normals | Mode::Gradient) => {
-                for_packets::<W, P>(q, qlen, probe, |idx, active, probe| {
-                    debug_shade::<W, P, M>(prep, ws, mode, idx, active, probe)
-                });
+                for_packets::<W, P>(q, qlen, probe, |at, probe| debug_shade::<W, P, M>(prep, ws, mode, at, probe));
             }
         }
     }
@@ -609,33 +696,79 @@ fn bounce<W: Wide, P: Probe, S: PathSampler, const M: bool>(
 }
 
 /// The classification of a scene of spheres only, W paths at a time: the
-/// packet's material kinds (one lookup per lane in `kind_of`, whose length
-/// is a power of two above every hit index), then, per kind in `kinds`, the
-/// indices of its lanes compressed onto its queue, in path order as one path
-/// at a time would append them. Misses join no queue (their pass is
-/// `shade_misses`). The surface kinds are a constant each (the loop over them
-/// is unrolled), so each queue's length stays in a register and a kind the
-/// scene does not have costs one predictable branch.
+/// packet's material kinds (one lookup per lane in the spheres' kind table,
+/// whose length is a power of two above every hit index). A packet whose
+/// hits all share a kind of `in_place` (by `Kind as usize`), and that has
+/// at least three quarters of its lanes hit, is scattered where it is (the
+/// bsdf estimator's pass), its paths read by whole-vector loads (a [`Run`]):
+/// the image does not depend on the order in which paths join the next
+/// bounce, only the packets' make-up does. Any other packet's hit lanes are compressed,
+/// per kind in `kinds`, onto that kind's queue, in path order as one path at
+/// a time would append them. Misses join no queue (their pass is
+/// `shade_misses`). The surface kinds are a constant each (the loop over
+/// them is unrolled), so each queue's length stays in a register and a kind
+/// the scene does not have costs one predictable branch. Returns the number
+/// of hits scattered in place (debug builds; 0 otherwise).
 #[inline(always)]
-fn classify_packets<W: Wide>(
-    kind_of: &[Kind],
-    hit: &Arr<u32>,
+#[allow(clippy::too_many_arguments)]
+fn classify_packets<W: Wide, P: Probe, S: PathSampler, const M: bool>(
+    prep: &Prepared,
+    sampler: S,
+    ws: &mut Workspace,
     n: usize,
+    depth: u32,
     kinds: KindSet,
+    in_place: [bool; Kind::SURFACES.len()],
     queues: &mut [Arr<u32>; MISS_QUEUE + 1],
     len: &mut [usize; MISS_QUEUE + 1],
-) {
-    const S: usize = Kind::SURFACES.len();
+    probe: &mut P,
+) -> usize {
+    const SURF: usize = Kind::SURFACES.len();
+    // The fewest hits a packet scattered in place has: its lanes' arithmetic
+    // is a whole packet's whatever their number, so an emptier one costs
+    // more than the queue it saves (measured: docs/performance.md).
+    let full_enough = W::LANES * 3 / 4;
+    let kind_of = &prep.spheres.kind[..];
     let kind_mask = kind_of.len().wrapping_sub(1);
-    let want: [bool; S] = Kind::SURFACES.map(|k| kinds.contains(k));
-    let mut lens: [usize; S] = Kind::SURFACES.map(|k| len[k as usize]);
+    let want: [bool; SURF] = Kind::SURFACES.map(|k| kinds.contains(k));
+    let mut lens: [usize; SURF] = Kind::SURFACES.map(|k| len[k as usize]);
     let iota = W::u_from_fn(|k| k as u32);
+    // In place: the bsdf estimator's passes only (book one's scenes, and
+    // any scene of spheres without emitters); the others' queues are kept.
+    debug_assert!(Dirs::of(prep) == Dirs::Bsdf || !in_place.contains(&true));
+    let mut placed = 0;
     for i in (0..n).step_by(W::LANES) {
-        let hit = W::load_u_pow2(hit, i);
+        let hit = W::load_u_pow2(&ws.hit, i);
         let hits = W::mask_bits(W::u_lt(hit, W::u_splat(MISS))) & low_bits(n - i);
         let kind = W::u_from_fn(|k| kind_of[W::lane_u(hit, k) as usize & kind_mask] as u32);
+        if hits != 0 {
+            let first = W::lane_u(kind, hits.trailing_zeros() as usize & (W::LANES - 1));
+            let same = W::mask_bits(W::u_eq(kind, W::u_splat(first))) & hits;
+            if same == hits && hits.count_ones() as usize >= full_enough && in_place[first as usize & (SURF - 1)] {
+                probe.lanes(Stage::Scatter, hits.count_ones(), W::LANES as u32);
+                if cfg!(debug_assertions) {
+                    placed += hits.count_ones() as usize;
+                }
+                let run = Run { i, live: hits };
+                // The kind a literal in each arm: each scatter is compiled for its kind.
+                const LAMBERTIAN: u32 = Kind::Lambertian as u32;
+                const METAL: u32 = Kind::Metal as u32;
+                let bsdf = Dirs::Bsdf;
+                match first {
+                    LAMBERTIAN => {
+                        scatter::<W, P, S, M>(prep, sampler, ws, Kind::Lambertian, depth, run, false, bsdf, probe)
+                    }
+                    METAL => scatter::<W, P, S, M>(prep, sampler, ws, Kind::Metal, depth, run, false, bsdf, probe),
+                    _ => {
+                        debug_assert_eq!(first, Kind::Dielectric as u32);
+                        scatter::<W, P, S, M>(prep, sampler, ws, Kind::Dielectric, depth, run, false, bsdf, probe)
+                    }
+                }
+                continue;
+            }
+        }
         let idx = iota.wrapping_add(W::u_splat(i as u32));
-        for s in 0..S {
+        for s in 0..SURF {
             if want[s] {
                 let k = Kind::SURFACES[s];
                 let keep = W::mask_bits(W::u_eq(kind, W::u_splat(k as u32))) & hits;
@@ -646,6 +779,7 @@ fn classify_packets<W: Wide>(
     for (s, k) in Kind::SURFACES.into_iter().enumerate() {
         len[k as usize] = lens[s];
     }
+    placed
 }
 
 /// How a diffuse vertex chooses its direction: the estimator of the render,
@@ -660,17 +794,30 @@ enum Dirs {
     Nee,
 }
 
+impl Dirs {
+    /// The plan's.
+    fn of(prep: &Prepared) -> Self {
+        if prep.plan.sample_toward > 0 {
+            Dirs::Book
+        } else if prep.plan.nee > 0 {
+            Dirs::Nee
+        } else {
+            Dirs::Bsdf
+        }
+    }
+}
+
 /// The power heuristic's weight of the lights a packet of queued paths hit
 /// (`nee-mis`): each lane's light density in its path's direction from the
 /// ray's origin, against the density its direction was drawn with.
 #[inline(never)]
-fn light_weight<W: Wide, const M: bool>(prep: &Prepared, ws: &Workspace, idx: &W::Idx) -> W {
-    let hit = W::gather_u_pow2(&ws.hit, idx);
+fn light_weight<W: Wide, const M: bool>(prep: &Prepared, ws: &Workspace, at: Queued<W>) -> W {
+    let hit = at.u(&ws.hit);
     let e = &prep.emitters;
     let shape = W::u_from_fn(|k| e.of_row[material_row::<M>(prep, W::lane_u(hit, k))]);
-    let o = v3_gather::<W>(&ws.cur.o, idx);
-    let d = v3_gather::<W>(&ws.cur.d, idx);
-    mis_bsdf(W::gather_pow2(&ws.cur.pdf, idx), e.pdf_of(o, d, shape))
+    let o = at.v3(&ws.cur.o);
+    let d = at.v3(&ws.cur.d);
+    mis_bsdf(at.f(&ws.cur.pdf), e.pdf_of(o, d, shape))
 }
 
 /// The shadow rays of the bounce (`nee-mis`), W contiguous rays per packet:
@@ -758,34 +905,29 @@ fn isotropic_pass<W: Wide, P: Probe, S: PathSampler, const M: bool>(
     probe: &mut P,
 ) {
     let m = &prep.media;
-    for_packets::<W, P>(queue, len, probe, |idx, active, _| {
+    for_packets::<W, P>(queue, len, probe, |at, _| {
         let cur = &ws.cur;
-        let hit = W::gather_u_pow2(&ws.hit, idx);
+        let hit = at.u(&ws.hit);
         let k = |j: usize| W::lane_u(hit, j).wrapping_sub(MEDIUM_BASE) as usize;
         let albedo = V3::new(
             W::from_fn(|j| m.albedo[k(j)][0]),
             W::from_fn(|j| m.albedo[k(j)][1]),
             W::from_fn(|j| m.albedo[k(j)][2]),
         );
-        let d = v3_gather::<W>(&cur.d, idx);
-        let p = v3_gather::<W>(&cur.o, idx) + d * W::gather_pow2(&ws.t, idx);
-        let mut rng = sampler.lanes::<W>(std::array::from_fn(|w| {
-            if w < S::WORDS {
-                W::gather_u_pow2(&cur.rng[w], idx)
-            } else {
-                W::u_splat(0)
-            }
-        }));
+        let d = at.v3(&cur.d);
+        let p = at.v3(&cur.o) + d * at.f(&ws.t);
+        let mut rng =
+            sampler.lanes::<W>(std::array::from_fn(|w| if w < S::WORDS { at.u(&cur.rng[w]) } else { W::u_splat(0) }));
         rng.seek(prep.bounces.scatter(depth));
         let dir = unit_vector(&mut rng);
-        let thr = v3_gather::<W>(&cur.thr, idx);
+        let thr = at.v3(&cur.thr);
         let nee = prep.plan.nee > 0;
         let (dir, albedo) = if prep.plan.sample_toward == 0 {
             if nee && depth + 1 < prep.settings.max_depth {
                 let (ld, t, carry) =
                     next_event(&prep.emitters, p, |_| W::splat(ISOTROPIC_PDF), prep.bounces.light(depth), &mut rng);
                 let c = thr.mul_elem(albedo.mul_elem(carry));
-                queue_shadow::<W, M>(ws, idx, active, Shadow { o: p, d: ld, tmax: shadow_tmax(t, W::splat(0.0)), c });
+                queue_shadow::<W, M>(ws, at, Shadow { o: p, d: ld, tmax: shadow_tmax(t, W::splat(0.0)), c });
             }
             (dir, albedo)
         } else {
@@ -796,7 +938,7 @@ fn isotropic_pass<W: Wide, P: Probe, S: PathSampler, const M: bool>(
         let thr = thr.mul_elem(albedo);
         let all = W::mask_from_bits(u32::MAX);
         let pdf = nee.then(|| W::splat(ISOTROPIC_PDF));
-        continue_paths::<W, S, M>(prep, ws, idx, active, depth, prep.bounces, rng, thr, all, p, dir, pdf);
+        continue_paths::<W, S, M>(prep, ws, at, depth, prep.bounces, rng, thr, all, p, dir, pdf);
     });
 }
 
@@ -851,12 +993,12 @@ fn textured_lambertian_pass<W: Wide, P: Probe, S: PathSampler, const M: bool>(
         let q = kind as usize - 1;
         // The texture passes are not observed by probes: their lanes are the
         // lambertian pass's, which reports them.
-        for_packets::<W, ()>(&tq[q], tlen[q], &mut (), |idx, active, _| {
-            let Hits { srf, .. } = surfaces::<W, (), M>(prep, ws, idx, active, &mut ());
-            let hits = W::gather_u_pow2(&ws.hit, idx);
+        for_packets::<W, ()>(&tq[q], tlen[q], &mut (), |at, _| {
+            let Hits { srf, .. } = surfaces::<W, (), M>(prep, ws, at, &mut ());
+            let hits = at.u(&ws.hit);
             let row = |k: usize| m.lambertian_tex[material_row::<M>(prep, W::lane_u(hits, k))].row as usize;
             let c = texture_albedo(prep, kind, srf.p, |k| W::lane_u(hits, k), row);
-            for (k, &i) in idx.as_ref().iter().enumerate().take(active) {
+            for (k, &i) in at.idx.as_ref().iter().enumerate().take(at.live.count_ones() as usize) {
                 let i = i as usize & MASK;
                 ws.albedo[0][i] = c.x.lane(k);
                 ws.albedo[1][i] = c.y.lane(k);
@@ -865,15 +1007,9 @@ fn textured_lambertian_pass<W: Wide, P: Probe, S: PathSampler, const M: bool>(
         });
     }
     ws.tex_queue = Some(tq);
-    let dirs = if prep.plan.sample_toward > 0 {
-        Dirs::Book
-    } else if prep.plan.nee > 0 {
-        Dirs::Nee
-    } else {
-        Dirs::Bsdf
-    };
-    for_packets::<W, P>(queue, len, probe, |idx, active, probe| {
-        scatter::<W, P, S, M>(prep, sampler, ws, Kind::Lambertian, depth, idx, active, true, dirs, probe)
+    let dirs = Dirs::of(prep);
+    for_packets::<W, P>(queue, len, probe, |at, probe| {
+        scatter::<W, P, S, M>(prep, sampler, ws, Kind::Lambertian, depth, at, true, dirs, probe)
     });
 }
 
@@ -891,16 +1027,11 @@ fn material_row<const M: bool>(prep: &Prepared, h: u32) -> usize {
 
 /// Calls `f` with each packet of W indices of the first `len` entries of
 /// `queue` (the last packet padded by repeating its first index, so every lane
-/// holds a real path) and the number of real lanes. The indices are masked
+/// holds a real path) and its real lanes. The indices are masked
 /// into the arrays' range (a no-op on indices below `MAX_PATHS`), so the
 /// gathers by them need no bounds checks.
 #[inline(always)]
-fn for_packets<W: Wide, P: Probe>(
-    queue: &Arr<u32>,
-    len: usize,
-    probe: &mut P,
-    mut f: impl FnMut(&W::Idx, usize, &mut P),
-) {
+fn for_packets<W: Wide, P: Probe>(queue: &Arr<u32>, len: usize, probe: &mut P, mut f: impl FnMut(Queued<W>, &mut P)) {
     debug_assert!(len <= MAX_PATHS && queue[..len].iter().all(|&i| (i as usize) < MAX_PATHS));
     for i in (0..len).step_by(W::LANES) {
         let active = (len - i).min(W::LANES);
@@ -909,14 +1040,14 @@ fn for_packets<W: Wide, P: Probe>(
         let run = W::u_select(W::mask_from_bits(low_bits(active)), run, first);
         let idx = W::idx_of(run & W::u_splat(MASK as u32));
         probe.lanes(Stage::Scatter, active as u32, W::LANES as u32);
-        f(&idx, active, probe);
+        f(Queued { idx, live: low_bits(active) }, probe);
     }
 }
 
 #[inline(always)]
-fn write_results<W: Wide, const ADD: bool>(ws: &mut Workspace, idx: &W::Idx, active: usize, c: V3<W>) {
-    let slot = W::gather_u_pow2(&ws.cur.slot, idx);
-    write_lanes::<W, ADD>(&mut ws.result, slot, low_bits(active), c);
+fn write_results<W: Wide, const ADD: bool>(ws: &mut Workspace, at: impl Packet<W>, c: V3<W>) {
+    let slot = at.u(&ws.cur.slot);
+    write_lanes::<W, ADD>(&mut ws.result, slot, at.live(), c);
 }
 
 /// `result[slot[k]] = c[k]` (`ADD`: `+= c[k]`) for the lanes k set in `lanes`.
@@ -957,27 +1088,29 @@ struct Hits<W: Wide> {
 fn surfaces<W: Wide, P: Probe, const M: bool>(
     prep: &Prepared,
     ws: &Workspace,
-    idx: &W::Idx,
-    active: usize,
+    at: impl Packet<W>,
     probe: &mut P,
 ) -> Hits<W> {
-    let sph = W::gather_u_pow2(&ws.hit, idx);
+    let sph = at.u(&ws.hit);
     if !M && prep.quads.is_empty() {
-        // Book one's surfaces, as they were.
-        let rec = W::gather_rows8(&prep.spheres.shade, &W::idx_of(sph));
+        // Book one's surfaces, as they were. The index is masked into the
+        // records' range: a no-op on a hit index, and a lane of a run that is
+        // not live (a miss's index, or a stale one) reads some record.
+        let rec =
+            W::gather_rows8(&prep.spheres.shade, &W::idx_of(sph & W::u_splat(prep.spheres.shade.len() as u32 - 1)));
         let c = V3::new(rec[Shade::CX], rec[Shade::CY], rec[Shade::CZ]);
         let r = rec[Shade::R];
-        let d = v3_gather::<W>(&ws.cur.d, idx);
-        let srf = surface(v3_gather::<W>(&ws.cur.o, idx), d, W::gather_pow2(&ws.t, idx), c, r);
+        let d = at.v3(&ws.cur.d);
+        let srf = surface(at.v3(&ws.cur.o), d, at.f(&ws.t), c, r);
         if P::PATHS {
-            probe.shaded(ws.ids::<W>(idx), sph, r, srf.n, srf.front, low_bits(active));
+            probe.shaded(ws.ids::<W>(&at.idx()), sph, r, srf.n, srf.front, at.live());
         }
         let a = Shade::ALBEDO;
         return Hits { d, srf, albedo: V3::new(rec[a], rec[a + 1], rec[a + 2]), param: rec[Shade::PARAM] };
     }
-    let d = v3_gather::<W>(&ws.cur.d, idx);
-    let o = v3_gather::<W>(&ws.cur.o, idx);
-    let t = W::gather_pow2(&ws.t, idx);
+    let d = at.v3(&ws.cur.d);
+    let o = at.v3(&ws.cur.o);
+    let t = at.f(&ws.t);
     let (srf, rec): (Surface<W>, [W; 8]) = {
         let is_sphere = W::u_lt(sph, W::u_splat(QUAD_BASE));
         let s_mask = W::u_splat(prep.spheres.shade.len() as u32 - 1);
@@ -985,7 +1118,7 @@ fn surfaces<W: Wide, P: Probe, const M: bool>(
         let srec = W::gather_rows8(&prep.spheres.shade, &W::idx_of(sph & s_mask));
         let qrec = W::gather_rows8(&prep.quads.shade, &W::idx_of(sph & q_mask));
         let (is_sphere, srec) =
-            if !M { (is_sphere, srec) } else { moving_records::<W>(prep, ws, idx, sph, is_sphere, srec) };
+            if !M { (is_sphere, srec) } else { moving_records::<W>(prep, at.f(&ws.cur.time), sph, is_sphere, srec) };
         let c = V3::new(srec[Shade::CX], srec[Shade::CY], srec[Shade::CZ]);
         let r = W::select(is_sphere, srec[Shade::R], W::splat(0.0));
         let s_srf = surface(o, d, t, c, srec[Shade::R]);
@@ -997,7 +1130,7 @@ fn surfaces<W: Wide, P: Probe, const M: bool>(
             offset: W::select(is_sphere, s_srf.offset, q_srf.offset),
         };
         if P::PATHS {
-            probe.shaded(ws.ids::<W>(idx), sph, r, srf.n, srf.front, low_bits(active));
+            probe.shaded(ws.ids::<W>(&at.idx()), sph, r, srf.n, srf.front, at.live());
         }
         (srf, std::array::from_fn(|k| W::select(is_sphere, srec[k], qrec[k])))
     };
@@ -1010,21 +1143,13 @@ fn surfaces<W: Wide, P: Probe, const M: bool>(
 /// time ([`centre_at`], the scalar kernel's formula), and the lanes counted
 /// as spheres.
 #[inline(never)]
-fn moving_records<W: Wide>(
-    prep: &Prepared,
-    ws: &Workspace,
-    idx: &W::Idx,
-    hit: W::U32,
-    is_sphere: W,
-    srec: [W; 8],
-) -> (W, [W; 8]) {
+fn moving_records<W: Wide>(prep: &Prepared, time: W, hit: W::U32, is_sphere: W, srec: [W; 8]) -> (W, [W; 8]) {
     let m = &prep.moving;
     let is_moving = !W::u_lt(hit, W::u_splat(MOVING_BASE));
     let m_mask = W::u_splat(m.s.shade.len() as u32 - 1);
     let midx = W::idx_of(hit & m_mask);
     let mut mrec = W::gather_rows8(&m.s.shade, &midx);
     let vel = W::gather_rows8(&m.vel, &midx);
-    let time = W::gather_pow2(&ws.cur.time, idx);
     let c =
         centre_at(V3::new(mrec[Shade::CX], mrec[Shade::CY], mrec[Shade::CZ]), V3::new(vel[0], vel[1], vel[2]), time);
     (mrec[Shade::CX], mrec[Shade::CY], mrec[Shade::CZ]) = (c.x, c.y, c.z);
@@ -1035,17 +1160,16 @@ fn debug_shade<W: Wide, P: Probe, const M: bool>(
     prep: &Prepared,
     ws: &mut Workspace,
     mode: Mode,
-    idx: &W::Idx,
-    active: usize,
+    at: Queued<W>,
     probe: &mut P,
 ) {
-    let hits = surfaces::<W, P, M>(prep, ws, idx, active, probe);
+    let hits = surfaces::<W, P, M>(prep, ws, at, probe);
     let c = match mode {
         Mode::Normals => normal_colour(hits.srf.n),
         // The flat colour (`MaterialTables::flat_colour`): the albedo, white for glass.
         Mode::Flat | Mode::Gradient | Mode::Path => hits.albedo,
     };
-    write_results::<W, false>(ws, idx, active, c);
+    write_results::<W, false>(ws, at, c);
 }
 
 /// Scatters a packet of paths that hit material `kind`; survivors join the next bounce.
@@ -1058,8 +1182,7 @@ fn scatter<W: Wide, P: Probe, S: PathSampler, const M: bool>(
     ws: &mut Workspace,
     kind: Kind,
     depth: u32,
-    idx: &W::Idx,
-    active: usize,
+    at: impl Packet<W>,
     textured: bool,
     dirs: Dirs,
     probe: &mut P,
@@ -1070,22 +1193,16 @@ fn scatter<W: Wide, P: Probe, S: PathSampler, const M: bool>(
     debug_assert_eq!(dirs == Dirs::Book, prep.plan.sample_toward > 0);
     debug_assert_eq!(dirs == Dirs::Nee, prep.plan.nee > 0);
     let dims = if dirs == Dirs::Bsdf { Bounces::BSDF } else { prep.bounces };
-    let Hits { d, srf, albedo, param } = surfaces::<W, P, M>(prep, ws, idx, active, probe);
+    let Hits { d, srf, albedo, param } = surfaces::<W, P, M>(prep, ws, at, probe);
     // A textured lambertian's record has parameter 1: its albedo is the one
     // its texture pass wrote.
-    let albedo =
-        if textured { V3::select(param.gt(W::splat(0.0)), v3_gather::<W>(&ws.albedo, idx), albedo) } else { albedo };
+    let albedo = if textured { V3::select(param.gt(W::splat(0.0)), at.v3(&ws.albedo), albedo) } else { albedo };
     let cur = &ws.cur;
-    let mut rng = sampler.lanes::<W>(std::array::from_fn(|w| {
-        if w < S::WORDS {
-            W::gather_u_pow2(&cur.rng[w], idx)
-        } else {
-            W::u_splat(0)
-        }
-    }));
+    let mut rng =
+        sampler.lanes::<W>(std::array::from_fn(|w| if w < S::WORDS { at.u(&cur.rng[w]) } else { W::u_splat(0) }));
     rng.seek(dims.scatter(depth));
     let all = W::mask_from_bits(u32::MAX);
-    let thr = v3_gather::<W>(&ws.cur.thr, idx);
+    let thr = at.v3(&ws.cur.thr);
     let (dir, alive, albedo) = match kind {
         Kind::Lambertian => {
             let dir = lambertian(srf.n, &mut rng);
@@ -1102,7 +1219,7 @@ fn scatter<W: Wide, P: Probe, S: PathSampler, const M: bool>(
                             next_event(&prep.emitters, srf.p, |d| cosine_pdf(srf.n, d), dims.light(depth), &mut rng);
                         let c = thr.mul_elem(albedo.mul_elem(carry));
                         let shadow = Shadow { o: spawn(&srf, ld), d: ld, tmax: shadow_tmax(t, srf.offset), c };
-                        queue_shadow::<W, M>(ws, idx, active, shadow);
+                        queue_shadow::<W, M>(ws, at, shadow);
                     }
                     (dir, all, albedo)
                 }
@@ -1122,7 +1239,7 @@ fn scatter<W: Wide, P: Probe, S: PathSampler, const M: bool>(
     // it reaches: the cosine lobe's, 0 for a specular bounce.
     let pdf =
         (dirs == Dirs::Nee).then(|| if kind == Kind::Lambertian { cosine_pdf(srf.n, dir) } else { W::splat(0.0) });
-    continue_paths::<W, S, M>(prep, ws, idx, active, depth, dims, rng, thr, alive, spawn(&srf, dir), dir, pdf);
+    continue_paths::<W, S, M>(prep, ws, at, depth, dims, rng, thr, alive, spawn(&srf, dir), dir, pdf);
 }
 
 /// A packet's light samples (`nee-mis`): shadow rays from `o` along `d` to
@@ -1137,15 +1254,15 @@ struct Shadow<W: Wide> {
 /// Appends the real lanes of a packet's light samples that carry anything
 /// to the shadow queue, as the scalar kernel traces exactly those.
 #[inline(always)]
-fn queue_shadow<W: Wide, const M: bool>(ws: &mut Workspace, idx: &W::Idx, active: usize, sh: Shadow<W>) {
+fn queue_shadow<W: Wide, const M: bool>(ws: &mut Workspace, at: impl Packet<W>, sh: Shadow<W>) {
     let zero = W::splat(0.0);
     let carries = sh.c.x.gt(zero) | sh.c.y.gt(zero) | sh.c.z.gt(zero);
-    let keep = W::mask_bits(carries) & low_bits(active);
+    let keep = W::mask_bits(carries) & at.live();
     if keep == 0 {
         return;
     }
-    let slot = W::gather_u_pow2(&ws.cur.slot, idx);
-    let time = if M { Some(W::gather_pow2(&ws.cur.time, idx)) } else { None };
+    let slot = at.u(&ws.cur.slot);
+    let time = if M { Some(at.f(&ws.cur.time)) } else { None };
     ws.shadows.append::<W>(keep, sh.o, sh.d, sh.tmax, sh.c, slot, time);
 }
 
@@ -1159,8 +1276,7 @@ fn queue_shadow<W: Wide, const M: bool>(ws: &mut Workspace, idx: &W::Idx, active
 fn continue_paths<W: Wide, S: PathSampler, const M: bool>(
     prep: &Prepared,
     ws: &mut Workspace,
-    idx: &W::Idx,
-    active: usize,
+    at: impl Packet<W>,
     depth: u32,
     dims: Bounces,
     mut rng: S::Lanes<W>,
@@ -1180,9 +1296,9 @@ fn continue_paths<W: Wide, S: PathSampler, const M: bool>(
         thr = t;
         alive = alive & survives;
     }
-    let alive = W::mask_bits(alive) & low_bits(active);
+    let alive = W::mask_bits(alive) & at.live();
     let cur = &ws.cur;
-    let slot = W::gather_u_pow2(&cur.slot, idx);
-    let time = if M { Some(W::gather_pow2(&cur.time, idx)) } else { None };
+    let slot = at.u(&cur.slot);
+    let time = if M { Some(at.f(&cur.time)) } else { None };
     ws.next.append::<W, S>(alive, o, dir, thr, S::lane_words::<W>(&rng), slot, time, pdf);
 }
