@@ -609,6 +609,7 @@ impl<L: LeafPrim> Bvh<L> {
                     V3::new(node.max[0][k], node.max[1][k], node.max[2][k]),
                     inv,
                     noi,
+                    0.0,
                 );
                 if !(near <= far * EXIT_SCALE && near <= best.t * PRUNE_SCALE) {
                     continue;
@@ -690,7 +691,12 @@ impl<L: LeafPrim> Bvh<L> {
         let mut tally = WorkTally::<P>::new();
         let (inv, noi) = slab_ray(o, d);
         let mut stack = Stack::new(0u32);
-        let exit = W::splat(EXIT_SCALE);
+        // The box loop needs every vector register on AVX2 (16): constants
+        // the compiler may rebuild are rebuilt inside it, one instruction
+        // each per box test. Opaque, they are kept in memory and read as the
+        // operands of the instructions that use them, for free.
+        let exit = std::hint::black_box(W::splat(EXIT_SCALE));
+        let zero = std::hint::black_box(W::splat(0.0));
         let prune = W::splat(PRUNE_SCALE);
         while let Some(ni) = stack.pop() {
             tally.work(Work::Node, 1);
@@ -700,7 +706,7 @@ impl<L: LeafPrim> Bvh<L> {
             for k in 0..kids {
                 let bmin = V3::new(node.min[0][k], node.min[1][k], node.min[2][k]);
                 let bmax = V3::new(node.max[0][k], node.max[1][k], node.max[2][k]);
-                let (near, far) = slab(V3::splat3(bmin.to_array()), V3::splat3(bmax.to_array()), inv, noi);
+                let (near, far) = slab(V3::splat3(bmin.to_array()), V3::splat3(bmax.to_array()), inv, noi, zero);
                 let enter = near.le(far * exit) & near.le(best.t * prune);
                 if !enter.any() {
                     continue;
@@ -740,7 +746,7 @@ impl Bvh {
             let node = &self.nodes[ni as usize];
             let bmin = V3::new(f32x8::new(node.min[0]), f32x8::new(node.min[1]), f32x8::new(node.min[2]));
             let bmax = V3::new(f32x8::new(node.max[0]), f32x8::new(node.max[1]), f32x8::new(node.max[2]));
-            let (near, far) = slab(bmin, bmax, inv8, noi8);
+            let (near, far) = slab(bmin, bmax, inv8, noi8, f32x8::splat(0.0));
             let ok = near.le(far * f32x8::splat(EXIT_SCALE)) & near.le(f32x8::splat(best.t * PRUNE_SCALE));
             // The empty slots (the last ones) hold zero boxes that a ray may enter.
             let mut mask = ok.to_bitmask() & ((1u32 << node.kids()) - 1);
@@ -874,17 +880,17 @@ fn slab_ray<R: Real>(o: V3<R>, d: V3<R>) -> (V3<R>, V3<R>) {
     (inv, -o.mul_elem(inv))
 }
 
-/// Entry and exit distances of the rays through boxes, entry clamped at 0,
-/// given [`slab_ray`]'s `1/d` and `-(o * (1/d))`: each face's distance is one
+/// Entry and exit distances of the rays through boxes, entry clamped at
+/// `zero` (0, passed in so that a caller can make it opaque), given [`slab_ray`]'s `1/d` and `-(o * (1/d))`: each face's distance is one
 /// fused multiply-add (see the module's error bounds).
 #[inline(always)]
-fn slab<R: Real>(bmin: V3<R>, bmax: V3<R>, inv: V3<R>, noi: V3<R>) -> (R, R) {
+fn slab<R: Real>(bmin: V3<R>, bmax: V3<R>, inv: V3<R>, noi: V3<R>, zero: R) -> (R, R) {
     let face = |b: R, inv: R, noi: R| b.mul_add_bound(inv, noi);
     let t0 = V3::new(face(bmin.x, inv.x, noi.x), face(bmin.y, inv.y, noi.y), face(bmin.z, inv.z, noi.z));
     let t1 = V3::new(face(bmax.x, inv.x, noi.x), face(bmax.y, inv.y, noi.y), face(bmax.z, inv.z, noi.z));
     // No NaN can arise (|1/d| <= 1e30, finite coordinates) and the test only
     // needs to be conservative, so the one-instruction min/max do.
-    let near = t0.x.fast_min(t1.x).fast_max(t0.y.fast_min(t1.y)).fast_max(t0.z.fast_min(t1.z)).fast_max(R::splat(0.0));
+    let near = t0.x.fast_min(t1.x).fast_max(t0.y.fast_min(t1.y)).fast_max(t0.z.fast_min(t1.z)).fast_max(zero);
     let far = t0.x.fast_max(t1.x).fast_min(t0.y.fast_max(t1.y)).fast_min(t0.z.fast_max(t1.z));
     (near, far)
 }
