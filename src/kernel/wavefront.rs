@@ -734,7 +734,8 @@ fn classify_packets<W: Wide, P: Probe, S: PathSampler, const M: bool>(
     let mut lens: [usize; SURF] = Kind::SURFACES.map(|k| len[k as usize]);
     let iota = W::u_from_fn(|k| k as u32);
     // In place: the bsdf estimator's passes only (book one's scenes, and
-    // any scene of spheres without emitters); the others' queues are kept.
+    // any other sphere-only scene rendered with it); under the book and
+    // nee-mis estimators every packet is queued, as before.
     debug_assert!(Dirs::of(prep) == Dirs::Bsdf || !in_place.contains(&true));
     let mut placed = 0;
     for i in (0..n).step_by(W::LANES) {
