@@ -11,8 +11,9 @@
 //!     misses:    W contiguous paths at a time, throughput x background (sky or constant) -> results
 //!     classify:  each path that hit joins the queue of its hit's material kind,
 //!                but a packet of contiguous paths whose hits share a kind
-//!                (three quarters of its lanes at least; sphere-only scenes,
-//!                bsdf estimator) is scattered where it is, without a queue
+//!                (three quarters of its lanes at least; scenes without
+//!                moving spheres or media, bsdf estimator) is scattered where
+//!                it is, without a queue
 //!     light pass (scenes with lights): throughput x emission -> the result; the path ends
 //!     texture passes (scenes with textures): one per texture kind, over the
 //!         lambertian hits of that kind, writing each path's albedo
@@ -593,12 +594,13 @@ fn bounce<W: Wide, P: Probe, S: PathSampler, const M: bool>(
     let quad_mask = prep.quads.kind.len().wrapping_sub(1);
     let moving_mask = prep.moving.s.kind.len().wrapping_sub(1);
     debug_assert!(prep.spheres.kind.len().is_power_of_two() && prep.quads.kind.len().is_power_of_two());
-    // A scene without quads classifies W paths at a time: the packet's
-    // material kinds (one lookup per lane); a packet whose hits share a kind
+    // A scene without moving spheres or media classifies W paths at a time:
+    // the packet's material kinds (one lookup per lane, in the spheres' or
+    // the quads' table); a packet whose hits share a kind
     // that has a plain scatter pass is scattered where it is; the others'
     // lanes are compressed onto their kinds' queues, in path order as one
     // path at a time would append them. Misses (shaded above) join no queue.
-    if !M && prep.quads.is_empty() && prep.media.is_empty() {
+    if !M && prep.media.is_empty() {
         // The path tracer queues only the kinds it has passes for (the plan's);
         // the debug modes shade every kind.
         let path = prep.plan.mode == Mode::Path;
@@ -614,8 +616,35 @@ fn bounce<W: Wide, P: Probe, S: PathSampler, const M: bool>(
                     Kind::DiffuseLight | Kind::Isotropic => false,
                 }
         });
-        let placed =
-            classify_packets::<W, P, S, M>(prep, sampler, ws, n, depth, kinds, in_place, &mut queues, &mut len, probe);
+        // Compiled apart for a scene with quads: a sphere-only scene's
+        // packets read one kind table, with no test per lane.
+        let placed = if prep.quads.is_empty() {
+            classify_packets::<W, P, S, M, false>(
+                prep,
+                sampler,
+                ws,
+                n,
+                depth,
+                kinds,
+                in_place,
+                &mut queues,
+                &mut len,
+                probe,
+            )
+        } else {
+            classify_packets::<W, P, S, M, true>(
+                prep,
+                sampler,
+                ws,
+                n,
+                depth,
+                kinds,
+                in_place,
+                &mut queues,
+                &mut len,
+                probe,
+            )
+        };
         debug_assert!(
             ws.hit[..n].iter().filter(|&&h| h != MISS).count() == len.iter().sum::<usize>() + placed,
             "the plan left out a kind that was hit"
@@ -695,9 +724,10 @@ fn bounce<W: Wide, P: Probe, S: PathSampler, const M: bool>(
     n as u64
 }
 
-/// The classification of a scene of spheres only, W paths at a time: the
-/// packet's material kinds (one lookup per lane in the spheres' kind table,
-/// whose length is a power of two above every hit index). A packet whose
+/// The classification of a scene of spheres and quads (no moving spheres, no
+/// media), W paths at a time: the packet's material kinds (one lookup per
+/// lane in the spheres' or, for a quad's hit index, the quads' kind table,
+/// each a power of two long above every index it is read at). A packet whose
 /// hits all share a kind of `in_place` (by `Kind as usize`), and that has
 /// at least three quarters of its lanes hit, is scattered where it is (the
 /// bsdf estimator's pass), its paths read by whole-vector loads (a [`Run`]):
@@ -711,7 +741,7 @@ fn bounce<W: Wide, P: Probe, S: PathSampler, const M: bool>(
 /// of hits scattered in place (debug builds; 0 otherwise).
 #[inline(always)]
 #[allow(clippy::too_many_arguments)]
-fn classify_packets<W: Wide, P: Probe, S: PathSampler, const M: bool>(
+fn classify_packets<W: Wide, P: Probe, S: PathSampler, const M: bool, const Q: bool>(
     prep: &Prepared,
     sampler: S,
     ws: &mut Workspace,
@@ -730,18 +760,36 @@ fn classify_packets<W: Wide, P: Probe, S: PathSampler, const M: bool>(
     let full_enough = W::LANES * 3 / 4;
     let kind_of = &prep.spheres.kind[..];
     let kind_mask = kind_of.len().wrapping_sub(1);
+    // `Q`: the scene has quads (a sphere-only scene reads one table; the
+    // quads' may be empty).
+    debug_assert_eq!(Q, !prep.quads.is_empty());
+    let quad_kind = &prep.quads.kind[..];
+    let quad_mask = quad_kind.len().wrapping_sub(1);
     let want: [bool; SURF] = Kind::SURFACES.map(|k| kinds.contains(k));
     let mut lens: [usize; SURF] = Kind::SURFACES.map(|k| len[k as usize]);
     let iota = W::u_from_fn(|k| k as u32);
     // In place: the bsdf estimator's passes only (book one's scenes, and
-    // any other sphere-only scene rendered with it); under the book and
+    // any other scene this classification serves, rendered with it); under the book and
     // nee-mis estimators every packet is queued, as before.
     debug_assert!(Dirs::of(prep) == Dirs::Bsdf || !in_place.contains(&true));
     let mut placed = 0;
     for i in (0..n).step_by(W::LANES) {
         let hit = W::load_u_pow2(&ws.hit, i);
         let hits = W::mask_bits(W::u_lt(hit, W::u_splat(MISS))) & low_bits(n - i);
-        let kind = W::u_from_fn(|k| kind_of[W::lane_u(hit, k) as usize & kind_mask] as u32);
+        let kind = if Q {
+            // Misses (MISS is above every quad's index) read some quad's
+            // kind; their lanes are not in `hits`.
+            W::u_from_fn(|k| {
+                let h = W::lane_u(hit, k);
+                if h < QUAD_BASE {
+                    kind_of[h as usize & kind_mask] as u32
+                } else {
+                    quad_kind[(h - QUAD_BASE) as usize & quad_mask] as u32
+                }
+            })
+        } else {
+            W::u_from_fn(|k| kind_of[W::lane_u(hit, k) as usize & kind_mask] as u32)
+        };
         if hits != 0 {
             let first = W::lane_u(kind, hits.trailing_zeros() as usize & (W::LANES - 1));
             let same = W::mask_bits(W::u_eq(kind, W::u_splat(first))) & hits;
