@@ -162,6 +162,20 @@ impl Paths {
     fn v3<W: Wide>(v: &[Arr<f32>; 3], i: usize) -> V3<W> {
         V3::new(W::load_pow2(&v[0], i), W::load_pow2(&v[1], i), W::load_pow2(&v[2], i))
     }
+
+    /// The sampler streams of a packet's paths (their `S::WORDS` words each).
+    #[inline(always)]
+    fn rng<W: Wide, S: PathSampler>(&self, sampler: S, at: impl Packet<W>) -> S::Lanes<W> {
+        sampler.lanes::<W>(std::array::from_fn(|w| if w < S::WORDS { at.u(&self.rng[w]) } else { W::u_splat(0) }))
+    }
+
+    /// Stores the streams of the run of paths at `i` back.
+    #[inline(always)]
+    fn store_rng<W: Wide, S: PathSampler>(&mut self, rng: &S::Lanes<W>, i: usize) {
+        for (w, words) in S::lane_words::<W>(rng).into_iter().enumerate().take(S::WORDS) {
+            W::store_u_pow2(words, &mut self.rng[w], i);
+        }
+    }
 }
 
 /// Stores the lanes of `keep` (a bitmask) of `x` at `v[at..]`, in lane
@@ -513,13 +527,7 @@ fn generate<W: Wide, P: Probe, S: PathSampler, const M: bool>(
     p.len = n;
     for i in (0..n).step_by(W::LANES) {
         let p = &mut ws.cur;
-        let mut rng = sampler.lanes::<W>(std::array::from_fn(|w| {
-            if w < S::WORDS {
-                W::load_u_pow2(&p.rng[w], i)
-            } else {
-                W::u_splat(0)
-            }
-        }));
+        let mut rng = p.rng::<W, S>(sampler, Run { i, live: low_bits(n - i) });
         let (o, d) = prep.camera.ray(W::load_pow2(&p.thr[0], i), W::load_pow2(&p.thr[1], i), &mut rng);
         if M {
             // The path's time, after its camera ray, as the scalar kernel draws it.
@@ -543,9 +551,7 @@ fn generate<W: Wide, P: Probe, S: PathSampler, const M: bool>(
         if prep.plan.nee > 0 {
             W::splat(0.0).store_pow2(&mut p.pdf, i);
         }
-        for (w, words) in S::lane_words::<W>(&rng).into_iter().enumerate().take(S::WORDS) {
-            W::store_u_pow2(words, &mut p.rng[w], i);
-        }
+        p.store_rng::<W, S>(&rng, i);
     }
 }
 
@@ -920,21 +926,13 @@ fn intersect<W: Wide, P: Probe, const M: bool>(prep: &Prepared, ws: &mut Workspa
 fn medium_pass<W: Wide, S: PathSampler>(prep: &Prepared, sampler: S, ws: &mut Workspace, n: usize, depth: u32) {
     for i in (0..n).step_by(W::LANES) {
         let p = &mut ws.cur;
-        let mut rng = sampler.lanes::<W>(std::array::from_fn(|w| {
-            if w < S::WORDS {
-                W::load_u_pow2(&p.rng[w], i)
-            } else {
-                W::u_splat(0)
-            }
-        }));
+        let mut rng = p.rng::<W, S>(sampler, Run { i, live: low_bits(n - i) });
         let (o, d) = (Paths::v3::<W>(&p.o, i), Paths::v3::<W>(&p.d, i));
         let (hit, t) = (W::load_u_pow2(&ws.hit, i), W::load_pow2(&ws.t, i));
         let (hit, t) = sample_media(&prep.media, o, d, hit, t, depth, &mut rng);
         W::store_u_pow2(hit, &mut ws.hit, i);
         t.store_pow2(&mut ws.t, i);
-        for (w, words) in S::lane_words::<W>(&rng).into_iter().enumerate().take(S::WORDS) {
-            W::store_u_pow2(words, &mut p.rng[w], i);
-        }
+        p.store_rng::<W, S>(&rng, i);
     }
 }
 
@@ -965,8 +963,7 @@ fn isotropic_pass<W: Wide, P: Probe, S: PathSampler, const M: bool>(
         );
         let d = at.v3(&cur.d);
         let p = at.v3(&cur.o) + d * at.f(&ws.t);
-        let mut rng =
-            sampler.lanes::<W>(std::array::from_fn(|w| if w < S::WORDS { at.u(&cur.rng[w]) } else { W::u_splat(0) }));
+        let mut rng = cur.rng::<W, S>(sampler, at);
         rng.seek(prep.bounces.scatter(depth));
         let dir = unit_vector(&mut rng);
         let thr = at.v3(&cur.thr);
@@ -1247,8 +1244,7 @@ fn scatter<W: Wide, P: Probe, S: PathSampler, const M: bool>(
     // its texture pass wrote.
     let albedo = if textured { V3::select(param.gt(W::splat(0.0)), at.v3(&ws.albedo), albedo) } else { albedo };
     let cur = &ws.cur;
-    let mut rng =
-        sampler.lanes::<W>(std::array::from_fn(|w| if w < S::WORDS { at.u(&cur.rng[w]) } else { W::u_splat(0) }));
+    let mut rng = cur.rng::<W, S>(sampler, at);
     rng.seek(dims.scatter(depth));
     let all = W::mask_from_bits(u32::MAX);
     let thr = at.v3(&ws.cur.thr);
