@@ -624,33 +624,23 @@ fn bounce<W: Wide, P: Probe, S: PathSampler, const M: bool>(
         });
         // Compiled apart for a scene with quads: a sphere-only scene's
         // packets read one kind table, with no test per lane.
-        let placed = if prep.quads.is_empty() {
-            classify_packets::<W, P, S, M, false>(
-                prep,
-                sampler,
-                ws,
-                n,
-                depth,
-                kinds,
-                in_place,
-                &mut queues,
-                &mut len,
-                probe,
-            )
-        } else {
-            classify_packets::<W, P, S, M, true>(
-                prep,
-                sampler,
-                ws,
-                n,
-                depth,
-                kinds,
-                in_place,
-                &mut queues,
-                &mut len,
-                probe,
-            )
-        };
+        macro_rules! classify {
+            ($quads:literal) => {
+                classify_packets::<W, P, S, M, $quads>(
+                    prep,
+                    sampler,
+                    ws,
+                    n,
+                    depth,
+                    kinds,
+                    in_place,
+                    &mut queues,
+                    &mut len,
+                    probe,
+                )
+            };
+        }
+        let placed = if prep.quads.is_empty() { classify!(false) } else { classify!(true) };
         debug_assert!(
             ws.hit[..n].iter().filter(|&&h| h != MISS).count() == len.iter().sum::<usize>() + placed,
             "the plan left out a kind that was hit"
