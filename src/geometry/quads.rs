@@ -20,7 +20,6 @@
 //! range test instead of 37, and 8 quad values broadcast per test instead of
 //! 16.
 //!
-//!
 //! * No epsilon on `n.d`: a ray parallel to the plane has `n.d = 0`, so `t` is
 //!   infinite or NaN and fails `0 < t < inf` (the book rejects `|n.d| < 1e-8`,
 //!   which also rejects real grazing hits of large quads).
@@ -145,12 +144,13 @@ impl Quads {
     /// in length around the quad (2.3e-3 in the Cornell box).
     ///
     /// The test computes `a` as `p.Ea - ka` (`Ea`, `ka` as the module says,
-    /// from the exact `u x v` in f64, rounded once to f32): its rounding is
-    /// the dot product's, about `3u sum |p_i Ea_i| + u |ka|`, which is
-    /// `sqrt 3 * 3u extent |Ea|`, in `a` (times `h`, about 1/2) about `5u
-    /// extent |v| / |u x v|`, inside the same band with the hit point's own
-    /// error (a margin above 2 where the old formula had 4: its cross
-    /// products added their own rounding).
+    /// from the exact `u x v` in f64, rounded once to f32): beyond the hit
+    /// point's own error, its rounding is the dot product's, at most about
+    /// `3u sum |p_i Ea_i| + u |ka|`, which in `a` (times `h`, about 1/2) is
+    /// about `5u extent |v| / |u x v|`: of the order of the book's formula's
+    /// (which rounds `p - Q`, a cross product and a dot product), inside the
+    /// same band. The f64 oracle's property test (`tests/suite/nextweek.rs`)
+    /// checks hits and misses against it, edges and grazing rays included.
     pub fn push(&mut self, q: [f32; 3], u: [f32; 3], v: [f32; 3], extent: f32, kind: Kind, row: u32) {
         let d3 = |a: [f32; 3]| glam::DVec3::from_array(a.map(f64::from));
         let (qd, ud, vd) = (d3(q), d3(u), d3(v));

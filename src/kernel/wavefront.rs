@@ -765,8 +765,8 @@ fn classify_packets<W: Wide, P: Probe, S: PathSampler, const M: bool, const Q: b
     let mut lens: [usize; SURF] = Kind::SURFACES.map(|k| len[k as usize]);
     let iota = W::u_from_fn(|k| k as u32);
     // In place: the bsdf estimator's passes only (book one's scenes, and
-    // any other scene this classification serves, rendered with it); under the book and
-    // nee-mis estimators every packet is queued, as before.
+    // any other scene this classification serves, rendered with it); under
+    // the book and nee-mis estimators every packet is queued, as before.
     debug_assert!(Dirs::of(prep) == Dirs::Bsdf || !in_place.contains(&true));
     let mut placed = 0;
     for i in (0..n).step_by(W::LANES) {
