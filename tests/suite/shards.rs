@@ -10,7 +10,7 @@ use common::{job, rtow, Run};
 use rtow::film::part;
 use rtow::scene::{preset, Scene};
 use rtow::shard::{self, FilmRequest, Part, Split, SplitKind};
-use rtow::{render, Adaptive, KernelChoice, RenderOptions, Settings};
+use rtow::{render, Adaptive, EstimatorChoice, KernelChoice, RenderOptions, Settings};
 use std::path::{Path, PathBuf};
 
 fn kernels() -> Vec<KernelChoice> {
@@ -109,6 +109,50 @@ fn a_resumed_render_is_the_render_with_more_samples() {
     let req = FilmRequest { split: Split::WHOLE, resume: Some((PathBuf::from("one.rtfilm"), one)) };
     let e = shard::check(&job(&scene, settings(8), opts(KernelChoice::Simd, 2, 16)), &req).unwrap_err().to_string();
     assert!(e.contains("one.rtfilm") && e.contains("pixel_jitter"), "{e}");
+}
+
+/// Every estimator keeps shards, merge and resume exact (the light samples'
+/// shadow rays included), and parts of different estimators never merge:
+/// the book's box, which both light-sampling estimators can sample.
+#[test]
+fn every_estimator_shards_merges_and_resumes_exactly() {
+    let scene = preset("rol-cornell-box").unwrap();
+    let with = |spp: u32, estimator: EstimatorChoice| Settings { estimator, ..settings(spp) };
+    let mut parts_of = Vec::new();
+    for estimator in EstimatorChoice::ALL.iter().copied() {
+        let s = with(7, estimator);
+        let one = render(&job(&scene, s, opts(KernelChoice::Simd, 2, 16)), None).unwrap();
+        for kernel in kernels() {
+            for split in
+                [Split { kind: SplitKind::Samples, shard: 0, of: 3 }, Split { kind: SplitKind::Rows, shard: 0, of: 2 }]
+            {
+                let parts: Vec<_> = (1..=split.of)
+                    .map(|k| shard_part(&scene, s, opts(kernel, 1 + k as usize % 2, 5), Split { shard: k, ..split }))
+                    .collect();
+                let merged = part::merge(&parts).unwrap();
+                assert_eq!(merged.film.image(), one.image, "{estimator:?} {kernel:?} {split:?}");
+                assert_eq!(merged.header.counters.rays, one.stats.rays);
+                if kernel == KernelChoice::Scalar && split.kind == SplitKind::Samples {
+                    parts_of.push(parts);
+                }
+            }
+            // Resumed from 3 samples, the 7-sample render.
+            let req = FilmRequest { split: Split::WHOLE, resume: None };
+            let (_, done) =
+                shard::render_part(&job(&scene, with(3, estimator), opts(kernel, 2, 16)), &req, None).unwrap();
+            let req = FilmRequest { split: Split::WHOLE, resume: Some((PathBuf::from("done.rtfilm"), done)) };
+            let (r, _) = shard::render_part(&job(&scene, s, opts(kernel, 2, 16)), &req, None).unwrap();
+            assert_eq!(r.image, one.image, "{estimator:?} {kernel:?}: resumed");
+        }
+    }
+    // Shard 1 of one estimator beside shards 2 and 3 of another: refused.
+    assert_eq!(parts_of.len(), EstimatorChoice::ALL.len());
+    for a in 0..parts_of.len() {
+        let b = (a + 1) % parts_of.len();
+        let mixed = [parts_of[a][0].clone(), parts_of[b][1].clone(), parts_of[b][2].clone()];
+        let e = part::merge(&mixed).map(|_| ()).unwrap_err().to_string();
+        assert!(e.contains("part-1.rtfilm"), "{e}");
+    }
 }
 
 #[test]
