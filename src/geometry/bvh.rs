@@ -119,12 +119,18 @@ pub struct LeafSphere {
     index: u32,
 }
 
-/// A leaf's quad: its record and its hit index (`QUAD_BASE + i`).
+/// A leaf's quad: its record and its hit index (`QUAD_BASE + i`). A leaf's
+/// quads are sorted by [`QuadRec::axis`] (those with a normal along x, then
+/// y, then z, then the others), and its first record says how many of each
+/// axis there are (`runs`), so that the leaf is tested in four loops, each
+/// with one form of the test ([`LeafPrim::test_leaf`]).
 #[derive(Clone, Copy, Debug)]
 #[repr(C)]
 pub struct LeafQuad {
     rec: QuadRec,
     index: u32,
+    /// In a leaf's first record: its quads with a normal along x, y and z.
+    runs: [u8; 4],
 }
 
 /// A leaf's moving sphere: its centre at time 0, motion, squared radius and
@@ -143,6 +149,14 @@ pub struct LeafMoving {
 /// closest hit (the tie rule is [`Closest::offer`]'s).
 pub trait LeafPrim: Copy + std::fmt::Debug {
     fn test<R: Real, P: Probe>(&self, o: V3<R>, d: V3<R>, time: R, best: &mut Closest<R>, probe: &mut P);
+
+    /// The primitives of one leaf, each tested in turn.
+    #[inline(always)]
+    fn test_leaf<R: Real, P: Probe>(leaf: &[Self], o: V3<R>, d: V3<R>, time: R, best: &mut Closest<R>, probe: &mut P) {
+        for s in leaf {
+            s.test(o, d, time, best, probe);
+        }
+    }
 }
 
 impl LeafPrim for LeafSphere {
@@ -157,6 +171,31 @@ impl LeafPrim for LeafQuad {
     #[inline(always)]
     fn test<R: Real, P: Probe>(&self, o: V3<R>, d: V3<R>, _time: R, best: &mut Closest<R>, probe: &mut P) {
         best.test_quad(o, d, &self.rec, self.index, probe);
+    }
+
+    /// The leaf's quads by axis, one loop per form of the test (with the
+    /// form chosen per quad, the compiler shares the forms' common end and
+    /// moves the closest hit between registers on every test). The tie rule
+    /// does not depend on the order of the tests.
+    #[inline(always)]
+    fn test_leaf<R: Real, P: Probe>(leaf: &[Self], o: V3<R>, d: V3<R>, _time: R, best: &mut Closest<R>, probe: &mut P) {
+        let Some(first) = leaf.first() else { return };
+        let [n0, n1, n2, _] = first.runs.map(usize::from);
+        let (x, rest) = leaf.split_at(n0.min(leaf.len()));
+        let (y, rest) = rest.split_at(n1.min(rest.len()));
+        let (z, rest) = rest.split_at(n2.min(rest.len()));
+        for q in x {
+            best.test_quad_axis::<0, P>(o, d, &q.rec, q.index, probe);
+        }
+        for q in y {
+            best.test_quad_axis::<1, P>(o, d, &q.rec, q.index, probe);
+        }
+        for q in z {
+            best.test_quad_axis::<2, P>(o, d, &q.rec, q.index, probe);
+        }
+        for q in rest {
+            best.test_quad_general(o, d, &q.rec, q.index, probe);
+        }
     }
 }
 
@@ -439,11 +478,27 @@ impl QuadBvh {
         let mut bvh =
             Bvh { nodes: Vec::new(), leaf: vec![], cx: vec![], cy: vec![], cz: vec![], r2: vec![], index: vec![] };
         for &i in &order {
-            bvh.leaf.push(LeafQuad { rec: q.rec[i as usize], index: QUAD_BASE + i });
+            bvh.leaf.push(LeafQuad { rec: q.rec[i as usize], index: QUAD_BASE + i, runs: [0; 4] });
         }
         bvh.nodes.push(Node8::EMPTY);
         if n > 0 {
             bvh.collapse(&bnodes, 0, 0);
+        }
+        // Each leaf's quads sorted by axis, the counts in its first record.
+        let leaves: Vec<(usize, usize)> = bvh
+            .nodes
+            .iter()
+            .flat_map(|node| {
+                (0..node.kids())
+                    .filter(|&k| node.count[k] != 0)
+                    .map(|k| (node.child[k] as usize, node.count[k] as usize))
+            })
+            .collect();
+        for (start, count) in leaves {
+            let leaf = &mut bvh.leaf[start..start + count];
+            leaf.sort_by_key(|q| q.rec.axis);
+            let runs = [0, 1, 2].map(|k| leaf.iter().filter(|q| q.rec.axis == k).count() as u8);
+            leaf[0].runs = [runs[0], runs[1], runs[2], 0];
         }
         bvh
     }
@@ -536,9 +591,7 @@ impl<L: LeafPrim> Bvh<L> {
         best: &mut Closest<R>,
         probe: &mut P,
     ) {
-        for s in &self.leaf[start..start + count] {
-            s.test(o, d, time, best, probe);
-        }
+        L::test_leaf(&self.leaf[start..start + count], o, d, time, best, probe);
     }
 
     /// The closest hit of one ray, one box and one sphere at a time (scalar kernel).

@@ -62,6 +62,10 @@ pub struct QuadRec {
     /// `b`'s test: `|p . eb - kb| <= 1`.
     pub eb: [f32; 3],
     pub kb: f32,
+    /// `k` when the quad's normal is along axis `k` (`n`, `ea` and `eb` are
+    /// exactly 0 in that component and `n` in the two others): the test then
+    /// skips the terms that are 0 ([`quad_hit`]). 3 otherwise.
+    pub axis: u32,
     pub q: [f32; 3],
     pub u: [f32; 3],
     pub v: [f32; 3],
@@ -173,6 +177,7 @@ impl Quads {
             ka: ((qd.dot(ad) + 0.5) / ha) as f32,
             eb: f32s(bd / hb),
             kb: ((qd.dot(bd) + 0.5) / hb) as f32,
+            axis: 3,
             q,
             u,
             v,
@@ -180,6 +185,8 @@ impl Quads {
             lo: [(-eps_a) as f32, (-eps_b) as f32],
             hi: [(1.0 + eps_a) as f32, (1.0 + eps_b) as f32],
         };
+        let mut rec = rec;
+        rec.axis = normal_axis(&rec);
         let unit = nd.normalize();
         let dn = unit.dot(qd);
         let unit = unit.to_array().map(|x| x as f32);
@@ -197,6 +204,7 @@ impl Quads {
         while self.rec.len() < target {
             self.rec.push(QuadRec {
                 ka: 2.0,
+                axis: 1,
                 lo: [1.0; 2],
                 hi: [0.0; 2],
                 n: [0.0, 1.0, 0.0],
@@ -214,19 +222,82 @@ impl Quads {
     }
 }
 
+/// The axis `k` along which `r`'s normal lies, if `n`, `ea` and `eb` are
+/// exactly 0 in component `k`'s two others (`n`) and in `k` (`ea`, `eb`);
+/// else 3. Exact zeros: a quad whose edges lie in an axis plane (walls, and
+/// the tops of boxes turned about y) has them from the exact cross products.
+fn normal_axis(r: &QuadRec) -> u32 {
+    (0..3)
+        .find(|&k| {
+            let (i, j) = ((k + 1) % 3, (k + 2) % 3);
+            r.n[i] == 0.0 && r.n[j] == 0.0 && r.n[k] != 0.0 && r.ea[k] == 0.0 && r.eb[k] == 0.0
+        })
+        .map_or(3, |k| k as u32)
+}
+
 /// The quad test: the hit mask and `t` of the rays `o + t d` against `q`
 /// (broadcast), as the module describes.
+///
+/// A hit needs `t > 0` and `|a|, |b| <= 1`. `t < inf` needs no test of its
+/// own: at `t = inf` every component of `p = o + t d` is infinite or NaN
+/// (`d_k t` is `+-inf`, or `0 inf = NaN`), so are `a` and `b` (sums of
+/// products with them), and the range test fails; NaN fails every test.
+///
+/// A quad whose normal lies along an axis ([`QuadRec::axis`]) takes
+/// [`quad_hit_axis`], which skips the products with the zeros and computes
+/// the same mask and, where it hits, the same `t`, bit for bit.
 #[inline(always)]
 pub fn quad_hit<R: Real>(o: V3<R>, d: V3<R>, q: &QuadRec) -> (R::Mask, R) {
+    match q.axis {
+        0 => quad_hit_axis::<R, 0>(o, d, q),
+        1 => quad_hit_axis::<R, 1>(o, d, q),
+        2 => quad_hit_axis::<R, 2>(o, d, q),
+        _ => quad_hit_general(o, d, q),
+    }
+}
+
+/// The quad test for any quad: every term of every dot product.
+#[inline(always)]
+pub fn quad_hit_general<R: Real>(o: V3<R>, d: V3<R>, q: &QuadRec) -> (R::Mask, R) {
     let n = V3::splat3(q.n);
     let t = (R::splat(q.d) - n.dot(o)) / n.dot(d);
     let p = o + d * t;
-    // `a` and `b` centred and scaled: the range test is |.| <= 1 (false
-    // for NaN, which only a t that fails `0 < t < inf` can give).
+    // `a` and `b` centred and scaled: the range test is |.| <= 1.
     let a = V3::splat3(q.ea).dot(p) - R::splat(q.ka);
     let b = V3::splat3(q.eb).dot(p) - R::splat(q.kb);
     let one = R::splat(1.0);
-    let hit = t.gt(R::splat(0.0)) & t.lt(R::splat(f32::INFINITY)) & a.abs().le(one) & b.abs().le(one);
+    let hit = t.gt(R::splat(0.0)) & a.abs().le(one) & b.abs().le(one);
+    (hit, t)
+}
+
+/// The quad test for a quad whose normal lies along axis `K`
+/// (`q.axis == K`): [`quad_hit_general`] without the products by the zeros.
+///
+/// The same bits: the dot products sum in the order `(x + y) + z`, and a
+/// product by 0 of a finite value is `+-0`, which leaves a sum unchanged (or
+/// changes the sign of a zero, which no test sees). So `n.o` is `n_K o_K`,
+/// `n.d` is `n_K d_K` and `t` is the same; `a` and `b` are the same sums of
+/// the two in-plane terms, in the same order, wherever `p_K` is finite. It
+/// is wherever `t` is: `d_K t` is `(D - n_K o_K) / n_K` up to rounding. At
+/// `t = +-inf` or NaN both tests miss (see [`quad_hit`]).
+/// `tests/suite/nextweek.rs` checks the two against each other.
+#[inline(always)]
+pub fn quad_hit_axis<R: Real, const K: usize>(o: V3<R>, d: V3<R>, q: &QuadRec) -> (R::Mask, R) {
+    let (i, j) = if K == 0 {
+        (1, 2)
+    } else if K == 1 {
+        (0, 2)
+    } else {
+        (0, 1)
+    };
+    let (o, d) = ([o.x, o.y, o.z], [d.x, d.y, d.z]);
+    let nk = R::splat(q.n[K]);
+    let t = (R::splat(q.d) - nk * o[K]) / (nk * d[K]);
+    let (pi, pj) = (o[i] + d[i] * t, o[j] + d[j] * t);
+    let a = R::splat(q.ea[i]) * pi + R::splat(q.ea[j]) * pj - R::splat(q.ka);
+    let b = R::splat(q.eb[i]) * pi + R::splat(q.eb[j]) * pj - R::splat(q.kb);
+    let one = R::splat(1.0);
+    let hit = t.gt(R::splat(0.0)) & a.abs().le(one) & b.abs().le(one);
     (hit, t)
 }
 

@@ -8,7 +8,7 @@ use common::*;
 use glam::DVec3;
 use proptest::prelude::*;
 use rtow::internals::geometry::{
-    closest_quad_hit, quad_hit, quad_surface, spawn, Closest, QuadRec, Quads, MISS, QUAD_BASE,
+    closest_quad_hit, quad_hit, quad_hit_general, quad_surface, spawn, Closest, QuadRec, Quads, MISS, QUAD_BASE,
 };
 use rtow::internals::material::Kind;
 use rtow::internals::vec3::V3;
@@ -323,6 +323,48 @@ proptest! {
             if hit {
                 prop_assert!((t as f64 - te).abs() <= t_tol, "t {t} vs {te}");
             }
+        }
+    }
+
+    /// A quad whose normal lies along an axis (a wall, the top of a box
+    /// turned about y) takes the test without the products by its zeros
+    /// (`quad_hit_axis`): it gives the general test's mask and, where it
+    /// hits, its `t`, bit for bit, for rays from anywhere in any direction,
+    /// directions with zero components, parallel to the plane, or aimed at
+    /// the quad's edges.
+    #[test]
+    fn the_axis_quad_test_is_the_general_one(
+        k in 0usize..3,
+        q in prop::array::uniform3(prop_oneof![-100.0f32..100.0, Just(0.0f32)]),
+        u in prop::array::uniform2(prop_oneof![6 => -50.0f32..50.0, 1 => Just(0.0f32), 1 => Just(1.0f32)]),
+        v in prop::array::uniform2(prop_oneof![6 => -50.0f32..50.0, 1 => Just(0.0f32), 1 => Just(1.0f32)]),
+        o in prop::array::uniform3(prop_oneof![-200.0f32..200.0, Just(0.0f32)]),
+        d in prop::array::uniform3(prop_oneof![-1.0f32..1.0, Just(0.0f32), -1e-6f32..1e-6]),
+        a in prop_oneof![-0.5f32..1.5, Just(0.0f32), Just(1.0f32)],
+        b in prop_oneof![-0.5f32..1.5, Just(0.0f32), Just(1.0f32)],
+        aim in any::<bool>(),
+    ) {
+        // u and v in the plane normal to axis k.
+        let (i, j) = [(1, 2), (0, 2), (0, 1)][k];
+        let put = |x: [f32; 2]| { let mut r = [0.0f32; 3]; r[i] = x[0]; r[j] = x[1]; r };
+        let (u3, v3) = (put(u), put(v));
+        let (ud, vd) = (d3(u3), d3(v3));
+        prop_assume!(ud.cross(vd).length() > 0.0);
+        let rec = one_quad(q, u3, v3, 500.0);
+        prop_assert_eq!(rec.axis, k as u32);
+        // Aimed at a point of the quad's plane (inside, on an edge or out), or anywhere.
+        let dir = if aim {
+            let target = d3(q) + ud * a as f64 + vd * b as f64;
+            (target - d3(o)).to_array().map(|x| x as f32)
+        } else {
+            d
+        };
+        let (o, dir) = (V3::from_array(o), V3::from_array(dir));
+        let (hit, t) = quad_hit(o, dir, &rec);
+        let (hit_g, t_g) = quad_hit_general(o, dir, &rec);
+        prop_assert_eq!(hit, hit_g);
+        if hit {
+            prop_assert_eq!(t.to_bits(), t_g.to_bits());
         }
     }
 
