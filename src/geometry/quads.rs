@@ -170,14 +170,14 @@ impl Quads {
         let (ad, bd) = (vd.cross(wd), wd.cross(ud));
         let (ha, hb) = (0.5 + eps_a, 0.5 + eps_b);
         let f32s = |x: glam::DVec3| x.to_array().map(|c| c as f32);
-        let rec = QuadRec {
+        let mut rec = QuadRec {
             n,
             d: n32.dot(qd) as f32,
             ea: f32s(ad / ha),
             ka: ((qd.dot(ad) + 0.5) / ha) as f32,
             eb: f32s(bd / hb),
             kb: ((qd.dot(bd) + 0.5) / hb) as f32,
-            axis: 3,
+            axis: 3, // set below, from the rounded record
             q,
             u,
             v,
@@ -185,7 +185,6 @@ impl Quads {
             lo: [(-eps_a) as f32, (-eps_b) as f32],
             hi: [(1.0 + eps_a) as f32, (1.0 + eps_b) as f32],
         };
-        let mut rec = rec;
         rec.axis = normal_axis(&rec);
         let unit = nd.normalize();
         let dn = unit.dot(qd);

@@ -111,8 +111,9 @@ fn a_resumed_render_is_the_render_with_more_samples() {
     assert!(e.contains("one.rtfilm") && e.contains("pixel_jitter"), "{e}");
 }
 
-/// Every estimator keeps shards, merge and resume exact (the light samples'
-/// shadow rays included), and parts of different estimators never merge:
+/// Every estimator keeps shards, merge and resume exact (the images, with the
+/// light samples' contributions, and the ray counts; parts do not carry
+/// shadow-ray counts), and parts of different estimators never merge:
 /// the book's box, which both light-sampling estimators can sample.
 #[test]
 fn every_estimator_shards_merges_and_resumes_exactly() {
