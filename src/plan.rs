@@ -186,6 +186,16 @@ pub struct SkyColours {
     pub constant: Option<[f32; 3]>,
 }
 
+impl SkyColours {
+    /// A black background: a path that leaves the scene adds nothing, so
+    /// neither kernel shades its miss (the scalar kernel's sum and the
+    /// wavefront's result stay as they are, bit for bit, whatever the
+    /// path's throughput).
+    pub fn is_black(&self) -> bool {
+        self.constant.is_some_and(|c| c.iter().all(|&x| x == 0.0))
+    }
+}
+
 /// Everything the kernels read, laid out for them.
 #[derive(Clone, Debug)]
 pub struct Prepared {

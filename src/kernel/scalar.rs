@@ -251,11 +251,14 @@ fn trace_in<P: Probe, const M: bool>(
         let (hit, t) =
             if prep.media.is_empty() { (hit, t) } else { sample_media(&prep.media, o, d, hit, t, depth, rng) };
         if hit == MISS {
-            let c = thr.mul_elem(background(&prep.sky, d));
+            // A black background adds nothing, whatever the throughput
+            // (`SkyColours::is_black`): the wavefront shades no miss then.
+            let black = prep.sky.is_black();
+            let c = if black { V3::splat3([0.0; 3]) } else { thr.mul_elem(background(&prep.sky, d)) };
             if P::PATHS {
                 probe.contributed(id, rays, Strategy::Background, c);
             }
-            return ((sum + c).to_array(), rays, shadow_rays);
+            return ((if black { sum } else { sum + c }).to_array(), rays, shadow_rays);
         }
         let (next_o, dir, atten, shadow) = if hit >= MEDIUM_BASE {
             // Isotropic scattering inside medium k: a uniform direction.

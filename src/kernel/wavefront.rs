@@ -584,10 +584,14 @@ fn bounce<W: Wide, P: Probe, S: PathSampler, const M: bool>(
         medium_pass::<W, S>(prep, sampler, ws, n, depth);
     }
     let nee = prep.plan.nee > 0;
+    // A black background adds nothing to a path that misses (`is_black`).
+    let shade = !prep.sky.is_black();
     if nee {
-        shade_misses::<W, true>(prep, ws, n);
+        if shade {
+            shade_misses::<W, true>(prep, ws, n);
+        }
         ws.shadows.len = 0;
-    } else {
+    } else if shade {
         shade_misses::<W, false>(prep, ws, n);
     }
     let mut len = [0usize; MISS_QUEUE + 1];
@@ -761,6 +765,8 @@ fn classify_packets<W: Wide, P: Probe, S: PathSampler, const M: bool, const Q: b
     debug_assert_eq!(Q, !prep.quads.is_empty());
     let quad_kind = &prep.quads.kind[..];
     let quad_mask = quad_kind.len().wrapping_sub(1);
+    let only_quads = prep.spheres.is_empty();
+    debug_assert!(quad_kind.len() as u32 <= QUAD_BASE);
     let want: [bool; SURF] = Kind::SURFACES.map(|k| kinds.contains(k));
     let mut lens: [usize; SURF] = Kind::SURFACES.map(|k| len[k as usize]);
     let iota = W::u_from_fn(|k| k as u32);
@@ -772,7 +778,11 @@ fn classify_packets<W: Wide, P: Probe, S: PathSampler, const M: bool, const Q: b
     for i in (0..n).step_by(W::LANES) {
         let hit = W::load_u_pow2(&ws.hit, i);
         let hits = W::mask_bits(W::u_lt(hit, W::u_splat(MISS))) & low_bits(n - i);
-        let kind = if Q {
+        let kind = if Q && only_quads {
+            // Every hit is a quad's: its index masked into the quads' table
+            // (`QUAD_BASE` is above the mask), without the test per lane.
+            W::u_from_fn(|k| quad_kind[W::lane_u(hit, k) as usize & quad_mask] as u32)
+        } else if Q {
             // Misses (MISS is above every quad's index) read some quad's
             // kind; their lanes are not in `hits`.
             W::u_from_fn(|k| {
@@ -1147,10 +1157,22 @@ fn surfaces<W: Wide, P: Probe, const M: bool>(
     let d = at.v3(&ws.cur.d);
     let o = at.v3(&ws.cur.o);
     let t = at.f(&ws.t);
+    let q_mask = W::u_splat(prep.quads.shade.len() as u32 - 1);
+    if !M && prep.spheres.is_empty() {
+        // A scene of quads alone (the Cornell boxes): every hit is a quad's,
+        // so the sphere records and surfaces the mixed case computes and
+        // then selects away are not computed (the same lanes, bit for bit).
+        let rec = W::gather_rows8(&prep.quads.shade, &W::idx_of(sph & q_mask));
+        let srf = quad_surface(o, d, t, V3::new(rec[0], rec[1], rec[2]), rec[3]);
+        if P::PATHS {
+            probe.shaded(ws.ids::<W>(&at.idx()), sph, W::splat(0.0), srf.n, srf.front, at.live());
+        }
+        let a = Shade::ALBEDO;
+        return Hits { d, srf, albedo: V3::new(rec[a], rec[a + 1], rec[a + 2]), param: rec[Shade::PARAM] };
+    }
     let (srf, rec): (Surface<W>, [W; 8]) = {
         let is_sphere = W::u_lt(sph, W::u_splat(QUAD_BASE));
         let s_mask = W::u_splat(prep.spheres.shade.len() as u32 - 1);
-        let q_mask = W::u_splat(prep.quads.shade.len() as u32 - 1);
         let srec = W::gather_rows8(&prep.spheres.shade, &W::idx_of(sph & s_mask));
         let qrec = W::gather_rows8(&prep.quads.shade, &W::idx_of(sph & q_mask));
         let (is_sphere, srec) =
