@@ -120,17 +120,18 @@ pub struct LeafSphere {
 }
 
 /// A leaf's quad: its record and its hit index (`QUAD_BASE + i`). A leaf's
-/// quads are sorted by [`QuadRec::axis`] (those with a normal along x, then
-/// y, then z, then the others), and its first record says how many of each
-/// axis there are (`runs`), so that the leaf is tested in four loops, each
-/// with one form of the test ([`LeafPrim::test_leaf`]).
+/// quads are sorted by the form of their test ([`QuadRec::axis`]: those with
+/// a normal along x, y, z, then those upright about x, y, z, then the
+/// others), and the first record of each run of one form says how long the
+/// run is (`run`), so that the leaf is tested in one loop per run, each with
+/// its form of the test ([`LeafPrim::test_leaf`]).
 #[derive(Clone, Copy, Debug)]
 #[repr(C)]
 pub struct LeafQuad {
     rec: QuadRec,
     index: u32,
-    /// In a leaf's first record: its quads with a normal along x, y and z.
-    runs: [u8; 4],
+    /// In the first record of a run of quads of one form: the run's length.
+    run: u32,
 }
 
 /// A leaf's moving sphere: its centre at time 0, motion, squared radius and
@@ -173,28 +174,26 @@ impl LeafPrim for LeafQuad {
         best.test_quad(o, d, &self.rec, self.index, probe);
     }
 
-    /// The leaf's quads by axis, one loop per form of the test (with the
-    /// form chosen per quad, the compiler shares the forms' common end and
-    /// moves the closest hit between registers on every test). The tie rule
-    /// does not depend on the order of the tests.
+    /// The leaf's quads run by run, one loop per run with its form of the
+    /// test (with the form chosen per quad, the compiler shares the forms'
+    /// common end and moves the closest hit between registers on every test;
+    /// with one loop per form, every form costs a leaf its loop's set-up).
+    /// The tie rule does not depend on the order of the tests.
     #[inline(always)]
     fn test_leaf<R: Real, P: Probe>(leaf: &[Self], o: V3<R>, d: V3<R>, _time: R, best: &mut Closest<R>, probe: &mut P) {
-        let Some(first) = leaf.first() else { return };
-        let [n0, n1, n2, _] = first.runs.map(usize::from);
-        let (x, rest) = leaf.split_at(n0.min(leaf.len()));
-        let (y, rest) = rest.split_at(n1.min(rest.len()));
-        let (z, rest) = rest.split_at(n2.min(rest.len()));
-        for q in x {
-            best.test_quad_axis::<0, P>(o, d, &q.rec, q.index, probe);
-        }
-        for q in y {
-            best.test_quad_axis::<1, P>(o, d, &q.rec, q.index, probe);
-        }
-        for q in z {
-            best.test_quad_axis::<2, P>(o, d, &q.rec, q.index, probe);
-        }
-        for q in rest {
-            best.test_quad_general(o, d, &q.rec, q.index, probe);
+        let mut rest = leaf;
+        while let Some(first) = rest.first() {
+            let (run, next) = rest.split_at((first.run as usize).clamp(1, rest.len()));
+            match first.rec.axis {
+                0 => run.iter().for_each(|q| best.test_quad_axis::<0, P>(o, d, &q.rec, q.index, probe)),
+                1 => run.iter().for_each(|q| best.test_quad_axis::<1, P>(o, d, &q.rec, q.index, probe)),
+                2 => run.iter().for_each(|q| best.test_quad_axis::<2, P>(o, d, &q.rec, q.index, probe)),
+                4 => run.iter().for_each(|q| best.test_quad_upright::<0, P>(o, d, &q.rec, q.index, probe)),
+                5 => run.iter().for_each(|q| best.test_quad_upright::<1, P>(o, d, &q.rec, q.index, probe)),
+                6 => run.iter().for_each(|q| best.test_quad_upright::<2, P>(o, d, &q.rec, q.index, probe)),
+                _ => run.iter().for_each(|q| best.test_quad_general(o, d, &q.rec, q.index, probe)),
+            }
+            rest = next;
         }
     }
 }
@@ -478,13 +477,14 @@ impl QuadBvh {
         let mut bvh =
             Bvh { nodes: Vec::new(), leaf: vec![], cx: vec![], cy: vec![], cz: vec![], r2: vec![], index: vec![] };
         for &i in &order {
-            bvh.leaf.push(LeafQuad { rec: q.rec[i as usize], index: QUAD_BASE + i, runs: [0; 4] });
+            bvh.leaf.push(LeafQuad { rec: q.rec[i as usize], index: QUAD_BASE + i, run: 0 });
         }
         bvh.nodes.push(Node8::EMPTY);
         if n > 0 {
             bvh.collapse(&bnodes, 0, 0);
         }
-        // Each leaf's quads sorted by axis, the counts in its first record.
+        // Each leaf's quads sorted by form (the general ones last), the
+        // counts in its first record.
         let leaves: Vec<(usize, usize)> = bvh
             .nodes
             .iter()
@@ -496,9 +496,15 @@ impl QuadBvh {
             .collect();
         for (start, count) in leaves {
             let leaf = &mut bvh.leaf[start..start + count];
-            leaf.sort_by_key(|q| q.rec.axis);
-            let runs = [0, 1, 2].map(|k| leaf.iter().filter(|q| q.rec.axis == k).count() as u8);
-            leaf[0].runs = [runs[0], runs[1], runs[2], 0];
+            let order = |axis: u32| if axis == 3 { 7 } else { axis };
+            leaf.sort_by_key(|q| order(q.rec.axis));
+            let mut start = 0;
+            while start < leaf.len() {
+                let form = leaf[start].rec.axis;
+                let len = leaf[start..].iter().take_while(|q| q.rec.axis == form).count();
+                leaf[start].run = len as u32;
+                start += len;
+            }
         }
         bvh
     }

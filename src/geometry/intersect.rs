@@ -50,7 +50,7 @@
 //!   origin off the surface by more than the bound on `c'`.
 
 use super::moving::{centre_at, MovingSpheres, MOVING_BASE};
-use super::quads::{quad_hit, quad_hit_axis, quad_hit_general, QuadRec, Quads, QUAD_BASE};
+use super::quads::{quad_hit, quad_hit_axis, quad_hit_general, quad_hit_upright, QuadRec, Quads, QUAD_BASE};
 use super::spheres::{Spheres, MISS};
 use crate::probe::{Probe, Work, WorkTally};
 use crate::real::{Mask, Real};
@@ -170,6 +170,23 @@ impl<R: Real> Closest<R> {
         debug_assert_eq!(q.axis as usize, K);
         probe.work(Work::Quad, 1);
         let (hit, t) = quad_hit_axis::<R, K>(o, d, q);
+        self.offer(hit, t, R::u_splat(index));
+    }
+
+    /// [`Closest::test_quad`] for a quad upright about axis `K`
+    /// (`q.axis == 4 + K`, [`quad_hit_upright`]).
+    #[inline(always)]
+    pub fn test_quad_upright<const K: usize, P: Probe>(
+        &mut self,
+        o: V3<R>,
+        d: V3<R>,
+        q: &QuadRec,
+        index: u32,
+        probe: &mut P,
+    ) {
+        debug_assert_eq!(q.axis as usize, 4 + K);
+        probe.work(Work::Quad, 1);
+        let (hit, t) = quad_hit_upright::<R, K>(o, d, q);
         self.offer(hit, t, R::u_splat(index));
     }
 

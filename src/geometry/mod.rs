@@ -16,5 +16,5 @@ pub use intersect::{
 pub use lights::{Emitters, LightQuad, LightSample, LightSphere, Lights};
 pub use media::{sample_media, transmittance, Boundary, Media, MEDIUM_BASE};
 pub use moving::{centre_at, MovingSpheres, MOVING_BASE};
-pub use quads::{quad_hit, quad_hit_axis, quad_hit_general, quad_surface, QuadRec, Quads, QUAD_BASE};
+pub use quads::{quad_hit, quad_hit_axis, quad_hit_general, quad_hit_upright, quad_surface, QuadRec, Quads, QUAD_BASE};
 pub use spheres::{Shade, Spheres, MISS};

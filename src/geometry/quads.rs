@@ -62,9 +62,12 @@ pub struct QuadRec {
     /// `b`'s test: `|p . eb - kb| <= 1`.
     pub eb: [f32; 3],
     pub kb: f32,
-    /// `k` when the quad's normal is along axis `k` (`n`, `ea` and `eb` are
-    /// exactly 0 in that component and `n` in the two others): the test then
-    /// skips the terms that are 0 ([`quad_hit`]). 3 otherwise.
+    /// The form of the test ([`quad_hit`]), by the exact zeros of `n`, `ea`
+    /// and `eb`, whose terms it skips: `k` (0, 1, 2) when the quad's normal
+    /// is along axis `k` (`n`, `ea` and `eb` are 0 in that component and `n`
+    /// in the two others); `4 + k` when the quad stands upright about axis
+    /// `k` (`n` and `ea` are 0 in component `k`, `eb` in the two others: the
+    /// sides of a box turned about `k`); 3 otherwise.
     pub axis: u32,
     pub q: [f32; 3],
     pub u: [f32; 3],
@@ -186,6 +189,17 @@ impl Quads {
             hi: [(1.0 + eps_a) as f32, (1.0 + eps_b) as f32],
         };
         rec.axis = normal_axis(&rec);
+        if rec.axis == 3 {
+            if let Some((k, swap)) = upright_axis(&rec) {
+                // The test accepts |a| <= 1 and |b| <= 1 alike, and reads `ea`,
+                // `ka`, `eb` and `kb` nowhere else: swapped, the edge along
+                // axis k is `b`'s.
+                if swap {
+                    (rec.ea, rec.ka, rec.eb, rec.kb) = (rec.eb, rec.kb, rec.ea, rec.ka);
+                }
+                rec.axis = 4 + k as u32;
+            }
+        }
         let unit = nd.normalize();
         let dn = unit.dot(qd);
         let unit = unit.to_array().map(|x| x as f32);
@@ -234,6 +248,25 @@ fn normal_axis(r: &QuadRec) -> u32 {
         .map_or(3, |k| k as u32)
 }
 
+/// The axis `k` a quad stands upright about, if `n` is exactly 0 in
+/// component `k`, and one of `ea` and `eb` is exactly 0 in `k` and the other
+/// exactly 0 in the two others; with `true` when that other is `ea`. (A box
+/// turned about y has such sides: their edges are a vertical one, exactly
+/// `(0, h, 0)`, and a horizontal one, 0 in y, and the cross products keep
+/// those zeros.)
+fn upright_axis(r: &QuadRec) -> Option<(usize, bool)> {
+    let along = |e: &[f32; 3], k: usize| (0..3).all(|c| (c == k) == (e[c] != 0.0));
+    (0..3).filter(|&k| r.n[k] == 0.0).find_map(|k| {
+        if r.ea[k] == 0.0 && along(&r.eb, k) {
+            Some((k, false))
+        } else if r.eb[k] == 0.0 && along(&r.ea, k) {
+            Some((k, true))
+        } else {
+            None
+        }
+    })
+}
+
 /// The quad test: the hit mask and `t` of the rays `o + t d` against `q`
 /// (broadcast), as the module describes.
 ///
@@ -243,14 +276,18 @@ fn normal_axis(r: &QuadRec) -> u32 {
 /// products with them), and the range test fails; NaN fails every test.
 ///
 /// A quad whose normal lies along an axis ([`QuadRec::axis`]) takes
-/// [`quad_hit_axis`], which skips the products with the zeros and computes
-/// the same mask and, where it hits, the same `t`, bit for bit.
+/// [`quad_hit_axis`], one upright about an axis [`quad_hit_upright`]: each
+/// skips the products with the record's zeros and computes the same mask
+/// and, where it hits, the same `t`, bit for bit.
 #[inline(always)]
 pub fn quad_hit<R: Real>(o: V3<R>, d: V3<R>, q: &QuadRec) -> (R::Mask, R) {
     match q.axis {
         0 => quad_hit_axis::<R, 0>(o, d, q),
         1 => quad_hit_axis::<R, 1>(o, d, q),
         2 => quad_hit_axis::<R, 2>(o, d, q),
+        4 => quad_hit_upright::<R, 0>(o, d, q),
+        5 => quad_hit_upright::<R, 1>(o, d, q),
+        6 => quad_hit_upright::<R, 2>(o, d, q),
         _ => quad_hit_general(o, d, q),
     }
 }
@@ -295,6 +332,32 @@ pub fn quad_hit_axis<R: Real, const K: usize>(o: V3<R>, d: V3<R>, q: &QuadRec) -
     let (pi, pj) = (o[i] + d[i] * t, o[j] + d[j] * t);
     let a = R::splat(q.ea[i]) * pi + R::splat(q.ea[j]) * pj - R::splat(q.ka);
     let b = R::splat(q.eb[i]) * pi + R::splat(q.eb[j]) * pj - R::splat(q.kb);
+    let one = R::splat(1.0);
+    let hit = t.gt(R::splat(0.0)) & a.abs().le(one) & b.abs().le(one);
+    (hit, t)
+}
+
+/// The quad test for a quad upright about axis `K` (`q.axis == 4 + K`):
+/// [`quad_hit_general`] without the products by the zeros of `n` and `ea`
+/// in component `K` and of `eb` in the two others. The same bits, by
+/// [`quad_hit_axis`]'s argument: each dot product is the sum of its
+/// remaining terms in the general order, and every component of `p` is
+/// finite wherever `t` is.
+#[inline(always)]
+pub fn quad_hit_upright<R: Real, const K: usize>(o: V3<R>, d: V3<R>, q: &QuadRec) -> (R::Mask, R) {
+    let (i, j) = if K == 0 {
+        (1, 2)
+    } else if K == 1 {
+        (0, 2)
+    } else {
+        (0, 1)
+    };
+    let (o, d) = ([o.x, o.y, o.z], [d.x, d.y, d.z]);
+    let (ni, nj) = (R::splat(q.n[i]), R::splat(q.n[j]));
+    let t = (R::splat(q.d) - (ni * o[i] + nj * o[j])) / (ni * d[i] + nj * d[j]);
+    let (pi, pj, pk) = (o[i] + d[i] * t, o[j] + d[j] * t, o[K] + d[K] * t);
+    let a = R::splat(q.ea[i]) * pi + R::splat(q.ea[j]) * pj - R::splat(q.ka);
+    let b = R::splat(q.eb[K]) * pk - R::splat(q.kb);
     let one = R::splat(1.0);
     let hit = t.gt(R::splat(0.0)) & a.abs().le(one) & b.abs().le(one);
     (hit, t)

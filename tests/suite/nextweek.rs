@@ -368,6 +368,51 @@ proptest! {
         }
     }
 
+    /// A quad upright about an axis (the side of a box turned about it: one
+    /// edge along the axis, the other across it, in either order) takes
+    /// the form of the test without the products by its zeros
+    /// (`quad_hit_upright`), or, when its normal is along an axis too, the
+    /// axis form: either gives the general test's mask and, where it hits,
+    /// its `t`, bit for bit.
+    #[test]
+    fn the_upright_quad_test_is_the_general_one(
+        k in 0usize..3,
+        q in prop::array::uniform3(prop_oneof![-100.0f32..100.0, Just(0.0f32)]),
+        across in prop::array::uniform2(prop_oneof![6 => -50.0f32..50.0, 1 => Just(0.0f32), 1 => Just(1.0f32)]),
+        along in prop_oneof![-50.0f32..50.0, Just(1.0f32)],
+        swap in any::<bool>(),
+        o in prop::array::uniform3(prop_oneof![-200.0f32..200.0, Just(0.0f32)]),
+        d in prop::array::uniform3(prop_oneof![-1.0f32..1.0, Just(0.0f32), -1e-6f32..1e-6]),
+        a in prop_oneof![-0.5f32..1.5, Just(0.0f32), Just(1.0f32)],
+        b in prop_oneof![-0.5f32..1.5, Just(0.0f32), Just(1.0f32)],
+        aim in any::<bool>(),
+    ) {
+        let (i, j) = [(1, 2), (0, 2), (0, 1)][k];
+        let mut h = [0.0f32; 3];
+        h[i] = across[0];
+        h[j] = across[1];
+        let mut e = [0.0f32; 3];
+        e[k] = along;
+        let (u3, v3) = if swap { (e, h) } else { (h, e) };
+        let (ud, vd) = (d3(u3), d3(v3));
+        prop_assume!(ud.cross(vd).length() > 0.0);
+        let rec = one_quad(q, u3, v3, 500.0);
+        prop_assert!(rec.axis == 4 + k as u32 || rec.axis < 3, "form {}", rec.axis);
+        let dir = if aim {
+            let target = d3(q) + ud * a as f64 + vd * b as f64;
+            (target - d3(o)).to_array().map(|x| x as f32)
+        } else {
+            d
+        };
+        let (o, dir) = (V3::from_array(o), V3::from_array(dir));
+        let (hit, t) = quad_hit(o, dir, &rec);
+        let (hit_g, t_g) = quad_hit_general(o, dir, &rec);
+        prop_assert_eq!(hit, hit_g);
+        if hit {
+            prop_assert_eq!(t.to_bits(), t_g.to_bits());
+        }
+    }
+
     /// Rays from inside a box (axis-aligned or turned, as a group flattens
     /// it) towards its corners, its edges and anywhere: every one hits a face
     /// (no leak through an edge or a corner); a ray spawned from that face
