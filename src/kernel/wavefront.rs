@@ -9,6 +9,7 @@
 //! loop until no path is alive or max_depth rays were traced:
 //!     intersect: W contiguous rays per packet (brute force or the BVH, as planned)
 //!     misses:    W contiguous paths at a time, throughput x background (sky or constant) -> results
+//!                (no pass under a black background: a miss adds nothing)
 //!     classify:  each path that hit joins the queue of its hit's material kind,
 //!                but a packet of contiguous paths whose hits share a kind
 //!                (three quarters of its lanes at least; scenes without
