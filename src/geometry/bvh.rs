@@ -34,7 +34,7 @@
 
 use super::intersect::{sphere_disc, sphere_t, Closest};
 use super::moving::{centre_at, MovingSpheres, MOVING_BASE};
-use super::quads::{next_down, next_up, QuadRec, Quads, QUAD_BASE};
+use super::quads::{next_down, next_up, quad_hit_axis, quad_hit_general, quad_hit_upright, QuadRec, Quads, QUAD_BASE};
 use super::spheres::{Spheres, MISS};
 use crate::probe::{Probe, Work, WorkTally};
 use crate::real::{Real, Wide, MAX_LANES};
@@ -184,14 +184,15 @@ impl LeafPrim for LeafQuad {
         let mut rest = leaf;
         while let Some(first) = rest.first() {
             let (run, next) = rest.split_at((first.run as usize).clamp(1, rest.len()));
+            debug_assert!(run.iter().all(|q| q.rec.axis == first.rec.axis));
             match first.rec.axis {
-                0 => run.iter().for_each(|q| best.test_quad_axis::<0, P>(o, d, &q.rec, q.index, probe)),
-                1 => run.iter().for_each(|q| best.test_quad_axis::<1, P>(o, d, &q.rec, q.index, probe)),
-                2 => run.iter().for_each(|q| best.test_quad_axis::<2, P>(o, d, &q.rec, q.index, probe)),
-                4 => run.iter().for_each(|q| best.test_quad_upright::<0, P>(o, d, &q.rec, q.index, probe)),
-                5 => run.iter().for_each(|q| best.test_quad_upright::<1, P>(o, d, &q.rec, q.index, probe)),
-                6 => run.iter().for_each(|q| best.test_quad_upright::<2, P>(o, d, &q.rec, q.index, probe)),
-                _ => run.iter().for_each(|q| best.test_quad_general(o, d, &q.rec, q.index, probe)),
+                0 => run.iter().for_each(|q| best.offer_quad(quad_hit_axis::<R, 0>(o, d, &q.rec), q.index, probe)),
+                1 => run.iter().for_each(|q| best.offer_quad(quad_hit_axis::<R, 1>(o, d, &q.rec), q.index, probe)),
+                2 => run.iter().for_each(|q| best.offer_quad(quad_hit_axis::<R, 2>(o, d, &q.rec), q.index, probe)),
+                4 => run.iter().for_each(|q| best.offer_quad(quad_hit_upright::<R, 0>(o, d, &q.rec), q.index, probe)),
+                5 => run.iter().for_each(|q| best.offer_quad(quad_hit_upright::<R, 1>(o, d, &q.rec), q.index, probe)),
+                6 => run.iter().for_each(|q| best.offer_quad(quad_hit_upright::<R, 2>(o, d, &q.rec), q.index, probe)),
+                _ => run.iter().for_each(|q| best.offer_quad(quad_hit_general(o, d, &q.rec), q.index, probe)),
             }
             rest = next;
         }

@@ -50,7 +50,7 @@
 //!   origin off the surface by more than the bound on `c'`.
 
 use super::moving::{centre_at, MovingSpheres, MOVING_BASE};
-use super::quads::{quad_hit, quad_hit_axis, quad_hit_general, quad_hit_upright, QuadRec, Quads, QUAD_BASE};
+use super::quads::{quad_hit, QuadRec, Quads, QUAD_BASE};
 use super::spheres::{Spheres, MISS};
 use crate::probe::{Probe, Work, WorkTally};
 use crate::real::{Mask, Real};
@@ -151,50 +151,15 @@ impl<R: Real> Closest<R> {
     /// leaf test of brute force and of the quad BVH's walks.
     #[inline(always)]
     pub fn test_quad<P: Probe>(&mut self, o: V3<R>, d: V3<R>, q: &QuadRec, index: u32, probe: &mut P) {
-        probe.work(Work::Quad, 1);
-        let (hit, t) = quad_hit(o, d, q);
-        self.offer(hit, t, R::u_splat(index));
+        self.offer_quad(quad_hit(o, d, q), index, probe);
     }
 
-    /// [`Closest::test_quad`] for a quad whose normal is along axis `K`
-    /// (`q.axis == K`, [`quad_hit_axis`]).
+    /// Takes the result `(hit, t)` of quad `index`'s test: [`quad_hit`], or
+    /// the form of it the quad's [`QuadRec::axis`] names (the quad BVH's
+    /// leaves call the forms directly, one loop per run of one form).
     #[inline(always)]
-    pub fn test_quad_axis<const K: usize, P: Probe>(
-        &mut self,
-        o: V3<R>,
-        d: V3<R>,
-        q: &QuadRec,
-        index: u32,
-        probe: &mut P,
-    ) {
-        debug_assert_eq!(q.axis as usize, K);
+    pub fn offer_quad<P: Probe>(&mut self, (hit, t): (R::Mask, R), index: u32, probe: &mut P) {
         probe.work(Work::Quad, 1);
-        let (hit, t) = quad_hit_axis::<R, K>(o, d, q);
-        self.offer(hit, t, R::u_splat(index));
-    }
-
-    /// [`Closest::test_quad`] for a quad upright about axis `K`
-    /// (`q.axis == 4 + K`, [`quad_hit_upright`]).
-    #[inline(always)]
-    pub fn test_quad_upright<const K: usize, P: Probe>(
-        &mut self,
-        o: V3<R>,
-        d: V3<R>,
-        q: &QuadRec,
-        index: u32,
-        probe: &mut P,
-    ) {
-        debug_assert_eq!(q.axis as usize, 4 + K);
-        probe.work(Work::Quad, 1);
-        let (hit, t) = quad_hit_upright::<R, K>(o, d, q);
-        self.offer(hit, t, R::u_splat(index));
-    }
-
-    /// [`Closest::test_quad`] with the general form of the test ([`quad_hit_general`]).
-    #[inline(always)]
-    pub fn test_quad_general<P: Probe>(&mut self, o: V3<R>, d: V3<R>, q: &QuadRec, index: u32, probe: &mut P) {
-        probe.work(Work::Quad, 1);
-        let (hit, t) = quad_hit_general(o, d, q);
         self.offer(hit, t, R::u_splat(index));
     }
 }

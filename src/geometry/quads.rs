@@ -301,9 +301,23 @@ pub fn quad_hit_general<R: Real>(o: V3<R>, d: V3<R>, q: &QuadRec) -> (R::Mask, R
     // `a` and `b` centred and scaled: the range test is |.| <= 1.
     let a = V3::splat3(q.ea).dot(p) - R::splat(q.ka);
     let b = V3::splat3(q.eb).dot(p) - R::splat(q.kb);
+    (in_range(t, a, b), t)
+}
+
+/// A hit's test: `t > 0` and `|a|, |b| <= 1` (`a` and `b` centred and scaled).
+#[inline(always)]
+fn in_range<R: Real>(t: R, a: R, b: R) -> R::Mask {
     let one = R::splat(1.0);
-    let hit = t.gt(R::splat(0.0)) & a.abs().le(one) & b.abs().le(one);
-    (hit, t)
+    t.gt(R::splat(0.0)) & a.abs().le(one) & b.abs().le(one)
+}
+
+/// The two axes other than `k`, in order.
+const fn others(k: usize) -> (usize, usize) {
+    match k {
+        0 => (1, 2),
+        1 => (0, 2),
+        _ => (0, 1),
+    }
 }
 
 /// The quad test for a quad whose normal lies along axis `K`
@@ -319,22 +333,14 @@ pub fn quad_hit_general<R: Real>(o: V3<R>, d: V3<R>, q: &QuadRec) -> (R::Mask, R
 /// `tests/suite/nextweek.rs` checks the two against each other.
 #[inline(always)]
 pub fn quad_hit_axis<R: Real, const K: usize>(o: V3<R>, d: V3<R>, q: &QuadRec) -> (R::Mask, R) {
-    let (i, j) = if K == 0 {
-        (1, 2)
-    } else if K == 1 {
-        (0, 2)
-    } else {
-        (0, 1)
-    };
+    let (i, j) = others(K);
     let (o, d) = ([o.x, o.y, o.z], [d.x, d.y, d.z]);
     let nk = R::splat(q.n[K]);
     let t = (R::splat(q.d) - nk * o[K]) / (nk * d[K]);
     let (pi, pj) = (o[i] + d[i] * t, o[j] + d[j] * t);
     let a = R::splat(q.ea[i]) * pi + R::splat(q.ea[j]) * pj - R::splat(q.ka);
     let b = R::splat(q.eb[i]) * pi + R::splat(q.eb[j]) * pj - R::splat(q.kb);
-    let one = R::splat(1.0);
-    let hit = t.gt(R::splat(0.0)) & a.abs().le(one) & b.abs().le(one);
-    (hit, t)
+    (in_range(t, a, b), t)
 }
 
 /// The quad test for a quad upright about axis `K` (`q.axis == 4 + K`):
@@ -345,22 +351,14 @@ pub fn quad_hit_axis<R: Real, const K: usize>(o: V3<R>, d: V3<R>, q: &QuadRec) -
 /// finite wherever `t` is.
 #[inline(always)]
 pub fn quad_hit_upright<R: Real, const K: usize>(o: V3<R>, d: V3<R>, q: &QuadRec) -> (R::Mask, R) {
-    let (i, j) = if K == 0 {
-        (1, 2)
-    } else if K == 1 {
-        (0, 2)
-    } else {
-        (0, 1)
-    };
+    let (i, j) = others(K);
     let (o, d) = ([o.x, o.y, o.z], [d.x, d.y, d.z]);
     let (ni, nj) = (R::splat(q.n[i]), R::splat(q.n[j]));
     let t = (R::splat(q.d) - (ni * o[i] + nj * o[j])) / (ni * d[i] + nj * d[j]);
     let (pi, pj, pk) = (o[i] + d[i] * t, o[j] + d[j] * t, o[K] + d[K] * t);
     let a = R::splat(q.ea[i]) * pi + R::splat(q.ea[j]) * pj - R::splat(q.ka);
     let b = R::splat(q.eb[K]) * pk - R::splat(q.kb);
-    let one = R::splat(1.0);
-    let hit = t.gt(R::splat(0.0)) & a.abs().le(one) & b.abs().le(one);
-    (hit, t)
+    (in_range(t, a, b), t)
 }
 
 /// The surface at distance `t` along `o + t d` on the plane with unit normal

@@ -267,6 +267,34 @@ fn unit(v: [f32; 3]) -> [f32; 3] {
     d3(v).normalize().to_array().map(|x| x as f32)
 }
 
+/// A quad's form of the test (`quad_hit`, by its `axis`) against the
+/// general one, for a ray from `o` along `d`, or (`aim`) aimed at the point
+/// `q + a u + b v` of the quad's plane (inside, on an edge or out): the same
+/// mask and, where it hits, the same `t`, bit for bit.
+fn form_is_general(
+    rec: &QuadRec,
+    (u, v): (DVec3, DVec3),
+    o: [f32; 3],
+    d: [f32; 3],
+    (a, b): (f32, f32),
+    aim: bool,
+) -> Result<(), TestCaseError> {
+    let dir = if aim {
+        let target = d3(rec.q) + u * a as f64 + v * b as f64;
+        (target - d3(o)).to_array().map(|x| x as f32)
+    } else {
+        d
+    };
+    let (o, dir) = (V3::from_array(o), V3::from_array(dir));
+    let (hit, t) = quad_hit(o, dir, rec);
+    let (hit_g, t_g) = quad_hit_general(o, dir, rec);
+    prop_assert_eq!(hit, hit_g);
+    if hit {
+        prop_assert_eq!(t.to_bits(), t_g.to_bits());
+    }
+    Ok(())
+}
+
 proptest! {
     #![proptest_config(ProptestConfig { cases: 4096, ..ProptestConfig::default() })]
 
@@ -352,20 +380,7 @@ proptest! {
         prop_assume!(ud.cross(vd).length() > 0.0);
         let rec = one_quad(q, u3, v3, 500.0);
         prop_assert_eq!(rec.axis, k as u32);
-        // Aimed at a point of the quad's plane (inside, on an edge or out), or anywhere.
-        let dir = if aim {
-            let target = d3(q) + ud * a as f64 + vd * b as f64;
-            (target - d3(o)).to_array().map(|x| x as f32)
-        } else {
-            d
-        };
-        let (o, dir) = (V3::from_array(o), V3::from_array(dir));
-        let (hit, t) = quad_hit(o, dir, &rec);
-        let (hit_g, t_g) = quad_hit_general(o, dir, &rec);
-        prop_assert_eq!(hit, hit_g);
-        if hit {
-            prop_assert_eq!(t.to_bits(), t_g.to_bits());
-        }
+        form_is_general(&rec, (ud, vd), o, d, (a, b), aim)?;
     }
 
     /// A quad upright about an axis (the side of a box turned about it: one
@@ -398,19 +413,7 @@ proptest! {
         prop_assume!(ud.cross(vd).length() > 0.0);
         let rec = one_quad(q, u3, v3, 500.0);
         prop_assert!(rec.axis == 4 + k as u32 || rec.axis < 3, "form {}", rec.axis);
-        let dir = if aim {
-            let target = d3(q) + ud * a as f64 + vd * b as f64;
-            (target - d3(o)).to_array().map(|x| x as f32)
-        } else {
-            d
-        };
-        let (o, dir) = (V3::from_array(o), V3::from_array(dir));
-        let (hit, t) = quad_hit(o, dir, &rec);
-        let (hit_g, t_g) = quad_hit_general(o, dir, &rec);
-        prop_assert_eq!(hit, hit_g);
-        if hit {
-            prop_assert_eq!(t.to_bits(), t_g.to_bits());
-        }
+        form_is_general(&rec, (ud, vd), o, d, (a, b), aim)?;
     }
 
     /// Rays from inside a box (axis-aligned or turned, as a group flattens
