@@ -484,8 +484,8 @@ impl QuadBvh {
         if n > 0 {
             bvh.collapse(&bnodes, 0, 0);
         }
-        // Each leaf's quads sorted by form (the general ones last), the
-        // counts in its first record.
+        // Each leaf's quads sorted by form (the general ones last), each
+        // run's length in its first record.
         let leaves: Vec<(usize, usize)> = bvh
             .nodes
             .iter()
