@@ -338,6 +338,11 @@ pub trait U32Lanes:
     fn lane(self, k: usize) -> u32;
     fn from_fn(f: impl FnMut(usize) -> u32) -> Self;
 
+    /// Lane k: `table[idx_k % 8]`, a lookup per lane in an eight-entry
+    /// table (one permute: `vpermd`). The table's second half repeats its
+    /// first, so that sixteen lanes may index it modulo 16.
+    fn lookup8(table: &[u32; 16], idx: Self) -> Self;
+
     /// All ones in the lanes whose lowest bit is set, zero elsewhere.
     #[inline(always)]
     fn low_bit_mask(self) -> Self {
@@ -387,6 +392,10 @@ impl U32Lanes for u32 {
         f(0)
     }
     #[inline(always)]
+    fn lookup8(table: &[u32; 16], idx: Self) -> Self {
+        table[(idx & 7) as usize]
+    }
+    #[inline(always)]
     fn low_bit_mask(self) -> Self {
         (self & 1).wrapping_neg()
     }
@@ -423,6 +432,22 @@ macro_rules! wide_lanes {
             #[inline(always)]
             fn lane(self, k: usize) -> u32 {
                 self.to_array()[k]
+            }
+            #[inline(always)]
+            fn lookup8(table: &[u32; 16], idx: Self) -> Self {
+                // Lane k takes entry idx_k modulo the width, the same
+                // entry as modulo 8 since the table's halves are equal.
+                if $n == 8 || cfg!(target_feature = "avx512f") {
+                    let t: [u32; $n] = table[..$n].try_into().unwrap();
+                    <$t>::new(t).shuffle_wrapping(idx)
+                } else {
+                    // Sixteen lanes in two registers: a permute of the
+                    // eight entries per half (the full 16-entry lookup
+                    // would blend two permutes per half).
+                    let t = u32x8::new(table[..8].try_into().unwrap());
+                    let halves: [u32x8; $n / 8] = bytemuck::cast(idx);
+                    bytemuck::cast(halves.map(|h| t.shuffle_wrapping(h)))
+                }
             }
             #[inline(always)]
             fn from_fn(f: impl FnMut(usize) -> u32) -> Self {
@@ -584,7 +609,11 @@ macro_rules! impl_wide {
             }
             #[inline(always)]
             fn u_select(m: $f, a: $u, b: $u) -> $u {
-                bytemuck::cast::<$f, $u>(m).select(a, b)
+                // A float blend of the bits (a select moves bits, it does not
+                // compute with them): on AVX-512 a move under the compare's
+                // mask register, where the integer select is a byte blend
+                // that converts the mask to a vector and back.
+                bytemuck::cast(m.select(bytemuck::cast::<$u, $f>(a), bytemuck::cast::<$u, $f>(b)))
             }
             #[inline(always)]
             fn lane(self, k: usize) -> f32 {
@@ -673,11 +702,14 @@ macro_rules! impl_wide {
             fn gather_rows8<T: AsRef<[f32; 8]>>(rows: &[T], idx: &[u32; $n]) -> [Self; 8] {
                 let Some(last) = rows.len().checked_sub(1) else { return [$f::splat(0.0); 8] };
                 debug_assert!(rows.len().is_power_of_two() && idx.iter().all(|&i| (i as usize) <= last));
-                let halves: [[f32x8; 8]; $n / 8] = std::array::from_fn(|h| {
-                    f32x8::transpose(std::array::from_fn(|k| {
-                        f32x8::new(*rows[idx[8 * h + k] as usize & last].as_ref())
-                    }))
-                });
+                // A loop and an array literal, not `from_fn`: its closures
+                // were compiled out of line (a call per gather) in the
+                // 16-lane kernels.
+                let mut halves = [[f32x8::splat(0.0); 8]; $n / 8];
+                for (h, half) in halves.iter_mut().enumerate() {
+                    let row = |k: usize| f32x8::new(*rows[idx[8 * h + k] as usize & last].as_ref());
+                    *half = f32x8::transpose([row(0), row(1), row(2), row(3), row(4), row(5), row(6), row(7)]);
+                }
                 std::array::from_fn(|j| {
                     let parts: [f32x8; $n / 8] = std::array::from_fn(|h| halves[h][j]);
                     bytemuck::cast(parts)

@@ -5,9 +5,9 @@
 //!
 //! 1. **Sobol** (Sobol' 1967, Joe and Kuo 2008): the point's 32 bits are the XOR
 //!    of the direction numbers of `dim` selected by the set bits of `index`
-//!    (the generator matrix times the index over GF(2)); no Gray code, so any
-//!    index is computed directly and any split of the sample range gives the
-//!    same points. Direction numbers: Joe and Kuo's `new-joe-kuo-6.21201`
+//!    (the generator matrix times the index over GF(2), taken three index
+//!    bits per table lookup); no Gray code, so any index is computed directly
+//!    and any split of the sample range gives the same points. Direction numbers: Joe and Kuo's `new-joe-kuo-6.21201`
 //!    parameters (`JOE_KUO`), expanded by the Bratley-Fox recurrence at
 //!    compile time; dimension 0 is van der Corput.
 //! 2. **Owen scramble**, hash-based (Burley, "Practical Hash-based Owen
@@ -178,9 +178,21 @@ const JOE_KUO: [(u32, u32, &[u32]); SOBOL_DIMS - 1] = [
 /// `V_j = V_(j-s) ^ (V_(j-s) >> s) ^ sum_k a_k V_(j-k)`.
 pub static DIRECTIONS: [[u32; 32]; SOBOL_DIMS] = directions();
 
-/// The same, bit-reversed: the matrix product then yields the reversed point,
-/// which is what the scramble works on.
-static DIRECTIONS_REV: [[u32; 32]; SOBOL_DIMS] = reversed(directions());
+/// The index bits one lookup of the matrix product takes.
+const GROUP_BITS: usize = 3;
+
+/// Groups of [`GROUP_BITS`] index bits in a `u32`.
+const GROUPS: usize = 32usize.div_ceil(GROUP_BITS);
+
+/// The matrix product by groups of three index bits, in the reversed domain
+/// (the product then yields the reversed point, which is what the scramble
+/// works on): `.0[dim][g][j]` is the XOR of the bit-reversed direction numbers
+/// `3g + b` of `dim` for the set bits `b` of `j % 8`. Each row's second half
+/// repeats its first ([`U32Lanes::lookup8`]); rows are cache-line aligned.
+#[repr(C, align(64))]
+struct DirectionGroups([[[u32; 16]; GROUPS]; SOBOL_DIMS]);
+
+static DIRECTION_GROUPS: DirectionGroups = DirectionGroups(groups(reversed(directions())));
 
 const fn directions() -> [[u32; 32]; SOBOL_DIMS] {
     let mut v = [[0u32; 32]; SOBOL_DIMS];
@@ -229,6 +241,33 @@ const fn reversed(mut v: [[u32; 32]; SOBOL_DIMS]) -> [[u32; 32]; SOBOL_DIMS] {
     v
 }
 
+const fn groups(v: [[u32; 32]; SOBOL_DIMS]) -> [[[u32; 16]; GROUPS]; SOBOL_DIMS] {
+    let mut t = [[[0u32; 16]; GROUPS]; SOBOL_DIMS];
+    let mut d = 0;
+    while d < SOBOL_DIMS {
+        let mut g = 0;
+        while g < GROUPS {
+            let mut j = 0;
+            while j < 16 {
+                let mut x = 0;
+                let mut b = 0;
+                while b < GROUP_BITS {
+                    let col = g * GROUP_BITS + b;
+                    if (j >> b) & 1 == 1 && col < 32 {
+                        x ^= v[d][col];
+                    }
+                    b += 1;
+                }
+                t[d][g][j] = x;
+                j += 1;
+            }
+            g += 1;
+        }
+        d += 1;
+    }
+    t
+}
+
 /// The unscrambled Sobol point: dimension `dim` of point `index`, as a 32-bit
 /// binary fraction. The scalar reference of the matrix product.
 pub fn sobol_u32(index: u32, dim: usize) -> u32 {
@@ -264,19 +303,21 @@ pub fn owen_scramble<U: U32Lanes>(x: U, seed: U) -> U {
 }
 
 /// The Owen-scrambled Sobol point, lane-wise: [`owen_scramble`] of
-/// [`sobol_u32`], computed in the reversed domain. The loop runs over the bits
-/// up to the highest set bit among the lanes' indices (a bound uniform across
-/// lanes; the value does not depend on it).
+/// [`sobol_u32`], computed in the reversed domain. The matrix product takes
+/// the index three bits at a time, one table lookup per group
+/// ([`U32Lanes::lookup8`]), up to the highest set bit among the lanes'
+/// indices (a bound uniform across lanes; the value does not depend on it):
+/// two lookups for an index below 64.
 #[inline(always)]
 pub fn sobol_owen<U: U32Lanes>(index: U, dim: usize, seed: U) -> U {
-    let v = &DIRECTIONS_REV[dim];
     let mut x = U::splat(0);
     let mut rest = index;
-    let mut j = 0;
-    while !rest.all_zero() {
-        x = x ^ (rest.low_bit_mask() & U::splat(v[j]));
-        rest = rest >> 1;
-        j += 1;
+    for group in &DIRECTION_GROUPS.0[dim] {
+        if rest.all_zero() {
+            break;
+        }
+        x = x ^ U::lookup8(group, rest);
+        rest = rest >> GROUP_BITS as u32;
     }
     lk_permute(x, seed).reverse_bits()
 }
@@ -424,8 +465,15 @@ mod tests {
             }
         }
         // Unscrambled points agree with the reversed-domain generator.
-        for (i, dim) in [(0u32, 0usize), (1, 3), (77, 9), (1 << 20, 100)] {
+        for (i, dim) in [(0u32, 0usize), (1, 3), (77, 9), (1 << 20, 100), (u32::MAX, 123), (1 << 31, 7)] {
             assert_eq!(sobol_owen(i, dim, 12345), owen_scramble(sobol_u32(i, dim), 12345));
+        }
+        // Every index bit of every dimension goes through its group's table.
+        for dim in 0..SOBOL_DIMS {
+            for i in (0..32).map(|b| 1u32 << b).chain([0x0000_00ff, 0x1234_5678, 0xdead_beef, u32::MAX]) {
+                let seed = hash32(i ^ dim as u32);
+                assert_eq!(sobol_owen(i, dim, seed), owen_scramble(sobol_u32(i, dim), seed), "dim {dim} i {i:#x}");
+            }
         }
     }
 
