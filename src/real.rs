@@ -343,12 +343,6 @@ pub trait U32Lanes:
     /// first, so that sixteen lanes may index it modulo 16.
     fn lookup8(table: &[u32; 16], idx: Self) -> Self;
 
-    /// All ones in the lanes whose lowest bit is set, zero elsewhere.
-    #[inline(always)]
-    fn low_bit_mask(self) -> Self {
-        Self::splat(0).wrapping_sub(self & Self::splat(1))
-    }
-
     /// The bits of every lane in reverse order (bit 0 <-> bit 31).
     #[inline(always)]
     fn reverse_bits(self) -> Self {
@@ -394,10 +388,6 @@ impl U32Lanes for u32 {
     #[inline(always)]
     fn lookup8(table: &[u32; 16], idx: Self) -> Self {
         table[(idx & 7) as usize]
-    }
-    #[inline(always)]
-    fn low_bit_mask(self) -> Self {
-        (self & 1).wrapping_neg()
     }
     #[inline(always)]
     fn reverse_bits(self) -> Self {

@@ -49,7 +49,8 @@ mod tests {
         agree::<U>(|a, b| (a ^ b) | (a & b), |a, b| (a ^ b) | (a & b));
         agree::<U>(|a, _| (a << 7) ^ (a >> 13), |a, _| (a << 7) ^ (a >> 13));
         agree::<U>(|a, _| a.reverse_bits(), |a, _| a.reverse_bits());
-        agree::<U>(|a, _| a.low_bit_mask(), |a, _| if a & 1 == 1 { u32::MAX } else { 0 });
+        let table: [u32; 16] = std::array::from_fn(|j| hash32(j as u32 % 8));
+        agree::<U>(|a, _| U::lookup8(&table, a), |a, _| table[a as usize % 8]);
         agree::<U>(|a, _| hash32(a), |a, _| hash32(a));
     }
 

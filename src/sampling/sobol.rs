@@ -7,9 +7,10 @@
 //!    of the direction numbers of `dim` selected by the set bits of `index`
 //!    (the generator matrix times the index over GF(2), taken three index
 //!    bits per table lookup); no Gray code, so any index is computed directly
-//!    and any split of the sample range gives the same points. Direction numbers: Joe and Kuo's `new-joe-kuo-6.21201`
-//!    parameters (`JOE_KUO`), expanded by the Bratley-Fox recurrence at
-//!    compile time; dimension 0 is van der Corput.
+//!    and any split of the sample range gives the same points. Direction
+//!    numbers: Joe and Kuo's `new-joe-kuo-6.21201` parameters (`JOE_KUO`),
+//!    expanded by the Bratley-Fox recurrence at compile time; dimension 0 is
+//!    van der Corput.
 //! 2. **Owen scramble**, hash-based (Burley, "Practical Hash-based Owen
 //!    Scrambling", JCGT 2020): the bits are reversed, permuted by a
 //!    Laine-Karras style hash in which each bit is flipped as a function of the
