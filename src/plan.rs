@@ -7,7 +7,8 @@ use crate::camera::PreparedCamera;
 use crate::choice::Mode;
 use crate::estimator::Estimator;
 use crate::geometry::{
-    self, Bvh, Closest, Emitters, Lights, Media, MovingBvh, MovingSpheres, QuadBvh, Quads, Spheres, MISS, QUAD_BASE,
+    self, Bvh, Closest, CuboidBvh, Cuboids, Emitters, Lights, Media, MovingBvh, MovingSpheres, QuadBvh, Quads, Spheres,
+    MISS, QUAD_BASE,
 };
 use crate::material::{Kind, MaterialTables};
 use crate::probe::Probe;
@@ -107,6 +108,12 @@ pub struct Plan {
     /// pays nothing).
     #[serde(skip_serializing_if = "Option::is_none")]
     pub quads: Option<Accel>,
+    /// The closest-hit search over cuboids (the scene's boxes, each tested
+    /// whole by one slab test: `geometry::cuboids`), when the scene has any
+    /// (searched after the loose quads'). Their faces are quads for
+    /// everything else.
+    #[serde(skip_serializing_if = "Option::is_none")]
+    pub cuboids: Option<Accel>,
     /// The closest-hit search over moving spheres, when the scene has any
     /// (searched after the quads'; each path then carries a time, drawn by
     /// the camera from `layout::TIME` and inherited by its scattered rays).
@@ -142,6 +149,11 @@ impl Plan {
             Some(_) => "; quads: their own bvh8, one box at a time",
             None => "",
         };
+        let cuboids = match self.cuboids {
+            Some(Accel::Brute) => "; boxes: brute force, one slab test per box",
+            Some(_) => "; boxes: their own bvh8, one slab test per box",
+            None => "",
+        };
         let moving = match self.moving {
             Some(Accel::Brute) => "; moving spheres: brute force at each path's time",
             Some(_) => "; moving spheres: their own bvh8 over the shutter interval, tested at each path's time",
@@ -167,7 +179,7 @@ impl Plan {
             ),
         };
         format!(
-            "plan: mode {:?}; material passes: {kinds}{textures}; camera: {} rays, {}; closest hit: {}{quads}{moving}{media}{toward}; paths stop at zero throughput",
+            "plan: mode {:?}; material passes: {kinds}{textures}; camera: {} rays, {}; closest hit: {}{quads}{cuboids}{moving}{media}{toward}; paths stop at zero throughput",
             self.mode,
             if self.lens { "thin-lens" } else { "pinhole" },
             if self.jitter { "jittered in the pixel" } else { "through pixel centres" },
@@ -215,6 +227,10 @@ pub struct Prepared {
     pub bvh: Option<Bvh>,
     /// The quads' tree, when the plan chose one for them.
     pub quad_bvh: Option<QuadBvh>,
+    /// The boxes, each tested whole (empty for a scene without).
+    pub cuboids: Cuboids,
+    /// Their tree, when the plan chose one for them.
+    pub cuboid_bvh: Option<CuboidBvh>,
     /// The moving spheres (empty for a scene without: padding only).
     pub moving: MovingSpheres,
     /// Their tree, when the plan chose one for them.
@@ -249,6 +265,12 @@ impl Prepared {
             match &self.quad_bvh {
                 Some(b) => best = b.walk_scalar(o, d, best, probe),
                 None => geometry::closest_quad_hit(&self.quads, o, d, &mut best, probe),
+            }
+            if !self.cuboids.is_empty() {
+                match &self.cuboid_bvh {
+                    Some(b) => best = b.walk_scalar(o, d, best, probe),
+                    None => geometry::closest_cuboid_hit(&self.cuboids, o, d, &mut best, probe),
+                }
             }
         }
         if M {
@@ -291,6 +313,12 @@ impl Prepared {
                 Some(b) => best = b.walk_packet(o, d, best, probe),
                 None => geometry::closest_quad_hit(&self.quads, o, d, &mut best, probe),
             }
+            if !self.cuboids.is_empty() {
+                match &self.cuboid_bvh {
+                    Some(b) => best = b.walk_packet(o, d, best, probe),
+                    None => geometry::closest_cuboid_hit(&self.cuboids, o, d, &mut best, probe),
+                }
+            }
         }
         if M {
             let time = time();
@@ -324,6 +352,12 @@ impl Prepared {
             match &self.quad_bvh {
                 Some(b) => best = b.any_hit_scalar_at(o, d, 0.0, best, probe),
                 None => geometry::any_quad_hit(&self.quads, o, d, &mut best, probe),
+            }
+        }
+        if best.index == MISS && !self.cuboids.is_empty() {
+            match &self.cuboid_bvh {
+                Some(b) => best = b.any_hit_scalar_at(o, d, 0.0, best, probe),
+                None => geometry::any_cuboid_hit(&self.cuboids, o, d, &mut best, probe),
             }
         }
         if M && best.index == MISS {
@@ -363,6 +397,12 @@ impl Prepared {
             match &self.quad_bvh {
                 Some(b) => best = b.any_hit_packet_at(o, d, W::splat(0.0), best, probe),
                 None => geometry::any_quad_hit(&self.quads, o, d, &mut best, probe),
+            }
+        }
+        if !best.leave_found() && !self.cuboids.is_empty() {
+            match &self.cuboid_bvh {
+                Some(b) => best = b.any_hit_packet_at(o, d, W::splat(0.0), best, probe),
+                None => geometry::any_cuboid_hit(&self.cuboids, o, d, &mut best, probe),
             }
         }
         if M && !best.leave_found() {

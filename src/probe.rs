@@ -35,10 +35,12 @@ pub enum Work {
     Root,
     /// A quad tested (The Next Week's primitives).
     Quad,
+    /// A cuboid tested (a box's six faces, by one slab test).
+    Cuboid,
 }
 
 impl Work {
-    pub const ALL: [Work; 5] = [Work::Node, Work::Box, Work::Sphere, Work::Root, Work::Quad];
+    pub const ALL: [Work; 6] = [Work::Node, Work::Box, Work::Sphere, Work::Root, Work::Quad, Work::Cuboid];
 }
 
 /// The work of one traversal, counted in registers and handed to the probe
@@ -46,14 +48,14 @@ impl Work {
 /// cost about 9% of the render (measured; docs/performance.md). Nothing is
 /// counted, and nothing is left in the code, unless `P::WORK`.
 pub struct WorkTally<P> {
-    n: [u32; 5],
+    n: [u32; 6],
     _probe: std::marker::PhantomData<fn(&mut P)>,
 }
 
 impl<P: Probe> WorkTally<P> {
     #[inline(always)]
     pub fn new() -> Self {
-        WorkTally { n: [0; 5], _probe: std::marker::PhantomData }
+        WorkTally { n: [0; 6], _probe: std::marker::PhantomData }
     }
 
     #[inline(always)]
@@ -182,6 +184,9 @@ pub struct WorkCounters {
     pub sphere_tests: u64,
     pub roots: u64,
     pub quad_tests: u64,
+    /// Cuboid tests (absent from parts written before cuboids: 0).
+    #[serde(default)]
+    pub cuboid_tests: u64,
     pub isect_active: u64,
     pub isect_lanes: u64,
     pub scatter_active: u64,
@@ -195,6 +200,7 @@ impl WorkCounters {
         self.sphere_tests += o.sphere_tests;
         self.roots += o.roots;
         self.quad_tests += o.quad_tests;
+        self.cuboid_tests += o.cuboid_tests;
         self.isect_active += o.isect_active;
         self.isect_lanes += o.isect_lanes;
         self.scatter_active += o.scatter_active;
@@ -219,6 +225,7 @@ impl Probe for WorkCounters {
             Work::Sphere => &mut self.sphere_tests,
             Work::Root => &mut self.roots,
             Work::Quad => &mut self.quad_tests,
+            Work::Cuboid => &mut self.cuboid_tests,
         };
         *c += n as u64;
     }

@@ -32,9 +32,10 @@
 //!   by `1 + 2 gamma_3` (Ize 2013, "Robust BVH ray traversal") and a box is
 //!   pruned only when its entry exceeds `best * (1 + 2^-20)`.
 
+use super::cuboids::{CuboidRec, Cuboids};
 use super::intersect::{sphere_disc, sphere_t, Closest};
 use super::moving::{centre_at, MovingSpheres, MOVING_BASE};
-use super::quads::{next_down, next_up, quad_hit_axis, quad_hit_general, quad_hit_upright, QuadRec, Quads, QUAD_BASE};
+use super::quads::{next_down, next_up, QuadRec, Quads, QUAD_BASE};
 use super::spheres::{Spheres, MISS};
 use crate::probe::{Probe, Work, WorkTally};
 use crate::real::{Real, Wide, MAX_LANES};
@@ -134,6 +135,13 @@ pub struct LeafQuad {
     run: u32,
 }
 
+/// A leaf's cuboid (its record holds its faces' hit indices).
+#[derive(Clone, Copy, Debug)]
+#[repr(C)]
+pub struct LeafCuboid {
+    rec: CuboidRec,
+}
+
 /// A leaf's moving sphere: its centre at time 0, motion, squared radius and
 /// hit index (`MOVING_BASE + i`).
 #[derive(Clone, Copy, Debug)]
@@ -185,17 +193,16 @@ impl LeafPrim for LeafQuad {
         while let Some(first) = rest.first() {
             let (run, next) = rest.split_at((first.run as usize).clamp(1, rest.len()));
             debug_assert!(run.iter().all(|q| q.rec.axis == first.rec.axis));
-            match first.rec.axis {
-                0 => run.iter().for_each(|q| best.offer_quad(quad_hit_axis::<R, 0>(o, d, &q.rec), q.index, probe)),
-                1 => run.iter().for_each(|q| best.offer_quad(quad_hit_axis::<R, 1>(o, d, &q.rec), q.index, probe)),
-                2 => run.iter().for_each(|q| best.offer_quad(quad_hit_axis::<R, 2>(o, d, &q.rec), q.index, probe)),
-                4 => run.iter().for_each(|q| best.offer_quad(quad_hit_upright::<R, 0>(o, d, &q.rec), q.index, probe)),
-                5 => run.iter().for_each(|q| best.offer_quad(quad_hit_upright::<R, 1>(o, d, &q.rec), q.index, probe)),
-                6 => run.iter().for_each(|q| best.offer_quad(quad_hit_upright::<R, 2>(o, d, &q.rec), q.index, probe)),
-                _ => run.iter().for_each(|q| best.offer_quad(quad_hit_general(o, d, &q.rec), q.index, probe)),
-            }
+            best.test_quad_run(first.rec.axis, run.iter().map(|q| (&q.rec, q.index)), o, d, probe);
             rest = next;
         }
+    }
+}
+
+impl LeafPrim for LeafCuboid {
+    #[inline(always)]
+    fn test<R: Real, P: Probe>(&self, o: V3<R>, d: V3<R>, _time: R, best: &mut Closest<R>, probe: &mut P) {
+        best.test_cuboid(o, d, &self.rec, probe);
     }
 }
 
@@ -210,6 +217,9 @@ impl LeafPrim for LeafMoving {
 /// The tree over a scene's quads (one tree per primitive kind: a
 /// sphere-only scene's walks are exactly what they were).
 pub type QuadBvh = Bvh<LeafQuad>;
+
+/// The tree over a scene's cuboids.
+pub type CuboidBvh = Bvh<LeafCuboid>;
 
 /// The tree over a scene's moving spheres, on their boxes over the shutter
 /// interval (traversal ignores time; the leaves test at each ray's time).
@@ -463,13 +473,17 @@ impl QuadBvh {
     /// about `10u extent` of the plane, u = 2^-24) and the slab test's (see
     /// the module's bounds). So a flat box is entered by every ray the quad
     /// test can accept, and brute force and the tree agree bit for bit.
+    ///
+    /// The tree holds the loose quads ([`Quads::loose`]); the cuboids' faces
+    /// are in the cuboids' search.
     pub fn build_quads(q: &Quads, extent: f32) -> QuadBvh {
-        let n = q.len;
+        let n = q.loose.len();
         let pad = 2.0 * extent.abs() * PAD;
-        let boxes: Vec<Aabb> = q.rec[..n]
+        let boxes: Vec<Aabb> = q
+            .loose
             .iter()
-            .map(|r| {
-                let (min, max) = r.bounds();
+            .map(|&i| {
+                let (min, max) = q.rec[i as usize].bounds();
                 Aabb { min: min.map(|x| x - pad), max: max.map(|x| x + pad) }
             })
             .collect();
@@ -477,7 +491,8 @@ impl QuadBvh {
         let (bnodes, order) = build_binary(&boxes, centroid, Walk::OneByOne);
         let mut bvh =
             Bvh { nodes: Vec::new(), leaf: vec![], cx: vec![], cy: vec![], cz: vec![], r2: vec![], index: vec![] };
-        for &i in &order {
+        for &k in &order {
+            let i = q.loose[k as usize];
             bvh.leaf.push(LeafQuad { rec: q.rec[i as usize], index: QUAD_BASE + i, run: 0 });
         }
         bvh.nodes.push(Node8::EMPTY);
@@ -506,6 +521,44 @@ impl QuadBvh {
                 leaf[start].run = len as u32;
                 start += len;
             }
+        }
+        bvh
+    }
+}
+
+impl CuboidBvh {
+    /// Builds the tree over the cuboids for the one-by-one walks. A cuboid's
+    /// box is the union of its faces' ([`QuadRec::bounds`]: the four corners
+    /// widened by the edge tolerance, rounded outwards), padded as the quads'
+    /// are (`2 extent 2^-19` on every side): far more than the distance
+    /// between the faces' planes and the slabs' (both rounded once from one
+    /// box) and the slab test's rounding, so every ray the cuboid test takes
+    /// enters the box, and brute force and the tree agree bit for bit.
+    pub fn build_cuboids(c: &Cuboids, q: &Quads, extent: f32) -> CuboidBvh {
+        let n = c.len();
+        let pad = 2.0 * extent.abs() * PAD;
+        let boxes: Vec<Aabb> = c
+            .rec
+            .iter()
+            .map(|r| {
+                let mut b = Aabb::EMPTY;
+                for face in r.faces.as_flattened() {
+                    let (min, max) = q.rec[(face - QUAD_BASE) as usize].bounds();
+                    b.grow(&Aabb { min: min.map(|x| x - pad), max: max.map(|x| x + pad) });
+                }
+                b
+            })
+            .collect();
+        let centroid = boxes.iter().map(|b| std::array::from_fn(|k| 0.5 * b.min[k] + 0.5 * b.max[k])).collect();
+        let (bnodes, order) = build_binary(&boxes, centroid, Walk::OneByOne);
+        let mut bvh =
+            Bvh { nodes: Vec::new(), leaf: vec![], cx: vec![], cy: vec![], cz: vec![], r2: vec![], index: vec![] };
+        for &i in &order {
+            bvh.leaf.push(LeafCuboid { rec: c.rec[i as usize] });
+        }
+        bvh.nodes.push(Node8::EMPTY);
+        if n > 0 {
+            bvh.collapse(&bnodes, 0, 0);
         }
         bvh
     }

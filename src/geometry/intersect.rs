@@ -49,8 +49,9 @@
 //!   radii away). Rendering never asks that question: [`spawn`] moves every new
 //!   origin off the surface by more than the bound on `c'`.
 
+use super::cuboids::{cuboid_hit, CuboidRec, Cuboids};
 use super::moving::{centre_at, MovingSpheres, MOVING_BASE};
-use super::quads::{quad_hit, QuadRec, Quads, QUAD_BASE};
+use super::quads::{quad_hit, quad_hit_axis, quad_hit_general, quad_hit_upright, QuadRec, Quads, QUAD_BASE};
 use super::spheres::{Spheres, MISS};
 use crate::probe::{Probe, Work, WorkTally};
 use crate::real::{Mask, Real};
@@ -162,6 +163,42 @@ impl<R: Real> Closest<R> {
         probe.work(Work::Quad, 1);
         self.offer(hit, t, R::u_splat(index));
     }
+
+    /// A run of quads of one form (`form`, their [`QuadRec::axis`]), each
+    /// given with its hit index, each tested with that form of the test: the
+    /// leaf test of the quad tree and of brute force. (With the form chosen
+    /// per quad, the compiler shares the forms' common end and moves the
+    /// closest hit between registers on every test; with one loop per form,
+    /// every form costs its loop's set-up.) The tie rule does not depend on
+    /// the order of the tests.
+    #[inline(always)]
+    pub fn test_quad_run<'a, P: Probe>(
+        &mut self,
+        form: u32,
+        run: impl Iterator<Item = (&'a QuadRec, u32)>,
+        o: V3<R>,
+        d: V3<R>,
+        probe: &mut P,
+    ) {
+        match form {
+            0 => run.for_each(|(q, i)| self.offer_quad(quad_hit_axis::<R, 0>(o, d, q), i, probe)),
+            1 => run.for_each(|(q, i)| self.offer_quad(quad_hit_axis::<R, 1>(o, d, q), i, probe)),
+            2 => run.for_each(|(q, i)| self.offer_quad(quad_hit_axis::<R, 2>(o, d, q), i, probe)),
+            4 => run.for_each(|(q, i)| self.offer_quad(quad_hit_upright::<R, 0>(o, d, q), i, probe)),
+            5 => run.for_each(|(q, i)| self.offer_quad(quad_hit_upright::<R, 1>(o, d, q), i, probe)),
+            6 => run.for_each(|(q, i)| self.offer_quad(quad_hit_upright::<R, 2>(o, d, q), i, probe)),
+            _ => run.for_each(|(q, i)| self.offer_quad(quad_hit_general(o, d, q), i, probe)),
+        }
+    }
+
+    /// A cuboid against the rays ([`cuboid_hit`]): its faces' hit indices
+    /// enter the tie rule as any quad's.
+    #[inline(always)]
+    pub fn test_cuboid<P: Probe>(&mut self, o: V3<R>, d: V3<R>, b: &CuboidRec, probe: &mut P) {
+        probe.work(Work::Cuboid, 1);
+        let (hit, t, index) = cuboid_hit(o, d, b);
+        self.offer(hit, t, index);
+    }
 }
 
 /// Every moving sphere at the rays' times `time` against the rays (brute
@@ -229,10 +266,47 @@ fn quads_brute<R: Real, P: Probe, const ANY: bool>(
     best: &mut Closest<R>,
     probe: &mut P,
 ) {
+    // Run by run of one form (the loose quads are sorted by form), as a
+    // tree's leaf is tested: a closure per quad, with the form chosen per
+    // quad, was compiled out of line (a call per quad test).
     let recs = &q.rec[..q.len];
-    brute::<R, P, ANY>(recs.len(), best, probe, |i, best, tally| {
-        best.test_quad(o, d, &recs[i], QUAD_BASE + i as u32, tally);
-    });
+    let mut tally = WorkTally::<P>::new();
+    let mut rest = &q.loose[..];
+    while let Some(&first) = rest.first() {
+        let form = recs[first as usize].axis;
+        let len = rest.iter().take_while(|&&i| recs[i as usize].axis == form).count();
+        let (run, next) = rest.split_at(len);
+        best.test_quad_run(form, run.iter().map(|&i| (&recs[i as usize], QUAD_BASE + i)), o, d, &mut tally);
+        if ANY && best.leave_found() {
+            break;
+        }
+        rest = next;
+    }
+    tally.flush(probe);
+}
+
+/// [`brute`] over the cuboids.
+#[inline(always)]
+fn cuboids_brute<R: Real, P: Probe, const ANY: bool>(
+    c: &Cuboids,
+    o: V3<R>,
+    d: V3<R>,
+    best: &mut Closest<R>,
+    probe: &mut P,
+) {
+    brute::<R, P, ANY>(c.len(), best, probe, |i, best, tally| best.test_cuboid(o, d, &c.rec[i], tally));
+}
+
+/// Every cuboid against the rays (brute force), improving `best`.
+#[inline]
+pub fn closest_cuboid_hit<R: Real, P: Probe>(c: &Cuboids, o: V3<R>, d: V3<R>, best: &mut Closest<R>, probe: &mut P) {
+    cuboids_brute::<R, P, false>(c, o, d, best, probe)
+}
+
+/// Any hit of the rays below `best.t` among the cuboids (brute force).
+#[inline]
+pub fn any_cuboid_hit<R: Real, P: Probe>(c: &Cuboids, o: V3<R>, d: V3<R>, best: &mut Closest<R>, probe: &mut P) {
+    cuboids_brute::<R, P, true>(c, o, d, best, probe)
 }
 
 /// [`brute`] over the moving spheres at the rays' times.

@@ -133,6 +133,9 @@ pub struct Quads {
     pub shade: Vec<Shade>,
     /// Number of real quads (the arrays are longer: padding).
     pub len: usize,
+    /// The quads the quad searches test (brute force, the quad tree): all but
+    /// the faces of cuboids ([`super::Cuboids`]), which are tested whole.
+    pub loose: Vec<u32>,
 }
 
 impl Quads {
@@ -207,12 +210,30 @@ impl Quads {
         self.kind.push(kind);
         self.row.push(row);
         self.shade.push(Shade([unit[0], unit[1], unit[2], dn as f32, 0.0, 0.0, 0.0, 0.0]));
+        self.loose.push(self.len as u32);
         self.len += 1;
+    }
+
+    /// Quads `first..first + 6` are a cuboid's faces: the quad searches
+    /// leave them to the cuboid's test.
+    pub fn set_cuboid_faces(&mut self, first: u32) {
+        self.loose.retain(|&i| !(first..first + 6).contains(&i));
     }
 
     /// Pads to a power of two, at least 8, with quads no ray can hit (their
     /// `a` test is `|0 - 2| <= 1`).
+    ///
+    /// The last step of building: it also sorts the loose quads by the form
+    /// of their test (those with a normal along x, y, z, then those upright
+    /// about x, y, z, then the others), so that brute force tests them run
+    /// by run as a tree's leaf does.
     pub fn pad(&mut self) {
+        let rec = &self.rec;
+        let order = |i: &u32| match rec[*i as usize].axis {
+            3 => (7, *i),
+            a => (a, *i),
+        };
+        self.loose.sort_by_key(order);
         let target = self.rec.len().max(8).next_power_of_two();
         while self.rec.len() < target {
             self.rec.push(QuadRec {

@@ -105,6 +105,9 @@ pub struct PerRay {
     /// Quad tests (absent from baselines of sphere-only scenes).
     #[serde(default, skip_serializing_if = "is_zero")]
     pub quad_tests: f64,
+    /// Cuboid tests (absent from baselines of scenes without boxes).
+    #[serde(default, skip_serializing_if = "is_zero")]
+    pub cuboid_tests: f64,
 }
 
 fn is_zero(x: &f64) -> bool {
@@ -120,6 +123,7 @@ impl PerRay {
             sphere_tests: w.sphere_tests as f64 / r,
             roots: w.roots as f64 / r,
             quad_tests: w.quad_tests as f64 / r,
+            cuboid_tests: w.cuboid_tests as f64 / r,
         }
     }
 }
@@ -258,6 +262,11 @@ impl BenchReport {
             let per: Vec<String> =
                 self.kernels.iter().map(|e| format!("{} {:.2}", e.stats.kernel, e.work_per_ray.quad_tests)).collect();
             t += &format!("quad tests per ray: {}\n", per.join(", "));
+        }
+        if self.kernels.iter().any(|e| e.work_per_ray.cuboid_tests > 0.0) {
+            let per: Vec<String> =
+                self.kernels.iter().map(|e| format!("{} {:.2}", e.stats.kernel, e.work_per_ray.cuboid_tests)).collect();
+            t += &format!("cuboid tests per ray: {}\n", per.join(", "));
         }
         t += &format!(
             "(seconds and Mrays/s: the median of {} run(s); CI: a distribution-free confidence interval for the median \
@@ -513,7 +522,7 @@ pub struct BaselineComparison {
 }
 
 fn total(w: &WorkCounters) -> u64 {
-    w.nodes + w.box_tests + w.sphere_tests + w.roots + w.quad_tests
+    w.nodes + w.box_tests + w.sphere_tests + w.roots + w.quad_tests + w.cuboid_tests
 }
 
 /// Compares a fresh report with a baseline (checked with [`Baseline::check`]).

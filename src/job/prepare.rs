@@ -8,8 +8,8 @@ use crate::camera::{PreparedCamera, View};
 use crate::choice::{AccelChoice, EstimatorChoice, Mode};
 use crate::estimator::Estimator;
 use crate::geometry::{
-    Boundary, Bvh, Emitters, LightQuad, LightSphere, Lights, Media, MovingBvh, MovingSpheres, QuadBvh, Quads, Spheres,
-    Walk,
+    Boundary, Bvh, CuboidBvh, Cuboids, Emitters, LightQuad, LightSphere, Lights, Media, MovingBvh, MovingSpheres,
+    QuadBvh, Quads, Spheres, Walk,
 };
 use crate::material::{Kind, MaterialTables};
 use crate::plan::{Accel, KindSet, Plan, Prepared, SkyColours};
@@ -109,7 +109,8 @@ pub(super) fn plan(scene: &Scene, settings: &Settings, accel: AccelChoice) -> Pl
         lens: scene.camera.lens_radius() > 0.0 && scene.mode != Mode::Gradient,
         jitter: settings.spp > 1,
         accel: choose_accel(accel, flat.spheres.iter().filter(|s| s.center1.is_none()).count(), scene.mode),
-        quads: choose_quad_accel(accel, flat.quads.len(), scene.mode),
+        quads: choose_quad_accel(accel, flat.quads.len() - 6 * flat.cuboids.len(), scene.mode),
+        cuboids: choose_quad_accel(accel, flat.cuboids.len(), scene.mode),
         moving: choose_quad_accel(accel, flat.spheres.iter().filter(|s| s.center1.is_some()).count(), scene.mode),
         sample_toward,
         nee,
@@ -217,6 +218,11 @@ pub(super) fn prepare(
     for q in &flat.quads {
         quads.push(q.q, q.u, q.v, extent, kind(&q.material), row_of(&q.material));
     }
+    let mut cuboids = Cuboids::default();
+    for c in &flat.cuboids {
+        cuboids.push(c.center, c.axes, c.half, c.first as u32);
+        quads.set_cuboid_faces(c.first as u32);
+    }
     spheres.pad();
     quads.pad();
     moving.pad();
@@ -249,6 +255,8 @@ pub(super) fn prepare(
     let emitters = if plan.nee > 0 { emitters(&spheres, &quads, &materials) } else { Emitters::default() };
     debug_assert_eq!(emitters.len(), plan.nee);
     let quad_bvh = (plan.quads.is_some_and(|a| a != Accel::Brute)).then(|| QuadBvh::build_quads(&quads, extent));
+    let cuboid_bvh =
+        (plan.cuboids.is_some_and(|a| a != Accel::Brute)).then(|| CuboidBvh::build_cuboids(&cuboids, &quads, extent));
     let moving_bvh = (plan.moving.is_some_and(|a| a != Accel::Brute)).then(|| MovingBvh::build_moving(&moving, extent));
     Prepared {
         plan,
@@ -269,6 +277,8 @@ pub(super) fn prepare(
         media,
         bvh,
         quad_bvh,
+        cuboids,
+        cuboid_bvh,
         moving,
         moving_bvh,
         estimator,
@@ -335,8 +345,14 @@ mod tests {
         let cornell = preset("nw-cornell-box").unwrap();
         let p = plan(&cornell, &settings(4), AccelChoice::Auto);
         assert_eq!(p.kinds.iter().collect::<Vec<_>>(), [Kind::Lambertian, Kind::DiffuseLight]);
-        assert_eq!(p.quads, Some(Accel::BvhPackets));
-        assert_eq!(plan(&cornell, &settings(4), AccelChoice::Brute).quads, Some(Accel::Brute));
+        // Six walls and the light (below the crossover) and two boxes, tested whole.
+        assert_eq!((p.quads, p.cuboids), (Some(Accel::Brute), Some(Accel::Brute)));
+        let p = plan(&cornell, &settings(4), AccelChoice::Bvh);
+        assert_eq!((p.quads, p.cuboids), (Some(Accel::BvhPackets), Some(Accel::BvhPackets)));
+        // The book's final scene: its one light quad, and 400 ground boxes in a tree of their own.
+        let p = plan(&preset("nw-final").unwrap(), &settings(4), AccelChoice::Auto);
+        assert_eq!((p.quads, p.cuboids), (Some(Accel::Brute), Some(Accel::BvhPackets)));
+        assert_eq!(plan(&fin, &settings(4), AccelChoice::Auto).cuboids, None);
         let normals = preset("ch05-normals").unwrap();
         assert!(plan(&normals, &settings(4), AccelChoice::Auto).kinds.is_empty());
     }

@@ -22,6 +22,20 @@ pub struct Flat {
     /// The media (the scene's, then each group's), in the order of their
     /// hit indices and sampler dimensions.
     pub media: Vec<FlatMedium>,
+    /// The boxes, each in its own frame, with the index of its first face in
+    /// `quads` (its six faces follow, in [`box_quads`]'s order).
+    pub cuboids: Vec<FlatCuboid>,
+}
+
+/// A box in world space: its centre, its three unit axes (the box's x, y and
+/// z turned by its group) and its half sizes along them, in f64 (the kernel
+/// side rounds them once), and the index of its first face among the quads.
+#[derive(Clone, Copy, Debug, PartialEq)]
+pub struct FlatCuboid {
+    pub center: [f64; 3],
+    pub axes: [[f64; 3]; 3],
+    pub half: [f64; 3],
+    pub first: usize,
 }
 
 /// A medium in world space; its boundary in f64 (the kernel side rounds it once).
@@ -83,6 +97,11 @@ impl Transform {
         [self.cos * v[0] + self.sin * v[2], v[1], -self.sin * v[0] + self.cos * v[2]]
     }
 
+    /// Unit axis `i` (x, y, z), turned.
+    fn axis(&self, i: usize) -> [f64; 3] {
+        self.vector(std::array::from_fn(|j| if i == j { 1.0 } else { 0.0 }))
+    }
+
     fn point(&self, p: [f64; 3]) -> [f64; 3] {
         let r = self.vector(p);
         [r[0] + self.t[0], r[1] + self.t[1], r[2] + self.t[2]]
@@ -132,8 +151,7 @@ fn medium(t: &Transform, m: &Medium) -> FlatMedium {
             let (a, b) = (f64s(a), f64s(b));
             let centre: [f64; 3] = std::array::from_fn(|i| 0.5 * (a[i] + b[i]));
             let half: [f64; 3] = std::array::from_fn(|i| 0.5 * (a[i] - b[i]).abs());
-            let axis = |i: usize| t.vector(std::array::from_fn(|j| if i == j { 1.0 } else { 0.0 }));
-            FlatBoundary::Box { center: t.point(centre), axes: [axis(0), axis(1), axis(2)], half }
+            FlatBoundary::Box { center: t.point(centre), axes: [t.axis(0), t.axis(1), t.axis(2)], half }
         }
     };
     FlatMedium { boundary, density: m.density, albedo: m.albedo }
@@ -158,6 +176,14 @@ impl Flat {
             self.quads.push(quad(t, f64s(q.q), f64s(q.u), f64s(q.v), q.material.clone()));
         }
         for b in boxes {
+            let (lo, hi) = (f64s(b.a), f64s(b.b));
+            let center: [f64; 3] = std::array::from_fn(|i| 0.5 * (lo[i] + hi[i]));
+            self.cuboids.push(FlatCuboid {
+                center: t.point(center),
+                axes: [t.axis(0), t.axis(1), t.axis(2)],
+                half: std::array::from_fn(|i| 0.5 * (lo[i] - hi[i]).abs()),
+                first: self.quads.len(),
+            });
             for (q, u, v) in box_quads(b) {
                 self.quads.push(quad(t, q, u, v, b.material.clone()));
             }

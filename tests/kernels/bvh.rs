@@ -4,11 +4,13 @@
 //! deep trees.
 
 use proptest::prelude::*;
-use rtow::internals::geometry::{closest_hit, closest_quad_hit, Bvh, Closest, QuadBvh, Quads, Spheres, Walk};
+use rtow::internals::geometry::{
+    closest_cuboid_hit, closest_hit, closest_quad_hit, Bvh, Closest, CuboidBvh, Cuboids, QuadBvh, Quads, Spheres, Walk,
+};
 use rtow::internals::material::Kind;
 use rtow::internals::real::Wide;
 use rtow::internals::vec3::V3;
-use rtow::scene::{box_quads, Material, QuadBox};
+use rtow::scene::{box_quads, Camera, Group, Material, QuadBox};
 use wide::{f32x16, f32x8};
 
 fn spheres(list: &[([f32; 3], f32)]) -> Spheres {
@@ -176,6 +178,54 @@ fn quad_packets<W: Wide>(
     Ok(())
 }
 
+/// The cuboids' tree (scalar walk, packets of 8 and 16), starting from a
+/// sphere hit or none, against brute force over the cuboids: the same face,
+/// the same `t` bits.
+fn check_cuboids(
+    c: &Cuboids,
+    q: &Quads,
+    extent: f32,
+    start: (u32, f32),
+    rays: &[(V3<f32>, V3<f32>)],
+) -> Result<(), TestCaseError> {
+    let bvh = CuboidBvh::build_cuboids(c, q, extent);
+    let brute = |o, d| {
+        let mut b = Closest::<f32> { index: start.0, t: start.1 };
+        closest_cuboid_hit(c, o, d, &mut b, &mut ());
+        (b.index, b.t.to_bits())
+    };
+    for &(o, d) in rays {
+        let tree = bvh.walk_scalar(o, d, Closest::<f32> { index: start.0, t: start.1 }, &mut ());
+        prop_assert_eq!(brute(o, d), (tree.index, tree.t.to_bits()), "scalar cuboid walk");
+    }
+    fn packets<W: Wide>(
+        bvh: &CuboidBvh,
+        start: (u32, f32),
+        rays: &[(V3<f32>, V3<f32>)],
+        brute: &dyn Fn(V3<f32>, V3<f32>) -> (u32, u32),
+    ) -> Result<(), TestCaseError> {
+        for chunk in rays.chunks(W::LANES) {
+            let n = chunk.len();
+            let at = |k: usize| chunk[k.min(n - 1)];
+            let o = V3::new(W::from_fn(|k| at(k).0.x), W::from_fn(|k| at(k).0.y), W::from_fn(|k| at(k).0.z));
+            let d = V3::new(W::from_fn(|k| at(k).1.x), W::from_fn(|k| at(k).1.y), W::from_fn(|k| at(k).1.z));
+            let best =
+                bvh.walk_packet(o, d, Closest::<W> { index: W::u_splat(start.0), t: W::splat(start.1) }, &mut ());
+            for (k, &(o, d)) in chunk.iter().enumerate() {
+                prop_assert_eq!(
+                    brute(o, d),
+                    (W::lane_u(best.index, k), best.t.lane(k).to_bits()),
+                    "cuboid packet of {}",
+                    W::LANES
+                );
+            }
+        }
+        Ok(())
+    }
+    packets::<f32x8>(&bvh, start, rays, &brute)?;
+    packets::<f32x16>(&bvh, start, rays, &brute)
+}
+
 /// Rays from `origins` to the corners, edge midpoints and centres of the quads.
 fn rays_to_quads(list: &[([f32; 3], [f32; 3], [f32; 3])], origins: &[[f32; 3]]) -> Vec<(V3<f32>, V3<f32>)> {
     let mut targets = Vec::new();
@@ -209,6 +259,35 @@ proptest! {
         let q = quads(&list, 200.0);
         let start = if sphere_t.is_finite() { (7, sphere_t) } else { (u32::MAX, f32::INFINITY) };
         check_quads(&q, 200.0, start, &rays_to_quads(&list, &origins))?;
+    }
+
+    /// Boxes turned about y (as the scene's groups turn them), tested whole
+    /// as cuboids, touching and overlapping, and rays at their faces'
+    /// corners and edges.
+    #[test]
+    fn cuboids_match_brute_force(
+        boxes in prop::collection::vec((prop::array::uniform3(-50.0f32..50.0), prop::array::uniform3(0.5f32..30.0), -180.0f32..180.0), 1..40),
+        origins in prop::collection::vec(prop::array::uniform3(-120.0f32..120.0), 1..30),
+        sphere_t in prop_oneof![Just(f32::INFINITY), 1.0f32..200.0],
+    ) {
+        let mut scene = rtow::scene::preset("nw-cornell-box-empty").unwrap();
+        scene.quads.clear();
+        scene.camera = Camera::looking([0.0, 0.0, 1.0], [0.0; 3], 40.0);
+        scene.groups = boxes.iter().map(|&(min, size, angle)| Group {
+            rotate_y: angle,
+            boxes: vec![QuadBox { a: min, b: std::array::from_fn(|k| min[k] + size[k]), material: Material::Lambertian { albedo: [0.5; 3].into() } }],
+            ..Group::default()
+        }).collect();
+        let flat = scene.flatten();
+        let list: Vec<_> = flat.quads.iter().map(|f| (f.q, f.u, f.v)).collect();
+        let mut q = quads(&list, 200.0);
+        let mut c = Cuboids::default();
+        for b in &flat.cuboids {
+            c.push(b.center, b.axes, b.half, b.first as u32);
+            q.set_cuboid_faces(b.first as u32);
+        }
+        let start = if sphere_t.is_finite() { (7, sphere_t) } else { (u32::MAX, f32::INFINITY) };
+        check_cuboids(&c, &q, 200.0, start, &rays_to_quads(&list, &origins))?;
     }
 
     /// Quads of any orientation and shape (sines down to 0.01), at large

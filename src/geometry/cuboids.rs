@@ -1,0 +1,140 @@
+//! Cuboids: a scene's boxes (The Next Week's `box(a, b)`, turned and moved
+//! by their groups) intersected whole, by one slab test in the box's own
+//! frame, instead of face by face.
+//!
+//! A box is still six quads ([`super::Quads`]): they carry its materials,
+//! shading records, light samples and bounds, and a cuboid's hit is the hit
+//! index of the face it enters (or, from inside, leaves), so every pass after
+//! the closest-hit search reads a quad. Only the search changes: six quad
+//! tests (about 38 vector instructions and a divide each) become one test of
+//! about 75 instructions and three divides, and a box's faces never compete
+//! with each other under the tie rule.
+//!
+//! # The test
+//!
+//! The box is its centre `c`, three unit axes `a_k` (world space) and half
+//! sizes `h_k`, each rounded once from f64 ([`crate::scene::Flat`] keeps
+//! them). For the ray `o + t d`, with `f = o - c`, each axis gives the
+//! distances to its two faces, `(-h_k - f.a_k) / d.a_k` and
+//! `(h_k - f.a_k) / d.a_k` (the reciprocal computed once, its divisor kept
+//! away from 0 as the BVH's slab test keeps it, so no `0 * inf` arises and
+//! every distance is finite or infinite, never NaN). The ray enters the box
+//! at `t_in`, the largest of the three near distances, and leaves it at
+//! `t_out`, the smallest of the far ones. It hits when `t_in <= t_out` and
+//! `t_out > 0`: at `t_in` from outside, at `t_out` from inside (a ray
+//! refracted into a glass box).
+//!
+//! * **The face** is that of the axis whose distance is `t_in` (or `t_out`),
+//!   the first of x, y, z on a tie (an edge or a corner), on the side the
+//!   ray comes from (or goes to). Its hit index is its quad's.
+//! * **No leaks at edges.** The faces share their planes' distances: a ray
+//!   that enters the box through an edge enters it through one of the two
+//!   faces, whatever the rounding. A ray that only touches the box at an edge
+//!   (`t_in = t_out` exactly) is a hit; a ray passing within rounding of an
+//!   edge outside may miss it, where the quad test's widened edges would take
+//!   it: a grazing ray that does not enter the box, either way.
+//! * **Self-hits** are prevented as for every quad, by where a new ray
+//!   starts: the face's surface ([`super::quad_surface`]) offsets it by
+//!   `32u (|p|_inf + |n.q|)`, far above the difference between the face's
+//!   plane and the slab's (both rounded from one f64 box: a few units of
+//!   roundoff of `|c| + |h|`) plus the test's rounding of `f.a_k` (about
+//!   `3u |f|`). `tests/suite/nextweek.rs` checks it, and the hits against an
+//!   f64 oracle.
+
+use super::quads::QUAD_BASE;
+use crate::real::{Mask, Real};
+use crate::vec3::V3;
+
+/// Directions components below this are replaced by it (with their sign)
+/// before the reciprocal, as in the BVH's slab test: `|1/d.a_k| <= 1e30`.
+const TINY_DIR: f32 = 1e-30;
+
+/// One box in its own frame, and the hit indices of its faces.
+#[derive(Clone, Copy, Debug, Default, PartialEq)]
+#[repr(C)]
+pub struct CuboidRec {
+    /// The centre (world space).
+    pub c: [f32; 3],
+    /// The unit axes (world space).
+    pub axes: [[f32; 3]; 3],
+    /// The half sizes along the axes.
+    pub half: [f32; 3],
+    /// The hit index (`QUAD_BASE + i`) of the face at `-half[k]` and at
+    /// `+half[k]` along axis `k`.
+    pub faces: [[u32; 2]; 3],
+}
+
+/// The scene's cuboids, in the order of their first faces.
+#[derive(Clone, Debug, Default)]
+pub struct Cuboids {
+    pub rec: Vec<CuboidRec>,
+}
+
+impl Cuboids {
+    pub fn len(&self) -> usize {
+        self.rec.len()
+    }
+    pub fn is_empty(&self) -> bool {
+        self.rec.is_empty()
+    }
+
+    /// Appends the box of centre `c`, axes and half sizes (f64, rounded
+    /// once), whose faces are the quads `first..first + 6` in the order the
+    /// book's `box(a, b)` builds them ([`crate::scene::box_quads`]: front
+    /// `+z`, right `+x`, back `-z`, left `-x`, top `+y`, bottom `-y`).
+    pub fn push(&mut self, c: [f64; 3], axes: [[f64; 3]; 3], half: [f64; 3], first: u32) {
+        let f = |v: [f64; 3]| v.map(|x| x as f32);
+        let face = |k: u32| QUAD_BASE + first + k;
+        self.rec.push(CuboidRec {
+            c: f(c),
+            axes: axes.map(f),
+            half: f(half),
+            faces: [[face(3), face(1)], [face(5), face(4)], [face(2), face(0)]],
+        });
+    }
+}
+
+/// `1 / x`, its divisor kept at least [`TINY_DIR`] in size.
+#[inline(always)]
+fn inv<R: Real>(x: R) -> R {
+    let tiny = R::splat(TINY_DIR);
+    R::splat(1.0) / R::select(x.abs().lt(tiny), tiny.copysign(x), x)
+}
+
+/// The cuboid test: the hit mask, `t` and the hit index of the face, for the
+/// rays `o + t d` against `b` (broadcast), as the module describes. The
+/// minima and maxima take one instruction each: no distance is NaN, and the
+/// sign of a zero distance (which is never a hit) is all they may change.
+#[inline(always)]
+pub fn cuboid_hit<R: Real>(o: V3<R>, d: V3<R>, b: &CuboidRec) -> (R::Mask, R, R::U32) {
+    let f = o - V3::splat3(b.c);
+    let axis = |k: usize| {
+        let a = V3::splat3(b.axes[k]);
+        let r = inv(d.dot(a));
+        let fa = f.dot(a);
+        let h = R::splat(b.half[k]);
+        let (t_lo, t_hi) = ((-h - fa) * r, (h - fa) * r);
+        // Entering through the `-h` face when the ray runs along the axis.
+        (t_lo.fast_min(t_hi), t_lo.fast_max(t_hi), r.gt(R::splat(0.0)))
+    };
+    let (nx, fx, px) = axis(0);
+    let (ny, fy, py) = axis(1);
+    let (nz, fz, pz) = axis(2);
+    let t_in = nx.fast_max(ny).fast_max(nz);
+    let t_out = fx.fast_min(fy).fast_min(fz);
+    let zero = R::splat(0.0);
+    let hit = t_in.le(t_out) & t_out.gt(zero);
+    let outside = t_in.gt(zero);
+    let u = |k: usize, side: usize| R::u_splat(b.faces[k][side]);
+    // Entering: the face on the side the ray comes from.
+    let side = |pos: R::Mask, k: usize| R::u_select(pos, u(k, 0), u(k, 1));
+    let enter = R::u_select(nx.eq(t_in), side(px, 0), R::u_select(ny.eq(t_in), side(py, 1), side(pz, 2)));
+    if (hit & !outside).any() {
+        // From inside: the face the ray leaves by, on the side it goes to.
+        let side = |pos: R::Mask, k: usize| R::u_select(pos, u(k, 1), u(k, 0));
+        let leave = R::u_select(fx.eq(t_out), side(px, 0), R::u_select(fy.eq(t_out), side(py, 1), side(pz, 2)));
+        let index = R::u_select(outside, enter, leave);
+        return (hit, R::select(outside, t_in, t_out), index);
+    }
+    (hit, t_in, enter)
+}
