@@ -477,7 +477,6 @@ impl QuadBvh {
     /// The tree holds the loose quads ([`Quads::loose`]); the cuboids' faces
     /// are in the cuboids' search.
     pub fn build_quads(q: &Quads, extent: f32) -> QuadBvh {
-        let n = q.loose.len();
         let pad = 2.0 * extent.abs() * PAD;
         let boxes: Vec<Aabb> = q
             .loose
@@ -487,18 +486,10 @@ impl QuadBvh {
                 Aabb { min: min.map(|x| x - pad), max: max.map(|x| x + pad) }
             })
             .collect();
-        let centroid = boxes.iter().map(|b| std::array::from_fn(|k| 0.5 * b.min[k] + 0.5 * b.max[k])).collect();
-        let (bnodes, order) = build_binary(&boxes, centroid, Walk::OneByOne);
-        let mut bvh =
-            Bvh { nodes: Vec::new(), leaf: vec![], cx: vec![], cy: vec![], cz: vec![], r2: vec![], index: vec![] };
-        for &k in &order {
-            let i = q.loose[k as usize];
-            bvh.leaf.push(LeafQuad { rec: q.rec[i as usize], index: QUAD_BASE + i, run: 0 });
-        }
-        bvh.nodes.push(Node8::EMPTY);
-        if n > 0 {
-            bvh.collapse(&bnodes, 0, 0);
-        }
+        let mut bvh = Bvh::one_by_one(&boxes, |k| {
+            let i = q.loose[k];
+            LeafQuad { rec: q.rec[i as usize], index: QUAD_BASE + i, run: 0 }
+        });
         // Each leaf's quads sorted by form (the general ones last), each
         // run's length in its first record.
         let leaves: Vec<(usize, usize)> = bvh
@@ -535,7 +526,6 @@ impl CuboidBvh {
     /// box) and the slab test's rounding, so every ray the cuboid test takes
     /// enters the box, and brute force and the tree agree bit for bit.
     pub fn build_cuboids(c: &Cuboids, q: &Quads, extent: f32) -> CuboidBvh {
-        let n = c.len();
         let pad = 2.0 * extent.abs() * PAD;
         let boxes: Vec<Aabb> = c
             .rec
@@ -549,18 +539,7 @@ impl CuboidBvh {
                 b
             })
             .collect();
-        let centroid = boxes.iter().map(|b| std::array::from_fn(|k| 0.5 * b.min[k] + 0.5 * b.max[k])).collect();
-        let (bnodes, order) = build_binary(&boxes, centroid, Walk::OneByOne);
-        let mut bvh =
-            Bvh { nodes: Vec::new(), leaf: vec![], cx: vec![], cy: vec![], cz: vec![], r2: vec![], index: vec![] };
-        for &i in &order {
-            bvh.leaf.push(LeafCuboid { rec: c.rec[i as usize] });
-        }
-        bvh.nodes.push(Node8::EMPTY);
-        if n > 0 {
-            bvh.collapse(&bnodes, 0, 0);
-        }
-        bvh
+        Bvh::one_by_one(&boxes, |i| LeafCuboid { rec: c.rec[i] })
     }
 }
 
@@ -581,23 +560,26 @@ impl MovingBvh {
                 Aabb { min: lo.map(|x| next_down(x) - pad), max: hi.map(|x| next_up(x) + pad) }
             })
             .collect();
-        let centroid = boxes.iter().map(|b| std::array::from_fn(|k| 0.5 * b.min[k] + 0.5 * b.max[k])).collect();
-        let (bnodes, order) = build_binary(&boxes, centroid, Walk::OneByOne);
-        let mut bvh =
-            Bvh { nodes: Vec::new(), leaf: vec![], cx: vec![], cy: vec![], cz: vec![], r2: vec![], index: vec![] };
-        for &i in &order {
-            let i = i as usize;
-            bvh.leaf.push(LeafMoving { c0: m.c0(i), v: m.v(i), r2: m.s.r2[i], index: MOVING_BASE + i as u32 });
-        }
-        bvh.nodes.push(Node8::EMPTY);
-        if n > 0 {
-            bvh.collapse(&bnodes, 0, 0);
-        }
-        bvh
+        Bvh::one_by_one(&boxes, |i| LeafMoving { c0: m.c0(i), v: m.v(i), r2: m.s.r2[i], index: MOVING_BASE + i as u32 })
     }
 }
 
 impl<L: LeafPrim> Bvh<L> {
+    /// The tree for the one-by-one walks over primitives whose (padded)
+    /// boxes are `boxes`, with leaf record `leaf(i)` for primitive `i`, in
+    /// the build's order.
+    fn one_by_one(boxes: &[Aabb], leaf: impl Fn(usize) -> L) -> Bvh<L> {
+        let centroid = boxes.iter().map(|b| std::array::from_fn(|k| 0.5 * b.min[k] + 0.5 * b.max[k])).collect();
+        let (bnodes, order) = build_binary(boxes, centroid, Walk::OneByOne);
+        let leaf = order.iter().map(|&i| leaf(i as usize)).collect();
+        let mut bvh =
+            Bvh { nodes: vec![Node8::EMPTY], leaf, cx: vec![], cy: vec![], cz: vec![], r2: vec![], index: vec![] };
+        if !boxes.is_empty() {
+            bvh.collapse(&bnodes, 0, 0);
+        }
+        bvh
+    }
+
     /// Fills node `at` with up to 8 descendants of binary node `root`.
     fn collapse(&mut self, bn: &[BNode], root: u32, at: usize) {
         let mut kids = vec![root];

@@ -52,12 +52,19 @@ fn check_tree(s: &Spheres, bvh: &Bvh, rays: &[(V3<f32>, V3<f32>)]) -> Result<(),
     packets::<f32x16>(s, bvh, rays)
 }
 
+/// Up to `W::LANES` rays as a packet (the last one repeated in the lanes beyond).
+fn packet<W: Wide>(chunk: &[(V3<f32>, V3<f32>)]) -> (V3<W>, V3<W>) {
+    let n = chunk.len();
+    let at = |k: usize| chunk[k.min(n - 1)];
+    let o = V3::new(W::from_fn(|k| at(k).0.x), W::from_fn(|k| at(k).0.y), W::from_fn(|k| at(k).0.z));
+    let d = V3::new(W::from_fn(|k| at(k).1.x), W::from_fn(|k| at(k).1.y), W::from_fn(|k| at(k).1.z));
+    (o, d)
+}
+
 fn packets<W: Wide>(s: &Spheres, bvh: &Bvh, rays: &[(V3<f32>, V3<f32>)]) -> Result<(), TestCaseError> {
     for chunk in rays.chunks(W::LANES) {
         let n = chunk.len();
-        let at = |k: usize| chunk[k.min(n - 1)];
-        let o = V3::new(W::from_fn(|k| at(k).0.x), W::from_fn(|k| at(k).0.y), W::from_fn(|k| at(k).0.z));
-        let d = V3::new(W::from_fn(|k| at(k).1.x), W::from_fn(|k| at(k).1.y), W::from_fn(|k| at(k).1.z));
+        let (o, d) = packet::<W>(chunk);
         let live = if n == 32 { u32::MAX } else { (1u32 << n) - 1 };
         let (pi, pt) = bvh.closest_hit_packet(o, d, live, &mut ());
         let (ri, rt) = bvh.closest_hits_one_by_one(o, d, live, &mut ());
@@ -159,10 +166,7 @@ fn quad_packets<W: Wide>(
     rays: &[(V3<f32>, V3<f32>)],
 ) -> Result<(), TestCaseError> {
     for chunk in rays.chunks(W::LANES) {
-        let n = chunk.len();
-        let at = |k: usize| chunk[k.min(n - 1)];
-        let o = V3::new(W::from_fn(|k| at(k).0.x), W::from_fn(|k| at(k).0.y), W::from_fn(|k| at(k).0.z));
-        let d = V3::new(W::from_fn(|k| at(k).1.x), W::from_fn(|k| at(k).1.y), W::from_fn(|k| at(k).1.z));
+        let (o, d) = packet::<W>(chunk);
         let best = bvh.walk_packet(o, d, Closest::<W> { index: W::u_splat(start.0), t: W::splat(start.1) }, &mut ());
         for (k, &(o, d)) in chunk.iter().enumerate() {
             let mut brute = Closest::<f32> { index: start.0, t: start.1 };
@@ -205,10 +209,7 @@ fn check_cuboids(
         brute: &dyn Fn(V3<f32>, V3<f32>) -> (u32, u32),
     ) -> Result<(), TestCaseError> {
         for chunk in rays.chunks(W::LANES) {
-            let n = chunk.len();
-            let at = |k: usize| chunk[k.min(n - 1)];
-            let o = V3::new(W::from_fn(|k| at(k).0.x), W::from_fn(|k| at(k).0.y), W::from_fn(|k| at(k).0.z));
-            let d = V3::new(W::from_fn(|k| at(k).1.x), W::from_fn(|k| at(k).1.y), W::from_fn(|k| at(k).1.z));
+            let (o, d) = packet::<W>(chunk);
             let best =
                 bvh.walk_packet(o, d, Closest::<W> { index: W::u_splat(start.0), t: W::splat(start.1) }, &mut ());
             for (k, &(o, d)) in chunk.iter().enumerate() {
