@@ -6,9 +6,10 @@
 //! shading records, light samples and bounds, and a cuboid's hit is the hit
 //! index of the face it enters (or, from inside, leaves), so every pass after
 //! the closest-hit search reads a quad. Only the search changes: six quad
-//! tests (about 38 vector instructions and a divide each) become one test of
-//! about 75 instructions and three divides, and a box's faces never compete
-//! with each other under the tie rule.
+//! tests (about 40 vector instructions and a divide each, with the closest
+//! hit's update) become one test of about 100 and three divides (counted
+//! from the source), and a box's faces never compete with each other under
+//! the tie rule.
 //!
 //! # The test
 //!
