@@ -960,9 +960,10 @@ fn splat3(v: V3<f32>) -> V3<f32x8> {
 }
 
 /// `1 / x` per lane; components smaller than `TINY_DIR` are replaced by it
-/// (with their sign), so the slab test never computes `0 * inf`.
+/// (with their sign), so the slab test never computes `0 * inf` (the
+/// boxes' slab tests and the cuboids', [`super::cuboids`]).
 #[inline(always)]
-fn inv_lanes<R: Real>(x: R) -> R {
+pub(super) fn inv_lanes<R: Real>(x: R) -> R {
     let tiny = R::splat(TINY_DIR);
     R::splat(1.0) / R::select(x.abs().lt(tiny), tiny.copysign(x), x)
 }

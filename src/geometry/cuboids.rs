@@ -42,13 +42,10 @@
 //!   `3u |f|`). `tests/suite/nextweek.rs` checks it, and the hits against an
 //!   f64 oracle.
 
+use super::bvh::inv_lanes;
 use super::quads::QUAD_BASE;
 use crate::real::{Mask, Real};
 use crate::vec3::V3;
-
-/// Directions components below this are replaced by it (with their sign)
-/// before the reciprocal, as in the BVH's slab test: `|1/d.a_k| <= 1e30`.
-const TINY_DIR: f32 = 1e-30;
 
 /// One box in its own frame, and the hit indices of its faces.
 #[derive(Clone, Copy, Debug, Default, PartialEq)]
@@ -95,13 +92,6 @@ impl Cuboids {
     }
 }
 
-/// `1 / x`, its divisor kept at least [`TINY_DIR`] in size.
-#[inline(always)]
-fn inv<R: Real>(x: R) -> R {
-    let tiny = R::splat(TINY_DIR);
-    R::splat(1.0) / R::select(x.abs().lt(tiny), tiny.copysign(x), x)
-}
-
 /// The cuboid test: the hit mask, `t` and the hit index of the face, for the
 /// rays `o + t d` against `b` (broadcast), as the module describes. The
 /// minima and maxima take one instruction each: no distance is NaN, and the
@@ -111,7 +101,7 @@ pub fn cuboid_hit<R: Real>(o: V3<R>, d: V3<R>, b: &CuboidRec) -> (R::Mask, R, R:
     let f = o - V3::splat3(b.c);
     let axis = |k: usize| {
         let a = V3::splat3(b.axes[k]);
-        let r = inv(d.dot(a));
+        let r = inv_lanes(d.dot(a));
         let fa = f.dot(a);
         let h = R::splat(b.half[k]);
         let (t_lo, t_hi) = ((-h - fa) * r, (h - fa) * r);

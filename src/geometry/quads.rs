@@ -214,10 +214,15 @@ impl Quads {
         self.len += 1;
     }
 
-    /// Quads `first..first + 6` are a cuboid's faces: the quad searches
-    /// leave them to the cuboid's test.
-    pub fn set_cuboid_faces(&mut self, first: u32) {
-        self.loose.retain(|&i| !(first..first + 6).contains(&i));
+    /// For each `first`, quads `first..first + 6` are a cuboid's faces: the
+    /// quad searches leave them to the cuboid's test. (One pass over the
+    /// loose quads for all the cuboids: linear in the scene's size.)
+    pub fn set_cuboid_faces(&mut self, firsts: impl IntoIterator<Item = u32>) {
+        let mut face = vec![false; self.len];
+        for first in firsts {
+            face[first as usize..first as usize + 6].fill(true);
+        }
+        self.loose.retain(|&i| !face[i as usize]);
     }
 
     /// Pads to a power of two, at least 8, with quads no ray can hit (their

@@ -221,8 +221,8 @@ pub(super) fn prepare(
     let mut cuboids = Cuboids::default();
     for c in &flat.cuboids {
         cuboids.push(c.center, c.axes, c.half, c.first as u32);
-        quads.set_cuboid_faces(c.first as u32);
     }
+    quads.set_cuboid_faces(flat.cuboids.iter().map(|c| c.first as u32));
     spheres.pad();
     quads.pad();
     moving.pad();

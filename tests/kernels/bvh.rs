@@ -285,8 +285,8 @@ proptest! {
         let mut c = Cuboids::default();
         for b in &flat.cuboids {
             c.push(b.center, b.axes, b.half, b.first as u32);
-            q.set_cuboid_faces(b.first as u32);
         }
+        q.set_cuboid_faces(flat.cuboids.iter().map(|b| b.first as u32));
         let start = if sphere_t.is_finite() { (7, sphere_t) } else { (u32::MAX, f32::INFINITY) };
         check_cuboids(&c, &q, 200.0, start, &rays_to_quads(&list, &origins))?;
     }

@@ -452,8 +452,8 @@ proptest! {
         if whole {
             for b in &flat.cuboids {
                 cuboids.push(b.center, b.axes, b.half, b.first as u32);
-                quads.set_cuboid_faces(b.first as u32);
             }
+            quads.set_cuboid_faces(flat.cuboids.iter().map(|b| b.first as u32));
         }
         quads.pad();
         let search = |o, d| {
