@@ -16,6 +16,38 @@
 //!   with `s = r^2 / d^2`, without the cancellation of `1 - sqrt(1 - s)`
 //!   for a small or far sphere.
 //!
+//! # Which directions have a density
+//!
+//! A density must be positive for every direction its sampler draws, as the
+//! computer rounds it: a drawn direction judged outside its shape is weighted
+//! as if the shape could not have drawn it (`book`: by the material's density
+//! alone, so it brings the light's full radiance, `L`, where its share is
+//! `L` times the light's tiny solid angle; `nee-mis`: the sample is lost).
+//! A test of the exact shape misjudges a fraction of the drawn directions
+//! near its outline of the order of the rounding error over the shape's
+//! size, and that error grows as the shape shrinks or moves away. The old
+//! sphere test (`d . oc >= (1 - (1 - cos theta_max)) |oc|`) compared two
+//! cosines that differ by less than their rounding near the outline of a
+//! small cone (and rounds `cos theta_max` to 1 below `r / d = 2.4e-4`):
+//! `rtow stress`'s family `small-lights` measures what that did to the
+//! image (docs/stability.md).
+//!
+//! So each shape's test is widened by a bound on that rounding, computed
+//! from the query's own distances (never the scene's extent), with a margin:
+//! - a sphere: the ray passes within `r + 64u |oc|` of the centre, measured
+//!   as the sphere's hit test measures it (`|oc - (oc . d) d|`, which rounds
+//!   to about `6u |oc|`, plus the sampled direction's own error of a few
+//!   `u`);
+//! - a quad: its plane coordinates `a`, `b` within `[-tol, 1 + tol]`, with
+//!   `tol = 64u (|x|_inf + t + |Q|_inf + |u|_inf + |v|_inf) |v| / |u x v|`
+//!   (for `a`; `|u|` for `b`): the error of the hit point relative to `Q`,
+//!   over the parallelogram's height.
+//!
+//! A direction in the band that misses the shape itself is given the
+//! shape's density too; what that costs is the radiance behind the band,
+//! weighted down: at most the band's solid angle times the background, a
+//! relative `~1e-4` of the light's own contribution at `r / d = 1e-4`.
+//!
 //! A list samples one of its shapes, uniformly (its density is the average
 //! of the shapes'). The shapes' densities are evaluated for every lane and
 //! each lane keeps its own: the list is short (at most
@@ -43,7 +75,16 @@ pub struct LightQuad {
     pub w: [f32; 3],
     /// `|u x v|`.
     pub area: f32,
+    /// The edge tolerances' scales: `tol_a = ta (|x|_inf + t + ext)` (and
+    /// `tol_b` with `tb`), in units of `a` and `b` (see the module).
+    pub ta: f32,
+    pub tb: f32,
+    /// `|Q|_inf + |u|_inf + |v|_inf`.
+    pub ext: f32,
 }
+
+/// The light tests' rounding bands: `64u` per unit of distance (see the module).
+const BAND: f32 = 64.0 / 16_777_216.0;
 
 /// A sphere of the list: centre and (positive) radius.
 #[derive(Clone, Copy, Debug, PartialEq)]
@@ -67,6 +108,8 @@ impl LightQuad {
         let f = |a: glam::DVec3| a.to_array().map(|x| x as f32);
         let nraw = d(u).cross(d(v));
         let n = nraw.normalize();
+        let inf = |a: [f32; 3]| a.iter().fold(0.0f32, |m, x| m.max(x.abs()));
+        let height = |e: [f32; 3]| d(e).length() / nraw.length();
         LightQuad {
             q,
             u,
@@ -75,6 +118,9 @@ impl LightQuad {
             d: n.dot(d(q)) as f32,
             w: f(nraw / nraw.length_squared()),
             area: nraw.length() as f32,
+            ta: (BAND as f64 * height(v)) as f32,
+            tb: (BAND as f64 * height(u)) as f32,
+            ext: inf(q) + inf(u) + inf(v),
         }
     }
 }
@@ -205,12 +251,15 @@ impl Emitters {
         let base = lights.quads.len();
         for (k, s) in lights.spheres.iter().enumerate() {
             let dir = sphere_sample(s, x, u1, u2);
-            let c = V3::splat3(s.c);
             let r2 = R::splat(s.r * s.r);
-            let (disc, g, b) = sphere_disc(x, dir, c, r2);
-            let (hit, t) = sphere_t(disc, g, b, r2);
+            // A drawn direction that rounding put just outside the sphere
+            // (in the band) meets it at its closest point.
+            // From inside, every direction meets it (the far root).
+            let (in_band, disc, g, b) = sphere_band(s, x, dir);
+            let (_, t) = sphere_t(disc.max(zero), g, b, r2);
             let outside = g.length_squared().gt(r2);
-            let pdf = R::select(hit, sphere_pdf(s, x, dir), zero);
+            let inside = g.length_squared().le(r2);
+            let pdf = R::select((in_band | inside) & t.gt(zero), sphere_pdf(s, x, dir), zero);
             let j = base + k;
             let emit = emission(V3::splat3(self.emit[j]), mask::<R>(self.one_sided[j]), outside);
             let take = which.eq(R::splat(j as f32));
@@ -267,7 +316,10 @@ pub fn quad_pdf<R: Real>(l: &LightQuad, x: V3<R>, dir: V3<R>) -> R {
     let w = V3::splat3(l.w);
     let a = w.dot(p.cross(V3::splat3(l.v)));
     let b = w.dot(V3::splat3(l.u).cross(p));
-    let inside = a.ge(zero) & a.le(one) & b.ge(zero) & b.le(one);
+    // The rounding band (see the module): from this query's distances.
+    let reach = x.max_abs() + t.abs() + R::splat(l.ext);
+    let (ta, tb) = (reach * R::splat(l.ta), reach * R::splat(l.tb));
+    let inside = a.ge(-ta) & a.le(one + ta) & b.ge(-tb) & b.le(one + tb);
     let hit = cos.gt(R::splat(1e-8)) & t.gt(zero) & inside;
     // Where `hit` is false the quotient may be infinite or NaN; it is not kept.
     R::select(hit, t * t / (cos * R::splat(l.area)), zero)
@@ -285,16 +337,28 @@ fn cone<R: Real>(s: &LightSphere, x: V3<R>) -> (V3<R>, R, R) {
     (oc, ratio, one_minus_cos)
 }
 
-/// The density of `dir` from `x` toward sphere `s` (see the module).
+/// Whether the line `x + t dir` (`t > 0`, unit `dir`) passes within the
+/// rounding band of sphere `s` (see the module), with the sphere test's
+/// `(disc, g, b')` ([`sphere_disc`]): `b' > 0` and `|l| <= r + 64u |g|`,
+/// `l = g - b' dir` the offset of the closest point from the centre.
+#[inline(always)]
+fn sphere_band<R: Real>(s: &LightSphere, x: V3<R>, dir: V3<R>) -> (R::Mask, R, V3<R>, R) {
+    let r = R::splat(s.r);
+    let (disc, g, b) = sphere_disc(x, dir, V3::splat3(s.c), r * r);
+    let delta = g.length_squared().sqrt() * R::splat(BAND);
+    // |l|^2 <= (r + delta)^2, i.e. disc = r^2 - |l|^2 >= -(2r + delta) delta.
+    let in_band = b.gt(R::splat(0.0)) & disc.ge(-((r + r + delta) * delta));
+    (in_band, disc, g, b)
+}
+
+/// The density of `dir` from `x` toward sphere `s` (see the module): the
+/// cone's uniform density for a direction in the sphere's rounding band.
 #[inline(always)]
 pub fn sphere_pdf<R: Real>(s: &LightSphere, x: V3<R>, dir: V3<R>) -> R {
-    let (oc, ratio, one_minus_cos) = cone(s, x);
+    let (_, ratio, one_minus_cos) = cone(s, x);
     let one = R::splat(1.0);
     let inside = ratio.ge(one);
-    // dir . oc / |oc| >= cos theta_max, without the division: both sides
-    // times |oc| (positive outside the sphere).
-    let len = oc.length_squared().sqrt();
-    let in_cone = dir.dot(oc).ge((one - one_minus_cos) * len);
+    let (in_cone, ..) = sphere_band(s, x, dir);
     let cone_pdf = R::select(in_cone, one / (R::splat(2.0 * PI) * one_minus_cos), R::splat(0.0));
     R::select(inside, R::splat(1.0 / (4.0 * PI)), cone_pdf)
 }

@@ -63,7 +63,10 @@ impl Media {
     pub fn is_empty(&self) -> bool {
         self.boundary.is_empty()
     }
+    /// Adds a medium; a density of `-0.0` is `0.0` (else `-1 / density`
+    /// would be `+inf`, a medium that scatters at once).
     pub fn push(&mut self, boundary: Boundary, density: f64, albedo: [f32; 3]) {
+        let density = if density == 0.0 { 0.0 } else { density };
         self.boundary.push(boundary);
         self.neg_inv_density.push((-1.0 / density) as f32);
         self.density.push(density as f32);

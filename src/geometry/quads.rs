@@ -9,22 +9,24 @@
 //! book's). A ray `o + t d` meets the plane at `t = (D - n.o) / (n.d)` and
 //! the point `p = o + t d` has the book's `a = w.((p - Q) x v)`, `b =
 //! w.(u x (p - Q))`. It is a hit when `0 < t < inf` and `a, b` lie in
-//! `[-eps, 1 + eps]`.
+//! `[-eps, 1 + eps]`, `eps` the rounding band of this ray's test.
 //!
 //! rtow computes `a` and `b` as one dot product each, of the hit point with a
-//! vector fixed per quad: `a = (p - Q).(v x w)` (the triple product turned),
-//! and the range test centred and scaled into the same vectors, `|p.Ea - ka|
-//! <= 1` with `Ea = (v x w) / h`, `ka = (Q.(v x w) + 1/2) / h`, `h = 1/2 +
-//! eps` (and `Eb`, `kb` from `w x u`), all of it computed in f64 when the
-//! scene is prepared: 17 arithmetic instructions from the hit point to the
-//! range test instead of 37, and 8 quad values broadcast per test instead of
-//! 16.
+//! vector fixed per quad, centred and scaled into lengths: `a' = p.Ea - ka`
+//! with `Ea = Ha (v x w)`, `ka = Ha (Q.(v x w) + 1/2)` is the signed distance
+//! of `p` from the quad's centre line across `a`, `Ha = |u x v| / |v|` the
+//! parallelogram's height across `a` (and `b'`, `Eb`, `kb`, `Hb` from `w x
+//! u`), all of it computed in f64 when the scene is prepared. The range test
+//! is `|a'| - tol <= Ha / 2` and `|b'| - tol <= Hb / 2`: 17 arithmetic
+//! instructions from the hit point to the range test instead of 37, and
+//! the edge tolerance `tol` ([`QuadRec::tolerance`]) computed per ray from
+//! its own distances, never the scene's size.
 //!
 //! * No epsilon on `n.d`: a ray parallel to the plane has `n.d = 0`, so `t` is
 //!   infinite or NaN and fails `0 < t < inf` (the book rejects `|n.d| < 1e-8`,
 //!   which also rejects real grazing hits of large quads).
-//! * **The tie rule at edges** is inclusive, widened by `eps`, a bound on the
-//!   rounding error of `a` and `b` ([`Quads::push`]): a ray through the edge
+//! * **The tie rule at edges** is inclusive, widened by `tol`, a bound on the
+//!   rounding error of `a'` and `b'` ([`QuadRec::tolerance`]): a ray through the edge
 //!   shared by two faces of a box is a hit on at least one of them (rounding
 //!   cannot open a gap between faces; light does not leak through a box's
 //!   edges), and where both faces are hit the closest-hit rule decides
@@ -43,9 +45,6 @@ use crate::vec3::V3;
 /// fewer than `2^20`), and below [`super::MISS`].
 pub const QUAD_BASE: u32 = 1 << 30;
 
-/// `u = 2^-24`, the f32 unit roundoff.
-const U: f64 = 1.0 / 16_777_216.0;
-
 /// One quad: first everything the hit test reads (brute force reads the
 /// records in scene order, the BVH's leaves in leaf order), then its
 /// parallelogram (bounds, texture coordinates, light sampling).
@@ -56,10 +55,10 @@ pub struct QuadRec {
     pub n: [f32; 3],
     /// `n . q`.
     pub d: f32,
-    /// `a`'s test: `|p . ea - ka| <= 1` ([`Quads::push`]).
+    /// `a`'s test: `|p . ea - ka| - tol <= ha` (see the module).
     pub ea: [f32; 3],
     pub ka: f32,
-    /// `b`'s test: `|p . eb - kb| <= 1`.
+    /// `b`'s test: `|p . eb - kb| - tol <= hb`.
     pub eb: [f32; 3],
     pub kb: f32,
     /// The form of the test ([`quad_hit`]), by the exact zeros of `n`, `ea`
@@ -69,18 +68,46 @@ pub struct QuadRec {
     /// `k` (`n` and `ea` are 0 in component `k`, `eb` in the two others: the
     /// sides of a box turned about `k`); 3 otherwise.
     pub axis: u32,
+    /// Half the parallelogram's heights across `a` and `b` (the accepted
+    /// `|a'|`, `|b'|` before the tolerance).
+    pub ha: f32,
+    pub hb: f32,
+    /// The tolerance's own term, `TOL (|Q|_inf + |u|_inf + |v|_inf)`
+    /// ([`QuadRec::tolerance`]).
+    pub kt: f32,
     pub q: [f32; 3],
     pub u: [f32; 3],
     pub v: [f32; 3],
     /// `n / (n . n)`.
     pub w: [f32; 3],
-    /// The edge tolerance, as the range the test accepts (up to its own
-    /// rounding): `a` in `[lo[0], hi[0]]`, `b` in `[lo[1], hi[1]]`.
+    /// The widest range the test accepts from a ray that starts, and hits,
+    /// within the scene's extent (up to its own rounding): `a` in `[lo[0],
+    /// hi[0]]`, `b` in `[lo[1], hi[1]]`. For the bounds ([`QuadRec::bounds`]).
     pub lo: [f32; 2],
     pub hi: [f32; 2],
 }
 
+/// The edge tolerance per unit of distance: `64u`, `u = 2^-24`.
+pub const TOL: f32 = 64.0 / 16_777_216.0;
+
 impl QuadRec {
+    /// The edge tolerance, in length across an edge, of the test of a ray
+    /// whose origin's largest coordinate is `o_max` (`|o|_inf`) at distance
+    /// `t`: `TOL (|o|_inf + t) + kt`, i.e. `64u (|o|_inf + t + |Q|_inf +
+    /// |u|_inf + |v|_inf)`.
+    ///
+    /// It bounds the rounding error of `a'` and `b'` (as lengths) with a
+    /// margin of 4 or more for rays that are not grazing: the hit point
+    /// `o + t d` is off by about `u (|o| + t)` per component, plus `t`'s own
+    /// error, about `4u (|Q| + |o|) / cos` along the ray; `p.Ea - ka` adds
+    /// about `3u |p| + u |ka|` (`|Ea| = 1`, `|ka| <~ |Q| + |u| + |v|`). It
+    /// follows the ray and the quad: a 1 mm quad seen from nearby has a
+    /// band of a few `1e-7`, whatever else the scene holds.
+    #[inline(always)]
+    pub fn tolerance<R: Real>(&self, o_max: R, t: R) -> R {
+        t * R::splat(TOL) + (o_max * R::splat(TOL) + R::splat(self.kt))
+    }
+
     /// The quad's axis-aligned bounds: its four corners widened by the edge
     /// tolerance (so the box covers every point the test can accept).
     pub fn bounds(&self) -> ([f32; 3], [f32; 3]) {
@@ -140,27 +167,14 @@ pub struct Quads {
 
 impl Quads {
     /// Appends the quad `(q, u, v)` with material (`kind`, `row`); the
-    /// shading record's material slots are filled by the caller.
+    /// shading record's material slots are filled by the caller. `extent`
+    /// bounds every ray origin and hit point of the scene (for the bounds'
+    /// widest band, not the test: [`QuadRec::tolerance`]).
     ///
-    /// The edge tolerance bounds the rounding error of the computed `a`
-    /// (and `b`): `p - Q` is off by about `3u (|o| + |t d| + |Q|)` per
-    /// component (the plane point's own rounding and that of the
-    /// subtraction), which `a` turns into `|v| / |u x v|` per unit of length
-    /// (the inverse of the parallelogram's height across `a`), plus a few
-    /// units of roundoff of the products. With every coordinate within
-    /// `extent` (rays start and hit within it), `eps_a = 64u extent |v| /
-    /// |u x v|` (and `eps_b` with `|u|`) covers it with a margin of 4 or
-    /// more for rays that are not grazing: a band of `64u extent / sin(u, v)`
-    /// in length around the quad (2.3e-3 in the Cornell box).
-    ///
-    /// The test computes `a` as `p.Ea - ka` (`Ea`, `ka` as the module says,
-    /// from the exact `u x v` in f64, rounded once to f32): beyond the hit
-    /// point's own error, its rounding is the dot product's, at most about
-    /// `3u sum |p_i Ea_i| + u |ka|`, which in `a` (times `h`, about 1/2) is
-    /// about `5u extent |v| / |u x v|`: of the order of the book's formula's
-    /// (which rounds `p - Q`, a cross product and a dot product), inside the
-    /// same band. The f64 oracle's property test (`tests/suite/nextweek.rs`)
-    /// checks hits and misses against it, edges and grazing rays included.
+    /// The test computes `a'` as `p.Ea - ka` (`Ea`, `ka` as the module says,
+    /// from the exact `u x v` in f64, rounded once to f32). The f64 oracle's
+    /// property test (`tests/suite/nextweek.rs`) checks hits and misses
+    /// against it, edges and grazing rays included, from 1e-6 to 1e6.
     pub fn push(&mut self, q: [f32; 3], u: [f32; 3], v: [f32; 3], extent: f32, kind: Kind, row: u32) {
         let d3 = |a: [f32; 3]| glam::DVec3::from_array(a.map(f64::from));
         let (qd, ud, vd) = (d3(q), d3(u), d3(v));
@@ -168,22 +182,31 @@ impl Quads {
         let n = nd.to_array().map(|x| x as f32);
         let n32 = d3(n);
         let w = (n32 / n32.dot(n32)).to_array().map(|x| x as f32);
-        let band = 64.0 * U * extent as f64 / nd.length();
-        let (eps_a, eps_b) = (band * vd.length(), band * ud.length());
-        // a = (p - Q).(v x w), b = (p - Q).(w x u), with the exact w; centred
-        // on 1/2 and scaled by the half-width of the accepted range.
+        // Heights across a (between the edges along v) and across b.
+        let (height_a, height_b) = (nd.length() / vd.length(), nd.length() / ud.length());
+        let inf = |a: [f32; 3]| a.iter().fold(0.0f64, |m, x| m.max(x.abs() as f64));
+        let own = inf(q) + inf(u) + inf(v);
+        let kt = TOL as f64 * own;
+        // The widest band: origin and hit point within `extent`, so
+        // `t <= 2 sqrt 3 extent`.
+        let widest = TOL as f64 * (extent.abs() as f64 * (1.0 + 2.0 * 3f64.sqrt())) + kt;
+        let (eps_a, eps_b) = (widest / height_a, widest / height_b);
+        // a' = Ha ((p - Q).(v x w) - 1/2), b' = Hb ((p - Q).(w x u) - 1/2),
+        // with the exact w: lengths from the centre lines.
         let wd = nd / nd.dot(nd);
         let (ad, bd) = (vd.cross(wd), wd.cross(ud));
-        let (ha, hb) = (0.5 + eps_a, 0.5 + eps_b);
         let f32s = |x: glam::DVec3| x.to_array().map(|c| c as f32);
         let mut rec = QuadRec {
             n,
             d: n32.dot(qd) as f32,
-            ea: f32s(ad / ha),
-            ka: ((qd.dot(ad) + 0.5) / ha) as f32,
-            eb: f32s(bd / hb),
-            kb: ((qd.dot(bd) + 0.5) / hb) as f32,
+            ea: f32s(ad * height_a),
+            ka: ((qd.dot(ad) + 0.5) * height_a) as f32,
+            eb: f32s(bd * height_b),
+            kb: ((qd.dot(bd) + 0.5) * height_b) as f32,
             axis: 3, // set below, from the rounded record
+            ha: (0.5 * height_a) as f32,
+            hb: (0.5 * height_b) as f32,
+            kt: kt as f32,
             q,
             u,
             v,
@@ -198,7 +221,7 @@ impl Quads {
                 // `ka`, `eb` and `kb` nowhere else: swapped, the edge along
                 // axis k is `b`'s.
                 if swap {
-                    (rec.ea, rec.ka, rec.eb, rec.kb) = (rec.eb, rec.kb, rec.ea, rec.ka);
+                    (rec.ea, rec.ka, rec.ha, rec.eb, rec.kb, rec.hb) = (rec.eb, rec.kb, rec.hb, rec.ea, rec.ka, rec.ha);
                 }
                 rec.axis = 4 + k as u32;
             }
@@ -226,7 +249,8 @@ impl Quads {
     }
 
     /// Pads to a power of two, at least 8, with quads no ray can hit (their
-    /// `a` test is `|0 - 2| <= 1`).
+    /// `a` test is `|0 - 2| - tol <= -inf`, false for every finite `tol`; at
+    /// `t = inf`, `a'` is NaN, see [`quad_hit`]).
     ///
     /// The last step of building: it also sorts the loose quads by the form
     /// of their test (those with a normal along x, y, z, then those upright
@@ -243,6 +267,7 @@ impl Quads {
         while self.rec.len() < target {
             self.rec.push(QuadRec {
                 ka: 2.0,
+                ha: f32::NEG_INFINITY,
                 axis: 1,
                 lo: [1.0; 2],
                 hi: [0.0; 2],
@@ -296,7 +321,7 @@ fn upright_axis(r: &QuadRec) -> Option<(usize, bool)> {
 /// The quad test: the hit mask and `t` of the rays `o + t d` against `q`
 /// (broadcast), as the module describes.
 ///
-/// A hit needs `t > 0` and `|a|, |b| <= 1`. `t < inf` needs no test of its
+/// A hit needs `t > 0` and `|a'| - tol <= ha`, `|b'| - tol <= hb`. `t < inf` needs no test of its
 /// own: at `t = inf` every component of `p = o + t d` is infinite or NaN
 /// (`d_k t` is `+-inf`, or `0 inf = NaN`), so are `a` and `b` (sums of
 /// products with them), and the range test fails; NaN fails every test.
@@ -327,14 +352,15 @@ pub fn quad_hit_general<R: Real>(o: V3<R>, d: V3<R>, q: &QuadRec) -> (R::Mask, R
     // `a` and `b` centred and scaled: the range test is |.| <= 1.
     let a = V3::splat3(q.ea).dot(p) - R::splat(q.ka);
     let b = V3::splat3(q.eb).dot(p) - R::splat(q.kb);
-    (in_range(t, a, b), t)
+    (in_range(q, o, t, a, b), t)
 }
 
-/// A hit's test: `t > 0` and `|a|, |b| <= 1` (`a` and `b` centred and scaled).
+/// A hit's test: `t > 0` and `|a'|, |b'|` within the half heights, widened
+/// by this ray's tolerance ([`QuadRec::tolerance`]).
 #[inline(always)]
-fn in_range<R: Real>(t: R, a: R, b: R) -> R::Mask {
-    let one = R::splat(1.0);
-    t.gt(R::splat(0.0)) & a.abs().le(one) & b.abs().le(one)
+fn in_range<R: Real>(q: &QuadRec, o: V3<R>, t: R, a: R, b: R) -> R::Mask {
+    let tol = q.tolerance(o.max_abs(), t);
+    t.gt(R::splat(0.0)) & (a.abs() - tol).le(R::splat(q.ha)) & (b.abs() - tol).le(R::splat(q.hb))
 }
 
 /// The two axes other than `k`, in order.
@@ -360,13 +386,14 @@ const fn others(k: usize) -> (usize, usize) {
 #[inline(always)]
 pub fn quad_hit_axis<R: Real, const K: usize>(o: V3<R>, d: V3<R>, q: &QuadRec) -> (R::Mask, R) {
     let (i, j) = others(K);
+    let ray = o;
     let (o, d) = ([o.x, o.y, o.z], [d.x, d.y, d.z]);
     let nk = R::splat(q.n[K]);
     let t = (R::splat(q.d) - nk * o[K]) / (nk * d[K]);
     let (pi, pj) = (o[i] + d[i] * t, o[j] + d[j] * t);
     let a = R::splat(q.ea[i]) * pi + R::splat(q.ea[j]) * pj - R::splat(q.ka);
     let b = R::splat(q.eb[i]) * pi + R::splat(q.eb[j]) * pj - R::splat(q.kb);
-    (in_range(t, a, b), t)
+    (in_range(q, ray, t, a, b), t)
 }
 
 /// The quad test for a quad upright about axis `K` (`q.axis == 4 + K`):
@@ -378,13 +405,14 @@ pub fn quad_hit_axis<R: Real, const K: usize>(o: V3<R>, d: V3<R>, q: &QuadRec) -
 #[inline(always)]
 pub fn quad_hit_upright<R: Real, const K: usize>(o: V3<R>, d: V3<R>, q: &QuadRec) -> (R::Mask, R) {
     let (i, j) = others(K);
+    let ray = o;
     let (o, d) = ([o.x, o.y, o.z], [d.x, d.y, d.z]);
     let (ni, nj) = (R::splat(q.n[i]), R::splat(q.n[j]));
     let t = (R::splat(q.d) - (ni * o[i] + nj * o[j])) / (ni * d[i] + nj * d[j]);
     let (pi, pj, pk) = (o[i] + d[i] * t, o[j] + d[j] * t, o[K] + d[K] * t);
     let a = R::splat(q.ea[i]) * pi + R::splat(q.ea[j]) * pj - R::splat(q.ka);
     let b = R::splat(q.eb[K]) * pk - R::splat(q.kb);
-    (in_range(t, a, b), t)
+    (in_range(q, ray, t, a, b), t)
 }
 
 /// The surface at distance `t` along `o + t d` on the plane with unit normal

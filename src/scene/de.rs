@@ -37,8 +37,13 @@ impl Number for f32 {
     const EXPECTING: &'static str = "a number";
     fn from_f64(v: f64) -> Option<f32> {
         // Out-of-range values round to infinity and are refused by validation
-        // ("must be finite"), with the field named.
-        Some(v as f32)
+        // ("must be finite"), with the field named. `-0.0` is read as `0.0`
+        // (adding `+0.0` does exactly that and changes no other value): no
+        // field gives a zero's sign a meaning, and a `-0.0` that reached the
+        // kernels could take another branch than `0.0` (`-1 / -0.0 = +inf`).
+        // Subnormals are kept as their value: every field that divides by
+        // one is computed in f64 or refuses what it cannot represent.
+        Some(v as f32 + 0.0)
     }
     fn from_u64(v: u64) -> Option<f32> {
         Some(v as f32)

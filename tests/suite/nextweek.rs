@@ -495,7 +495,7 @@ proptest! {
         }
         // Out through the face: never the face it leaves. (Near an edge it
         // may clip the neighbouring face's tolerance band, which reaches
-        // `64u extent / sin` beyond the edge: then within that distance.)
+        // that ray's tolerance beyond the edge: then within it.)
         let outward = (d + b * 0.5).normalize();
         if outward.dot(n) < -1e-3 {
             let from = spawn(&srf, outward);
@@ -504,7 +504,8 @@ proptest! {
             if next.index != MISS {
                 let p = from + outward * next.t;
                 let dist = (p - srf.p).dot(n).abs();
-                prop_assert!(dist < 64.0 / 16_777_216.0 * extent * 2.0, "a hit {dist} outside the box");
+                let tol = quads.rec[(next.index - QUAD_BASE) as usize].tolerance(from.max_abs(), next.t);
+                prop_assert!(dist < 2.0 * tol, "a hit {dist} outside the box (tolerance {tol})");
             }
         }
     }

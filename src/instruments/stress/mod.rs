@@ -29,6 +29,7 @@
 //! The textbook test (`b*b - 4ac`, `t_min = 0.001`, no re-projection, no offset)
 //! is implemented here only, as a reference for docs/stability.md; it never gates.
 
+mod books;
 mod oracle;
 mod report;
 mod scenes;
@@ -200,6 +201,11 @@ pub fn run(cfg: &StressConfig, progress: &mut dyn FnMut(&str)) -> Result<StressR
     scaled_scenes(cfg, &sz, &images, &mut out)?;
     every_preset(cfg, &mut out)?;
     progress("presets");
+    books::small_lights(cfg, &mut out, progress)?;
+    books::furnaces(cfg, &mut out, progress)?;
+    books::quad_scale(cfg, &mut out, progress)?;
+    books::emitter_magnitude(cfg, &mut out, progress)?;
+    books::media_density(cfg, &mut out, progress)?;
     Ok(StressReport {
         quick: cfg.quick,
         seed: cfg.seed,
