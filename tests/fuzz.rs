@@ -492,6 +492,7 @@ const FILM_FIELDS: &[&str] = &[
     "sum_bytes",
     "scene_bytes",
     "fraction_bits",
+    "film_exponent",
     "moments",
     "counters",
     "settings",
