@@ -76,11 +76,22 @@ pub struct Stats {
 }
 
 impl Stats {
+    /// The samples rejected, by cause.
+    pub fn rejected(&self) -> crate::limits::Rejected {
+        crate::limits::Rejected {
+            samples: self.samples,
+            total: self.rejected_samples,
+            out_of_range: self.rejected_out_of_range,
+            range: self.film_range,
+        }
+    }
+
     /// An error (exit status 2) when more than
     /// [`MAX_REJECTED_FRACTION`](crate::limits::MAX_REJECTED_FRACTION) of the
-    /// samples were NaN or infinite: the image would be mostly black or wrong.
+    /// samples were rejected (NaN, infinite or out of the film's range): the
+    /// image would be mostly black or wrong.
     pub fn check_finite(&self) -> Result<()> {
-        crate::limits::check_rejected(self.rejected_samples, self.samples)
+        self.rejected().check_fraction()
     }
 }
 

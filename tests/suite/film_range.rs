@@ -1,15 +1,20 @@
 //! Issue 37, class 3: bright emitters. The film's fixed point covers the
 //! scene (a scale exponent chosen from its brightest emission before any
-//! work), so a light up to f32::MAX renders where it is seen.
+//! work), so a light up to f32::MAX renders where it is seen; and a sample
+//! the film still rejects is never left out silently: one warning line on
+//! stderr (even with -q), the counts by cause in the statistics, and
+//! `--on-rejected error` to fail instead.
 
 use crate::common;
 
-use common::{failure, rtow, Run};
+use common::{failure, listing, rtow, Run};
 use rtow::film::accum::{Scale, HEADROOM_BITS, MAX_EXPONENT};
 use rtow::scene::{self, Format};
 use rtow::shard::Part;
 use rtow::{Image, Job, Overrides, RenderOptions};
 use std::path::Path;
+
+const SENTINEL: &[u8] = b"old contents; a failed run must leave this file alone";
 
 /// A small sphere light of radiance `emit` (in every channel) above a grey
 /// ground, on a black background: the light is seen straight on at the
@@ -24,6 +29,21 @@ fn light_scene(emit: &str) -> String {
   "background": [0, 0, 0]}}"#
     )
 }
+
+/// A tiny mirror of albedo `albedo` under a sky of `sky`, seen by 4 of the
+/// 40,000 pixel centres of a 200x200 image at 1 spp: below the 0.1% that fails
+/// a render. With albedo 1e30 (no emitter: exponent 0) its samples are finite
+/// and out of the film's range; with 3e38 under a sky of 2 they overflow f32.
+fn mirror_scene(albedo: &str, sky: &str) -> String {
+    format!(
+        r#"{{"camera": {{"look_from": [0, 0, 0], "look_at": [0, 0, -1], "vfov_deg": 90}},
+  "sky": {{"horizon": [{sky}, {sky}, {sky}], "zenith": [{sky}, {sky}, {sky}]}},
+  "spheres": [{{"center": [0, 0, -1], "radius": 0.015,
+    "material": {{"type": "metal", "albedo": [{albedo}, {albedo}, {albedo}], "fuzz": 0}}}}]}}"#
+    )
+}
+
+const MIRROR_SIZE: [&str; 6] = ["--width", "200", "--height", "200", "--spp", "1"];
 
 fn stats(dir: &Path, file: &str) -> serde_json::Value {
     serde_json::from_slice(&std::fs::read(dir.join(file)).unwrap()).unwrap()
@@ -194,4 +214,100 @@ fn a_scaled_render_splits_merges_and_resumes_exactly() {
     let line = failure(&r, 2, "resume");
     assert!(line.contains("half-52.rtfilm") && line.contains("scale exponent 52"), "{line}");
     assert!(!d.join("x.png").exists());
+}
+
+/// The number in "warning: N of ..." and that the line is the only one.
+fn warned(r: &Run, what: &str) -> (u64, String) {
+    ok(r, what);
+    let lines: Vec<&str> = r.stderr.lines().collect();
+    assert_eq!(lines.len(), 1, "{what}: {:?}", r.stderr);
+    let line = lines[0].strip_prefix("warning: ").unwrap_or_else(|| panic!("{what}: {:?}", lines[0]));
+    let line = line.strip_prefix("the parts' ").unwrap_or(line);
+    let n = line.split(' ').next().unwrap().replace(',', "").parse().unwrap();
+    assert!(lines[0].ends_with("and left out of the image"), "{what}: {:?}", lines[0]);
+    (n, lines[0].to_string())
+}
+
+/// A few rejected samples (below the 0.1% that fails a render) are reported
+/// by cause on stderr even with -q, and in the statistics; a finite sample is
+/// never called NaN or infinite. Both kernels, a render and a merge.
+#[test]
+fn rejected_samples_are_reported_even_with_q_by_cause() {
+    let dir = tempfile::tempdir().unwrap();
+    let d = dir.path();
+    std::fs::write(d.join("hot.json"), mirror_scene("1e30", "1")).unwrap();
+    std::fs::write(d.join("inf.json"), mirror_scene("3e38", "2")).unwrap();
+    for (scene, finite) in [("hot.json", true), ("inf.json", false)] {
+        for kernel in ["scalar", "simd"] {
+            let what = format!("{scene} {kernel}");
+            let mut args = vec!["render", scene, "-q", "-o", "x.png", "--stats-json", "x.json", "--kernel", kernel];
+            args.extend_from_slice(&MIRROR_SIZE);
+            let (n, line) = warned(&rtow(d, &args), &what);
+            assert!(n > 0 && line.contains(&format!("{n} of 40,000 samples")), "{what}: {line}");
+            let s = stats(d, "x.json");
+            assert_eq!(s["rejected_samples"], n, "{what}");
+            assert_eq!(s["film_exponent"], 0, "{what}");
+            if finite {
+                assert_eq!((&s["rejected_out_of_range"], &s["rejected_non_finite"]), (&n.into(), &0.into()));
+                assert!(line.contains("finite but out of the film's range: |x| >= 9.223e18"), "{what}: {line}");
+                assert!(!line.contains("NaN") && !line.contains("infinite"), "{what}: {line}");
+            } else {
+                assert_eq!((&s["rejected_out_of_range"], &s["rejected_non_finite"]), (&0.into(), &n.into()));
+                assert!(line.contains("NaN or infinite") && !line.contains("range"), "{what}: {line}");
+            }
+            // The summary line says it too.
+            let r = rtow(d, &args.iter().filter(|&&a| a != "-q").copied().collect::<Vec<_>>());
+            assert!(r.stdout.contains(&format!("{n} samples rejected")), "{what}: {}", r.stdout);
+        }
+        // Shards carry the counts; their merge reports them the same way.
+        for k in 1..=2 {
+            let shard = format!("{k}/2");
+            let out = format!("p{k}.rtfilm");
+            let mut args = vec!["render", scene, "-q", "--shard", &shard, "--split", "rows", "-o", &out];
+            args.extend_from_slice(&MIRROR_SIZE);
+            ok(&rtow(d, &args), "shard");
+        }
+        let (n, line) = warned(&rtow(d, &["merge", "p1.rtfilm", "p2.rtfilm", "-q", "-o", "m.png"]), "merge");
+        assert!(line.starts_with("warning: the parts' ") && n > 0, "{line}");
+        assert_eq!(line.contains("NaN"), !finite, "{line}");
+    }
+}
+
+/// `--on-rejected error`: a render (or a merge) that rejected any sample
+/// fails with exit status 2 and one error line, and writes nothing: not the
+/// image, the float image or the statistics, and an old file stays as it was.
+#[test]
+fn the_error_policy_fails_and_writes_nothing() {
+    let dir = tempfile::tempdir().unwrap();
+    let d = dir.path();
+    std::fs::write(d.join("hot.json"), mirror_scene("1e30", "1")).unwrap();
+    std::fs::write(d.join("x.png"), SENTINEL).unwrap();
+    for kernel in ["scalar", "simd"] {
+        let mut args = vec!["render", "hot.json", "-q", "--on-rejected", "error", "--kernel", kernel];
+        args.extend_from_slice(&["-o", "x.png", "--float", "x.pfm", "--stats-json", "x.json"]);
+        args.extend_from_slice(&MIRROR_SIZE);
+        let line = failure(&rtow(d, &args), 2, kernel);
+        assert!(line.contains("--on-rejected error: nothing written"), "{line}");
+        assert!(line.contains("finite but out of the film's range") && !line.contains("NaN"), "{line}");
+        assert_eq!(std::fs::read(d.join("x.png")).unwrap(), SENTINEL);
+        assert_eq!(listing(d), ["hot.json", "x.png"]);
+        // A shard too.
+        let mut args = vec!["render", "hot.json", "--on-rejected", "error", "--shard", "1/1", "-o", "p.rtfilm"];
+        args.extend_from_slice(&MIRROR_SIZE);
+        failure(&rtow(d, &args), 2, kernel);
+        assert_eq!(listing(d), ["hot.json", "x.png"]);
+    }
+    // The default policy writes the image (and warns); `warn` is the default.
+    let mut args = vec!["render", "hot.json", "-q", "--on-rejected", "warn", "-o", "x.png"];
+    args.extend_from_slice(&MIRROR_SIZE);
+    warned(&rtow(d, &args), "warn");
+    assert_ne!(std::fs::read(d.join("x.png")).unwrap(), SENTINEL);
+    // A merge of parts that rejected samples.
+    let mut args = vec!["render", "hot.json", "-q", "--shard", "1/1", "-o", "p.rtfilm"];
+    args.extend_from_slice(&MIRROR_SIZE);
+    warned(&rtow(d, &args), "shard");
+    let r = rtow(d, &["merge", "p.rtfilm", "-o", "m.png", "--stats-json", "m.json", "--on-rejected", "error"]);
+    let line = failure(&r, 2, "merge");
+    assert!(line.contains("--on-rejected error: nothing written"), "{line}");
+    assert!(!d.join("m.png").exists() && !d.join("m.json").exists());
 }
