@@ -76,6 +76,21 @@ impl Mode {
 }
 
 choice!(
+    /// What a run does when its film rejected samples (NaN, infinite, or out
+    /// of the film's range): in any case it says so on stderr and in its
+    /// statistics. More than `limits::MAX_REJECTED_FRACTION` of the samples
+    /// always fail the run.
+    #[derive(Default)]
+    OnRejected {
+        /// Write the outputs, with one warning line naming the count.
+        #[default]
+        Warn = "warn",
+        /// Fail (exit status 2) and write nothing.
+        Error = "error",
+    }
+);
+
+choice!(
     /// Which kernel renders.
     KernelChoice {
         /// One path at a time: the reference.

@@ -18,8 +18,9 @@ pub enum Error {
     /// An unknown preset or unreadable input.
     #[error("{0}")]
     Input(String),
-    /// A render whose samples were mostly NaN or infinite: the scene is
-    /// numerically degenerate (see `limits::MAX_REJECTED_FRACTION`).
+    /// A render that rejected too many samples (NaN, infinite, or out of the
+    /// film's range): the scene is numerically degenerate (see
+    /// `limits::MAX_REJECTED_FRACTION`); or any, under `OnRejected::Error`.
     #[error("{0}")]
     Degenerate(String),
     /// Writing an output failed.

@@ -5,7 +5,7 @@
 //! renders a whole image or a partial film, whether it counts work for the
 //! statistics, and the order of the checks.
 
-use crate::choice::EstimatorChoice;
+use crate::choice::{EstimatorChoice, OnRejected};
 use crate::error::{Error, Result};
 use crate::estimator::{Adaptive, Roulette};
 use crate::film::part::{self, is_part_path, Part, Split, SplitKind};
@@ -94,11 +94,16 @@ pub struct RenderRequest<'a> {
     /// How the film to resume is checked by recomputation ([`shard::Verify`]).
     pub verify: shard::Verify,
     pub files: RenderFiles,
+    /// Whether rejected samples fail the render (nothing written) or only
+    /// warn (the caller prints [`Stats::rejected`]'s warning).
+    pub on_rejected: OnRejected,
 }
 
 /// Renders `req` and writes its files; returns the statistics (the run's,
 /// written to `files.stats` too). Bad input is refused (exit status 2), then
-/// an output that cannot be written (1), before any rendering.
+/// an output that cannot be written (1), before any rendering. A render that
+/// rejected more than [`crate::limits::MAX_REJECTED_FRACTION`] of its
+/// samples, or any under [`OnRejected::Error`], writes nothing (exit status 2).
 pub fn render_to_files(req: &RenderRequest, progress: Option<&(dyn Fn(Progress) + Sync)>) -> Result<Stats> {
     let files = &req.files;
     files.check_types()?;
@@ -138,7 +143,7 @@ pub fn render_to_files(req: &RenderRequest, progress: Option<&(dyn Fn(Progress) 
     let gamma = files.gamma.unwrap_or(req.job.default_gamma());
     let r = if partial {
         let (r, part) = shard::render_part(req.job, &film, progress)?;
-        r.stats.check_finite()?;
+        r.stats.rejected().check(req.on_rejected)?;
         let bytes = if files.writes_film() {
             part.to_bytes()
         } else {
@@ -150,7 +155,7 @@ pub fn render_to_files(req: &RenderRequest, progress: Option<&(dyn Fn(Progress) 
         // Statistics come with the exact work counters (a counted render costs nothing measurable).
         let r: Rendered =
             if files.stats.is_some() { render_counted(req.job, progress)? } else { render(req.job, progress)? };
-        r.stats.check_finite()?;
+        r.stats.rejected().check(req.on_rejected)?;
         outputs.stage(out_id, &r.image.file_bytes(&files.output, gamma, files.names.output)?)?;
         r
     };
@@ -201,7 +206,16 @@ pub struct StatsFile {
     pub adaptive: Option<Adaptive>,
     pub sampler: Sampler,
     pub estimator: EstimatorChoice,
+    /// Samples left out of the image (NaN, infinite or out of the film's range).
     pub rejected_samples: u64,
+    /// Of those, the samples with a NaN or infinite channel.
+    pub rejected_non_finite: u64,
+    /// Of those, the finite samples outside the film's range (`film_range`).
+    pub rejected_out_of_range: u64,
+    /// The film's fixed-point scale exponent (0 for every preset; see `film::accum`).
+    pub film_exponent: u32,
+    /// A sample is accepted when every channel's magnitude is below this.
+    pub film_range: f64,
     pub work: Option<WorkCounters>,
     pub image_hash: String,
     pub plan: Option<Plan>,
@@ -254,6 +268,10 @@ impl StatsFile {
             sampler: st.sampler,
             estimator: st.estimator,
             rejected_samples: st.rejected_samples,
+            rejected_non_finite: st.rejected().non_finite(),
+            rejected_out_of_range: st.rejected_out_of_range,
+            film_exponent: st.film_exponent,
+            film_range: st.film_range,
             work: st.work,
             image_hash: st.image_hash.clone(),
             plan: Some(st.plan.clone()),
@@ -289,6 +307,10 @@ impl StatsFile {
             sampler: st.sampler,
             estimator: st.estimator,
             rejected_samples: st.rejected_samples,
+            rejected_non_finite: st.rejected().non_finite(),
+            rejected_out_of_range: st.rejected_out_of_range,
+            film_exponent: st.film_exponent,
+            film_range: st.rejected().range,
             work: None,
             image_hash: st.image_hash.clone(),
             plan: None,
@@ -329,6 +351,10 @@ pub struct MergeStats {
     pub rays: u64,
     pub samples: u64,
     pub rejected_samples: u64,
+    /// Of those, the finite samples out of the film's range.
+    pub rejected_out_of_range: u64,
+    /// The parts' film scale exponent.
+    pub film_exponent: u32,
     pub read_seconds: f64,
     pub merge_seconds: f64,
     pub write_seconds: f64,
@@ -338,11 +364,30 @@ pub struct MergeStats {
     pub verified: shard::Verified,
 }
 
+impl MergeStats {
+    /// The samples the parts rejected, by cause.
+    pub fn rejected(&self) -> crate::limits::Rejected {
+        crate::limits::Rejected {
+            samples: self.samples,
+            total: self.rejected_samples,
+            out_of_range: self.rejected_out_of_range,
+            range: crate::film::accum::Scale::new(self.film_exponent).map_or(f64::INFINITY, |s| s.limit()),
+        }
+    }
+}
+
 /// Merges the partial films `parts` (every shard of one render) and writes
 /// `files`: the image (bit for bit the one-process render's) or the whole
 /// render's film (to resume later), the linear image, the statistics.
 /// Every part is checked by recomputation as `verify` says ([`shard::Verify`]).
-pub fn merge_to_files(parts: &[PathBuf], files: &RenderFiles, verify: shard::Verify) -> Result<MergeStats> {
+/// Parts that rejected samples are merged (their render said so) unless
+/// `on_rejected` is [`OnRejected::Error`]: then nothing is written (exit status 2).
+pub fn merge_to_files(
+    parts: &[PathBuf],
+    files: &RenderFiles,
+    verify: shard::Verify,
+    on_rejected: OnRejected,
+) -> Result<MergeStats> {
     let t0 = Instant::now();
     files.check_types()?;
     verify.check()?;
@@ -354,6 +399,14 @@ pub fn merge_to_files(parts: &[PathBuf], files: &RenderFiles, verify: shard::Ver
     let (out_id, float_id, stats_id) = files.add_to(&mut outputs)?;
     // Read (and check) every header, then stream the parts into one film.
     let shard::Merged { part: merged, split: split_kind, verified } = shard::merge_files(parts, verify)?;
+    let c = &merged.header.counters;
+    crate::limits::Rejected {
+        samples: c.samples,
+        total: c.rejected_samples,
+        out_of_range: c.rejected_out_of_range,
+        range: Part::scale(&merged.header).limit(),
+    }
+    .check(on_rejected)?;
     let read_seconds = t0.elapsed().as_secs_f64();
     let t1 = Instant::now();
     let image = merged.film.image();
@@ -386,6 +439,8 @@ pub fn merge_to_files(parts: &[PathBuf], files: &RenderFiles, verify: shard::Ver
         rays: h.counters.rays,
         samples: h.counters.samples,
         rejected_samples: h.counters.rejected_samples,
+        rejected_out_of_range: h.counters.rejected_out_of_range,
+        film_exponent: h.film_exponent,
         read_seconds,
         merge_seconds,
         write_seconds: 0.0,

@@ -78,7 +78,7 @@ pub mod shard;
 mod texture;
 mod vec3;
 
-pub use choice::{AccelChoice, EstimatorChoice, KernelChoice, Mode};
+pub use choice::{AccelChoice, EstimatorChoice, KernelChoice, Mode, OnRejected};
 pub use error::{Error, Result};
 pub use estimator::{Adaptive, Roulette, ADAPTIVE_MIN_SPP, ROULETTE_AFTER_RAYS};
 pub use film::Image;

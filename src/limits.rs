@@ -4,6 +4,7 @@
 //! exhausting memory, hanging, or rendering garbage. docs/reliability.md
 //! lists them.
 
+use crate::choice::OnRejected;
 use crate::error::{Error, Result};
 
 /// Most pixels an image may have: 2^26, an 8192 x 8192 image. Memory: the
@@ -112,10 +113,11 @@ pub const MAX_LENS_RADIUS: f32 = MAX_COORD;
 /// thread costs a stack and a workspace.
 pub const MAX_THREADS: usize = 1024;
 
-/// A render in which more than this fraction of the samples were NaN or
-/// infinite (and so rejected from the image) fails with exit status 2 rather
+/// A render in which more than this fraction of the samples were rejected
+/// (NaN, infinite, or out of the film's range) fails with exit status 2 rather
 /// than writing an image that is mostly black: the scene is numerically
-/// degenerate (e.g. a colour near f32::MAX).
+/// degenerate (e.g. an albedo near f32::MAX). Fewer are reported (a warning
+/// line, the statistics), and `--on-rejected error` fails on any.
 pub const MAX_REJECTED_FRACTION: f64 = 1e-3;
 
 /// Reads the file at `path` whole, refusing it (exit status 2) when it is
@@ -153,17 +155,100 @@ pub fn check_threads(threads: Option<usize>) -> Result<()> {
     }
 }
 
-/// Fails when more than [`MAX_REJECTED_FRACTION`] of `samples` were rejected.
-pub fn check_rejected(rejected: u64, samples: u64) -> Result<()> {
-    if samples > 0 && rejected as f64 > MAX_REJECTED_FRACTION * samples as f64 {
-        return Err(Error::Degenerate(format!(
-            "{rejected} of {samples} samples ({:.2}%) were NaN or infinite (at most {}% may be): \
-             the scene is numerically degenerate; no image written",
-            100.0 * rejected as f64 / samples as f64,
-            100.0 * MAX_REJECTED_FRACTION
-        )));
+/// The samples a render (or the parts of a merge) rejected, by cause.
+#[derive(Clone, Copy, Debug, PartialEq)]
+pub struct Rejected {
+    /// Samples traced (accepted and rejected).
+    pub samples: u64,
+    /// Samples rejected, whatever the cause.
+    pub total: u64,
+    /// Of those, the finite samples outside the film's range.
+    pub out_of_range: u64,
+    /// The film's range: a sample is accepted when every channel's magnitude is below it.
+    pub range: f64,
+}
+
+impl Rejected {
+    /// Samples with a NaN or infinite channel.
+    pub fn non_finite(&self) -> u64 {
+        self.total - self.out_of_range
     }
-    Ok(())
+
+    /// E.g. "12 of 1,234,567 samples (0.00097%) rejected (3 NaN or infinite;
+    /// 9 finite but out of the film's range: |x| >= 9.223e18)": a finite
+    /// sample is never called NaN or infinite.
+    pub fn describe(&self) -> String {
+        let mut causes = Vec::new();
+        if self.non_finite() > 0 {
+            causes.push(format!("{} NaN or infinite", grouped(self.non_finite())));
+        }
+        if self.out_of_range > 0 {
+            causes.push(format!(
+                "{} finite but out of the film's range: |x| >= {:.3e}",
+                grouped(self.out_of_range),
+                self.range
+            ));
+        }
+        let pct = if self.samples > 0 { 100.0 * self.total as f64 / self.samples as f64 } else { 0.0 };
+        format!(
+            "{} of {} samples ({}%) rejected ({})",
+            grouped(self.total),
+            grouped(self.samples),
+            significant(pct),
+            causes.join("; ")
+        )
+    }
+
+    /// The line a run prints on stderr when it rejected samples, whatever
+    /// its verbosity (`None`: none rejected).
+    pub fn warning(&self) -> Option<String> {
+        (self.total > 0).then(|| format!("{} and left out of the image", self.describe()))
+    }
+
+    /// Fails (exit status 2) when more than [`MAX_REJECTED_FRACTION`] of the samples were rejected.
+    pub fn check_fraction(&self) -> Result<()> {
+        if self.samples > 0 && self.total as f64 > MAX_REJECTED_FRACTION * self.samples as f64 {
+            return Err(Error::Degenerate(format!(
+                "{} (at most {}% may be): the scene is numerically degenerate; no image written",
+                self.describe(),
+                100.0 * MAX_REJECTED_FRACTION
+            )));
+        }
+        Ok(())
+    }
+
+    /// [`Rejected::check_fraction`], then, under [`OnRejected::Error`], fails
+    /// (exit status 2) when any sample was rejected.
+    pub fn check(&self, policy: OnRejected) -> Result<()> {
+        self.check_fraction()?;
+        if policy == OnRejected::Error && self.total > 0 {
+            return Err(Error::Degenerate(format!("{} and --on-rejected error: nothing written", self.describe())));
+        }
+        Ok(())
+    }
+}
+
+/// `n` with its thousands separated by commas (1,234,567).
+pub fn grouped(n: u64) -> String {
+    let digits = n.to_string();
+    let mut out = String::with_capacity(digits.len() + digits.len() / 3);
+    for (i, ch) in digits.chars().enumerate() {
+        if i > 0 && (digits.len() - i).is_multiple_of(3) {
+            out.push(',');
+        }
+        out.push(ch);
+    }
+    out
+}
+
+/// A percentage with two significant digits at least (0.00097, 12, 100).
+fn significant(pct: f64) -> String {
+    if pct == 0.0 || pct >= 1.0 {
+        format!("{pct:.2}").trim_end_matches('0').trim_end_matches('.').to_string()
+    } else {
+        let decimals = (1.0 - pct.log10().floor()) as usize;
+        format!("{pct:.decimals$}")
+    }
 }
 
 #[cfg(test)]
@@ -182,10 +267,40 @@ mod tests {
 
     #[test]
     fn rejected_fraction_is_bounded() {
-        assert!(check_rejected(0, 0).is_ok());
-        assert!(check_rejected(1, 1000).is_ok());
-        let e = check_rejected(2, 1000).unwrap_err();
+        let r = |total, out_of_range, samples| Rejected { samples, total, out_of_range, range: 2f64.powi(63) };
+        assert!(r(0, 0, 0).check_fraction().is_ok());
+        assert!(r(1, 0, 1000).check_fraction().is_ok());
+        assert!(r(1, 1, 1000).check(OnRejected::Warn).is_ok());
+        let e = r(2, 0, 1000).check_fraction().unwrap_err();
         assert_eq!(e.exit_code(), 2);
-        assert!(e.to_string().contains("NaN or infinite"), "{e}");
+        assert!(e.to_string().contains("2 NaN or infinite") && !e.to_string().contains("range"), "{e}");
+        // A finite sample is never called NaN or infinite.
+        let e = r(2, 2, 1000).check_fraction().unwrap_err().to_string();
+        assert!(!e.contains("NaN") && e.contains("2 finite but out of the film's range: |x| >= 9.223e18"), "{e}");
+        let e = r(5, 2, 1000).check_fraction().unwrap_err().to_string();
+        assert!(e.contains("3 NaN or infinite; 2 finite but out"), "{e}");
+        // The policy: any rejected sample fails under `error`, none under `warn`.
+        assert!(r(0, 0, 1000).check(OnRejected::Error).is_ok());
+        let e = r(1, 1, 1000).check(OnRejected::Error).unwrap_err();
+        assert_eq!(e.exit_code(), 2);
+        assert!(e.to_string().contains("--on-rejected error: nothing written"), "{e}");
+    }
+
+    #[test]
+    fn the_warning_names_the_count() {
+        let r = Rejected { samples: 1_234_567, total: 12, out_of_range: 12, range: 2f64.powi(63) };
+        assert_eq!(
+            r.warning().unwrap(),
+            "12 of 1,234,567 samples (0.00097%) rejected (12 finite but out of the film's range: |x| >= 9.223e18) \
+             and left out of the image"
+        );
+        assert_eq!(Rejected { total: 0, out_of_range: 0, ..r }.warning(), None);
+        assert_eq!(grouped(0), "0");
+        assert_eq!(grouped(999), "999");
+        assert_eq!(grouped(1000), "1,000");
+        assert_eq!(grouped(u64::MAX), "18,446,744,073,709,551,615");
+        assert_eq!(significant(100.0), "100");
+        assert_eq!(significant(12.5), "12.5");
+        assert_eq!(significant(0.1), "0.10");
     }
 }

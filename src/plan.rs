@@ -6,6 +6,7 @@
 use crate::camera::PreparedCamera;
 use crate::choice::Mode;
 use crate::estimator::Estimator;
+use crate::film::accum::Scale;
 use crate::geometry::{
     self, Bvh, Closest, CuboidBvh, Cuboids, Emitters, Lights, Media, MovingBvh, MovingSpheres, QuadBvh, Quads, Spheres,
     MISS, QUAD_BASE,
@@ -133,13 +134,29 @@ pub struct Plan {
     /// power heuristic. 0: no light samples.
     #[serde(skip_serializing_if = "is_zero")]
     pub nee: usize,
+    /// The film's fixed-point scale exponent ([`Scale`]), chosen from the
+    /// brightest emission the scene can produce (`job::prepare::brightest`)
+    /// before any work: 0, the unit scale, for every scene whose brightest
+    /// emission is below 2^47 (every preset); above, the smallest that leaves
+    /// 2^16 of headroom over it in the film's range.
+    #[serde(skip_serializing_if = "is_zero_u32")]
+    pub film_exponent: u32,
 }
 
 fn is_zero(n: &usize) -> bool {
     *n == 0
 }
 
+fn is_zero_u32(n: &u32) -> bool {
+    *n == 0
+}
+
 impl Plan {
+    /// The film's fixed-point scale (of [`Plan::film_exponent`]).
+    pub fn film_scale(&self) -> Scale {
+        Scale::new(self.film_exponent).expect("the plan's exponent is at most MAX_EXPONENT")
+    }
+
     /// A human-readable account of the plan (`rtow render --explain`).
     pub fn explain(&self) -> String {
         let kinds: Vec<&str> = self.kinds.iter().map(Kind::name).collect();
@@ -178,8 +195,17 @@ impl Plan {
                  weighted against the scattered direction by the power heuristic"
             ),
         };
+        let film = match self.film_scale() {
+            s if s.exponent() == 0 => String::new(),
+            s => format!(
+                "; film: fixed point scaled by 2^-{} for the brightest emission (samples below {:.3e}, steps of {:.3e})",
+                s.exponent(),
+                s.limit(),
+                s.resolution()
+            ),
+        };
         format!(
-            "plan: mode {:?}; material passes: {kinds}{textures}; camera: {} rays, {}; closest hit: {}{quads}{cuboids}{moving}{media}{toward}; paths stop at zero throughput",
+            "plan: mode {:?}; material passes: {kinds}{textures}; camera: {} rays, {}; closest hit: {}{quads}{cuboids}{moving}{media}{toward}; paths stop at zero throughput{film}",
             self.mode,
             if self.lens { "thin-lens" } else { "pinhole" },
             if self.jitter { "jittered in the pixel" } else { "through pixel centres" },

@@ -4,6 +4,7 @@
 use crate::choice::{EstimatorChoice, Mode};
 use crate::error::{Error, Result};
 use crate::estimator::Adaptive;
+use crate::film::accum::Scale;
 use crate::film::{Film, Image, TileFilm};
 use crate::job::Job;
 use crate::kernel::{gradient, isa, scalar, wavefront, Kernel};
@@ -58,8 +59,16 @@ pub struct Stats {
     pub sampler: Sampler,
     /// How paths chose directions at diffuse vertices (`bsdf`, `book`).
     pub estimator: EstimatorChoice,
-    /// Samples with a NaN or infinite component, kept out of the image.
+    /// Samples kept out of the image: with a NaN or infinite component, or
+    /// finite but outside the film's range (`rejected_out_of_range`).
     pub rejected_samples: u64,
+    /// Of `rejected_samples`, the finite samples outside the film's range
+    /// ([`Stats::film_range`]).
+    pub rejected_out_of_range: u64,
+    /// The film's fixed-point scale exponent (`plan.film_exponent`; 0 for every preset).
+    pub film_exponent: u32,
+    /// A sample is accepted when every channel's magnitude is below this.
+    pub film_range: f64,
     /// Exact work counters and lane occupancy, when the render counted them.
     pub work: Option<WorkCounters>,
     pub image_hash: String,
@@ -67,11 +76,22 @@ pub struct Stats {
 }
 
 impl Stats {
+    /// The samples rejected, by cause.
+    pub fn rejected(&self) -> crate::limits::Rejected {
+        crate::limits::Rejected {
+            samples: self.samples,
+            total: self.rejected_samples,
+            out_of_range: self.rejected_out_of_range,
+            range: self.film_range,
+        }
+    }
+
     /// An error (exit status 2) when more than
     /// [`MAX_REJECTED_FRACTION`](crate::limits::MAX_REJECTED_FRACTION) of the
-    /// samples were NaN or infinite: the image would be mostly black or wrong.
+    /// samples were rejected (NaN, infinite or out of the film's range): the
+    /// image would be mostly black or wrong.
     pub fn check_finite(&self) -> Result<()> {
-        crate::limits::check_rejected(self.rejected_samples, self.samples)
+        self.rejected().check_fraction()
     }
 }
 
@@ -80,15 +100,15 @@ pub struct Rendered {
     pub stats: Stats,
 }
 
-/// The tiles of rows `rows`, empty or starting from `start`'s accumulators.
-fn tiles(width: u32, rows: Range<u32>, edge: u32, moments: bool, start: Option<&Film>) -> Vec<TileFilm> {
+/// The tiles of rows `rows`, empty (of scale `scale`) or starting from `start`'s accumulators.
+fn tiles(width: u32, rows: Range<u32>, edge: u32, moments: bool, scale: Scale, start: Option<&Film>) -> Vec<TileFilm> {
     let mut v = Vec::new();
     for y0 in rows.clone().step_by(edge as usize) {
         for x0 in (0..width).step_by(edge as usize) {
             let (w, h) = (edge.min(width - x0), edge.min(rows.end - y0));
             let t = match start {
                 Some(f) => f.tile(x0, y0, w, h),
-                None => TileFilm::new(x0, y0, w, h),
+                None => TileFilm::new(x0, y0, w, h).scaled(scale),
             };
             v.push(if moments && t.sum_sq.is_empty() { t.with_moments() } else { t });
         }
@@ -139,7 +159,7 @@ pub fn render_pixels(job: &Job, pixels: &[(u32, u32)], samples: Range<u32>) -> V
     let mut tiles: Vec<TileFilm> = pixels
         .iter()
         .map(|&(x, y)| {
-            let t = TileFilm::new(x, y, 1, 1);
+            let t = TileFilm::new(x, y, 1, 1).scaled(prep.plan.film_scale());
             if moments {
                 t.with_moments()
             } else {
@@ -228,6 +248,9 @@ impl Stats {
             sampler: s.sampler,
             estimator: s.estimator,
             rejected_samples: out.rejected,
+            rejected_out_of_range: out.rejected_out_of_range,
+            film_exponent: job.plan().film_exponent,
+            film_range: job.plan().film_scale().limit(),
             work: None,
             image_hash: format!("{:016x}", out.image.hash()),
             plan: job.plan().clone(),
@@ -250,6 +273,7 @@ struct Finished<P> {
     rays: u64,
     shadow_rays: u64,
     rejected: u64,
+    rejected_out_of_range: u64,
     /// Samples traced (`None` when no sample is traced: the gradient).
     traced: Option<u64>,
     probes: Vec<P>,
@@ -273,10 +297,21 @@ fn render_prepared<P: Probe + Send>(
                 image.data[(y * s.width + x) as usize] = gradient(x, y, s.width, s.height);
             }
         }
-        return Finished { image, rays: 0, shadow_rays: 0, rejected: 0, traced: None, probes: Vec::new(), film: None };
+        return Finished {
+            image,
+            rays: 0,
+            shadow_rays: 0,
+            rejected: 0,
+            rejected_out_of_range: 0,
+            traced: None,
+            probes: Vec::new(),
+            film: None,
+        };
     }
     let moments = prep.estimator.adaptive.is_some();
-    let mut films = tiles(s.width, work.rows.clone(), tile, moments, work.start);
+    let scale = prep.plan.film_scale();
+    debug_assert!(work.start.is_none_or(|f| f.scale == scale), "a film of another scale is refused before");
+    let mut films = tiles(s.width, work.rows.clone(), tile, moments, scale, work.start);
     let started: u64 = films.iter().flat_map(|t| &t.count).map(|&c| c as u64).sum();
     let total = films.len() as u64;
     let done = AtomicU64::new(0);
@@ -297,8 +332,9 @@ fn render_prepared<P: Probe + Send>(
     });
     // The film is gathered only for a caller that wants it (a partial film):
     // a plain render writes the image straight from the tiles.
-    let mut film = work.keep_film.then(|| Film::new(s.width, s.height, work.rows.clone(), moments));
+    let mut film = work.keep_film.then(|| Film::new(s.width, s.height, work.rows.clone(), moments).scaled(scale));
     let mut rejected = 0;
+    let mut rejected_out_of_range = 0;
     let mut shadow_rays = 0;
     let mut traced = 0;
     // Tiles are dropped as they are copied: the peak stays near one film.
@@ -308,6 +344,7 @@ fn render_prepared<P: Probe + Send>(
             None => image.put_tile(&t),
         }
         rejected += t.rejected;
+        rejected_out_of_range += t.rejected_out_of_range;
         shadow_rays += t.shadow_rays;
         traced += t.rejected + t.count.iter().map(|&c| c as u64).sum::<u64>();
     }
@@ -315,7 +352,7 @@ fn render_prepared<P: Probe + Send>(
         f.write_into(&mut image);
     }
     let traced = Some(traced - started);
-    Finished { image, rays: rays.into_inner(), shadow_rays, rejected, traced, probes, film }
+    Finished { image, rays: rays.into_inner(), shadow_rays, rejected, rejected_out_of_range, traced, probes, film }
 }
 
 fn scalar_tiles<P: Probe + Send, S: PathSampler>(

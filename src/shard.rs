@@ -69,7 +69,7 @@ pub fn check(job: &Job, req: &FilmRequest) -> Result<()> {
         Vec::new(),
         settings.spp,
         Split::WHOLE,
-        crate::film::Film::new(0, 0, 0..0, false),
+        crate::film::Film::new(0, 0, 0..0, false).scaled(job.plan().film_scale()),
         PartCounters::default(),
     );
     part::same_image(path, h, Path::new("this render"), &mine.header, "this render cannot continue it")?;
@@ -116,7 +116,12 @@ pub fn render_part(
     let (rendered, film) = render_portion(job, portion, progress)?;
     let film = film.ok_or_else(|| Error::Input("this scene traces no samples: it has no film".into()))?;
     let st = &rendered.stats;
-    counters.add(&PartCounters { rays: st.rays, samples: st.samples, rejected_samples: st.rejected_samples });
+    counters.add(&PartCounters {
+        rays: st.rays,
+        samples: st.samples,
+        rejected_samples: st.rejected_samples,
+        rejected_out_of_range: st.rejected_out_of_range,
+    });
     let part = Part::new(&job.identity(), job.scene_json(), settings.spp, req.split, film, counters);
     Ok((rendered, part))
 }
@@ -164,7 +169,7 @@ pub fn merge_files(paths: &[PathBuf], verify: Verify) -> Result<Merged> {
     }
     let h0 = &headers[0];
     let moments = headers.iter().all(|h| h.moments);
-    let mut film = Film::new(h0.width, h0.height, 0..h0.height, moments);
+    let mut film = Film::new(h0.width, h0.height, 0..h0.height, moments).scaled(Part::scale(h0));
     let mut report = Verified { pixels_per_part: verify.pixels, seed: verify.seed, pixels: 0, seconds: 0.0 };
     let mut job: Option<Job> = None;
     let mut scene0 = Vec::new();
@@ -330,6 +335,13 @@ fn verification_job(p: &Path, h: &Header, scene: &[u8]) -> Result<Job> {
     if job.mode() == Mode::Gradient {
         return Err(cannot("its scene traces no samples".into()));
     }
+    if job.plan().film_exponent != h.film_exponent {
+        return Err(cannot(format!(
+            "its film has scale exponent {}, but this rtow gives its scene {}",
+            h.film_exponent,
+            job.plan().film_exponent
+        )));
+    }
     Ok(job)
 }
 
@@ -354,7 +366,7 @@ fn check_pixels(job: &Job, p: &Path, h: &Header, chosen: &[usize], stored: &[Pix
         let sq = |v: [f64; 3]| v.map(f64::to_bits);
         let same = t.count[0] == s.count && t.sum[0] == s.sum && (!adaptive || sq(t.sum_sq[0]) == sq(s.sum_sq));
         if !same {
-            let mean = |sum: [i128; 3], n: u32| crate::film::accum::mean(sum, n);
+            let mean = |sum: [i128; 3], n: u32| Part::scale(h).mean(sum, n);
             return Err(Error::Input(format!(
                 "{}: pixel ({x}, {y}) is not what its scene renders over samples {}..{}: the part holds {} samples \
                  of mean {:?}, rendering it again gives {} of mean {:?} (verified with --verify-seed {}); the part \

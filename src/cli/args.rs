@@ -4,8 +4,8 @@
 use clap::builder::{PossibleValuesParser, TypedValueParser};
 use clap::Args;
 use rtow::{
-    AccelChoice, Adaptive, EstimatorChoice, KernelChoice, Mode, Overrides, RenderOptions, Result, Roulette, Sampler,
-    Settings, ADAPTIVE_MIN_SPP, DEFAULT_TILE, ROULETTE_AFTER_RAYS,
+    AccelChoice, Adaptive, EstimatorChoice, KernelChoice, Mode, OnRejected, Overrides, RenderOptions, Result, Roulette,
+    Sampler, Settings, ADAPTIVE_MIN_SPP, DEFAULT_TILE, ROULETTE_AFTER_RAYS,
 };
 use std::path::PathBuf;
 use std::str::FromStr;
@@ -234,6 +234,18 @@ pub fn flag_of(field: &str) -> Option<&'static str> {
         "tolerance" => "--tolerance",
         _ => return None,
     })
+}
+
+/// What a render or a merge does when samples were rejected.
+#[derive(Args, Clone, Debug)]
+pub struct RejectedArgs {
+    /// When the film rejects samples (NaN, infinite, or finite but out of the
+    /// film's range): warn (write the outputs; one warning line on stderr,
+    /// even with -q, and the counts by cause in --stats-json) or error (exit
+    /// status 2, nothing written). More than 0.1% of the samples rejected
+    /// always fails.
+    #[arg(long, value_parser = choice::<OnRejected>(OnRejected::NAMES), default_value = "warn")]
+    pub on_rejected: OnRejected,
 }
 
 /// How `merge` and `render --resume` check partial films by recomputation.

@@ -1,8 +1,8 @@
 //! `rtow merge`: partial films (the shards of one render) into the image, bit
 //! for bit the one a single process renders with the same scene and settings.
 
-use super::args::{OutputArgs, VerifyArgs};
-use super::say;
+use super::args::{OutputArgs, RejectedArgs, VerifyArgs};
+use super::{say, tell};
 use clap::Args;
 use rtow::files;
 use rtow::Result;
@@ -21,13 +21,19 @@ pub struct MergeArgs {
     files: OutputArgs,
     #[command(flatten)]
     verify: VerifyArgs,
-    /// No summary line.
+    #[command(flatten)]
+    rejected: RejectedArgs,
+    /// No summary line (warnings are still printed).
     #[arg(short, long)]
     quiet: bool,
 }
 
 pub fn run(a: MergeArgs) -> Result<()> {
-    let st = files::merge_to_files(&a.parts, &a.files.files(a.output.clone()), a.verify.verify())?;
+    let st =
+        files::merge_to_files(&a.parts, &a.files.files(a.output.clone()), a.verify.verify(), a.rejected.on_rejected)?;
+    if let Some(w) = st.rejected().warning() {
+        tell!("warning: the parts' {w}");
+    }
     if !a.quiet {
         say!(
             "merged {} part(s) ({}x{}, {} spp, split by {}) -> {}: {} rays, {} samples, image hash {}, in {:.3} s \
@@ -47,9 +53,6 @@ pub fn run(a: MergeArgs) -> Result<()> {
             st.write_seconds,
             super::args::verified(&st.verified)
         );
-        if st.rejected_samples > 0 {
-            say!("{} samples were rejected (NaN, Inf or out of range) in the parts", st.rejected_samples);
-        }
     }
     Ok(())
 }

@@ -2,7 +2,7 @@
 //! or to a partial film (`.rtfilm`): a shard of the render (`--shard K/N`), or
 //! a whole render to be resumed (`--resume`) or merged later.
 
-use super::args::{choice, kernel_parser, EstimatorArgs, ImageArgs, OutputArgs, RunArgs, VerifyArgs};
+use super::args::{choice, kernel_parser, EstimatorArgs, ImageArgs, OutputArgs, RejectedArgs, RunArgs, VerifyArgs};
 use super::{say, tell};
 use clap::Args;
 use indicatif::{ProgressBar, ProgressStyle};
@@ -50,10 +50,12 @@ pub struct RenderArgs {
     estimator: EstimatorArgs,
     #[command(flatten)]
     files: OutputArgs,
+    #[command(flatten)]
+    rejected: RejectedArgs,
     /// Print the render plan (what the scene needs) before rendering.
     #[arg(long)]
     explain: bool,
-    /// No progress bar and no summary line.
+    /// No progress bar and no summary line (warnings are still printed).
     #[arg(short, long)]
     quiet: bool,
 }
@@ -108,11 +110,16 @@ pub fn run(a: RenderArgs) -> Result<()> {
         resume: a.resume.clone(),
         verify: a.verify.verify(),
         files: a.files.files(output.clone()),
+        on_rejected: a.rejected.on_rejected,
     };
     if a.explain {
         say!("{}", job.explain());
     }
     let st = with_progress(a.quiet, |cb| files::render_to_files(&req, cb))?;
+    // Never silent: a render that left samples out of its image says so, even with -q.
+    if let Some(w) = st.rejected().warning() {
+        tell!("warning: {w}");
+    }
     if !a.quiet {
         say!("{}", summary(&source.name, &st, &req, &output));
     }
@@ -131,11 +138,8 @@ fn summary(name: &str, st: &Stats, req: &RenderRequest, output: &std::path::Path
         ),
         _ => String::new(),
     };
-    let rejected = if st.rejected_samples > 0 {
-        format!(", {} NaN/Inf samples rejected", st.rejected_samples)
-    } else {
-        String::new()
-    };
+    let rejected =
+        if st.rejected_samples > 0 { format!(", {} samples rejected", st.rejected_samples) } else { String::new() };
     let shadow = if st.shadow_rays > 0 {
         format!(" + {} shadow rays = {:.2} M/s", st.shadow_rays, st.mshadow_rays_per_s)
     } else {

@@ -27,10 +27,11 @@ pub struct Moments {
     pub sum_sq: [f64; 3],
 }
 
-/// The accumulators of one tile. Each sample is converted to fixed point and
-/// added to its pixel's `i128` sums ([`accum`]), so the sums do not depend on
-/// threads, tiles, kernels or how samples are grouped. Samples with a NaN,
-/// infinite or out-of-range component are rejected (and counted), never added.
+/// The accumulators of one tile. Each sample is converted to fixed point by
+/// the film's [`accum::Scale`] and added to its pixel's `i128` sums
+/// ([`accum`]), so the sums do not depend on threads, tiles, kernels or how
+/// samples are grouped. Samples with a NaN, infinite or out-of-range component
+/// are rejected (and counted, by cause), never added.
 ///
 /// Besides the sums that make the image, each pixel can keep the f64 sum of
 /// the squares of its samples (added in sample order, which every kernel and
@@ -47,7 +48,12 @@ pub struct TileFilm {
     pub count: Vec<u32>,
     /// Per pixel, the sums of squares. Empty unless asked for ([`TileFilm::with_moments`]).
     pub sum_sq: Vec<[f64; 3]>,
+    /// Samples rejected, whatever the cause.
     pub rejected: u64,
+    /// Of those, the finite samples outside the film's range ([`accum::Rejection::OutOfRange`]).
+    pub rejected_out_of_range: u64,
+    /// The fixed-point scale of the sums (the render's; exponent 0 unless [`TileFilm::scaled`]).
+    pub scale: accum::Scale,
     /// Shadow rays the kernel traced for this tile (`nee-mis`), counted
     /// apart from the rays; not part of the film's data.
     pub shadow_rays: u64,
@@ -65,8 +71,22 @@ impl TileFilm {
             count: vec![0; n],
             sum_sq: Vec::new(),
             rejected: 0,
+            rejected_out_of_range: 0,
+            scale: accum::Scale::UNIT,
             shadow_rays: 0,
         }
+    }
+
+    /// Converts samples by `scale` (the render's: [`crate::plan::Plan::film_scale`]).
+    pub fn scaled(mut self, scale: accum::Scale) -> Self {
+        self.scale = scale;
+        self
+    }
+
+    #[inline(always)]
+    fn reject(&mut self, why: accum::Rejection) {
+        self.rejected += 1;
+        self.rejected_out_of_range += (why == accum::Rejection::OutOfRange) as u64;
     }
 
     /// Also keeps the sums of squares that adaptive sampling's error estimate needs.
@@ -88,12 +108,12 @@ impl TileFilm {
     #[cfg_attr(not(feature = "phases"), inline)]
     #[cfg_attr(feature = "phases", inline(never))]
     pub fn add(&mut self, local: usize, c: [f32; 3]) {
-        match accum::to_fixed(c) {
-            Some(q) => {
+        match self.scale.to_fixed(c) {
+            Ok(q) => {
                 let s = &mut self.sum[local];
-                s[0] += q[0] as i128;
-                s[1] += q[1] as i128;
-                s[2] += q[2] as i128;
+                s[0] += q[0];
+                s[1] += q[1];
+                s[2] += q[2];
                 self.count[local] += 1;
                 if let Some(m) = self.sum_sq.get_mut(local) {
                     for k in 0..3 {
@@ -102,7 +122,7 @@ impl TileFilm {
                     }
                 }
             }
-            None => self.rejected += 1,
+            Err(why) => self.reject(why),
         }
     }
 
@@ -127,28 +147,30 @@ impl TileFilm {
     #[inline(always)]
     fn add_rounds_with<const MOMENTS: bool>(&mut self, locals: &[u32], samples: &[[f32; 3]]) {
         let na = locals.len();
+        let scale = self.scale;
         debug_assert!(na == 0 || samples.len().is_multiple_of(na));
         for (j, &local) in locals.iter().enumerate() {
             let local = local as usize;
             // Samples below 2^19 per channel (all but the rarest) sum in a
             // run; the others, and a full run, take the general path.
             let mut run = accum::Run::default();
-            let (mut sum, mut n, mut rejected) = ([0i128; 3], 0u32, 0u64);
+            let (mut sum, mut n, mut rejected, mut out_of_range) = ([0i128; 3], 0u32, 0u64, 0u64);
             let mut sq = if MOMENTS { self.sum_sq[local] } else { [0.0; 3] };
             let mut i = j;
             while let Some(&c) = samples.get(i) {
                 i += na;
-                let accepted = run.try_add(c)
-                    || match accum::to_fixed(c) {
-                        Some(q) => {
+                let accepted = run.try_add(c, scale)
+                    || match scale.to_fixed(c) {
+                        Ok(q) => {
                             for k in 0..3 {
-                                sum[k] += q[k] as i128;
+                                sum[k] += q[k];
                             }
                             n += 1;
                             true
                         }
-                        None => {
+                        Err(why) => {
                             rejected += 1;
+                            out_of_range += (why == accum::Rejection::OutOfRange) as u64;
                             false
                         }
                     };
@@ -170,6 +192,7 @@ impl TileFilm {
                 self.sum_sq[local] = sq;
             }
             self.rejected += rejected;
+            self.rejected_out_of_range += out_of_range;
         }
     }
 
@@ -178,7 +201,7 @@ impl TileFilm {
     pub fn moments(&self, local: usize) -> Moments {
         Moments {
             n: self.count[local],
-            sum: self.sum[local].map(accum::to_f64),
+            sum: self.sum[local].map(|s| self.scale.to_f64(s)),
             sum_sq: self.sum_sq.get(local).copied().unwrap_or([0.0; 3]),
         }
     }
@@ -203,6 +226,8 @@ pub struct Film {
     pub count: Vec<u32>,
     /// Empty, or one entry per pixel (see [`TileFilm::sum_sq`]).
     pub sum_sq: Vec<[f64; 3]>,
+    /// The fixed-point scale of the sums (exponent 0 unless [`Film::scaled`]).
+    pub scale: accum::Scale,
 }
 
 impl Film {
@@ -217,7 +242,14 @@ impl Film {
             sum: vec![[0; 3]; n],
             count: vec![0; n],
             sum_sq: if moments { vec![[0.0; 3]; n] } else { Vec::new() },
+            scale: accum::Scale::UNIT,
         }
+    }
+
+    /// Sums in the fixed point of `scale` (the render's, or a partial film's).
+    pub fn scaled(mut self, scale: accum::Scale) -> Film {
+        self.scale = scale;
+        self
     }
 
     pub fn has_moments(&self) -> bool {
@@ -228,8 +260,9 @@ impl Film {
         (y - self.rows.start) as usize * self.width as usize + x as usize
     }
 
-    /// Copies a finished tile (inside the band) into the film.
+    /// Copies a finished tile (inside the band, of the same scale) into the film.
     pub fn put_tile(&mut self, t: &TileFilm) {
+        assert_eq!(t.scale, self.scale, "a tile of another fixed-point scale");
         for local in 0..t.len() {
             let (x, y) = t.pixel_of(local);
             let i = self.index(x, y);
@@ -241,10 +274,10 @@ impl Film {
         }
     }
 
-    /// A tile that starts from this film's accumulators (to resume a render).
-    /// It keeps sums of squares if the film has them.
+    /// A tile that starts from this film's accumulators (to resume a render),
+    /// of its scale. It keeps sums of squares if the film has them.
     pub fn tile(&self, x0: u32, y0: u32, w: u32, h: u32) -> TileFilm {
-        let mut t = TileFilm::new(x0, y0, w, h);
+        let mut t = TileFilm::new(x0, y0, w, h).scaled(self.scale);
         if !self.sum_sq.is_empty() {
             t = t.with_moments();
         }
@@ -260,12 +293,14 @@ impl Film {
         t
     }
 
-    /// Adds `other`'s accumulators (rows inside this film's) into this one:
-    /// exact for the sums and counts whatever the order of the parts. The sums
-    /// of squares are kept only if both have them. `None` if a count would
+    /// Adds `other`'s accumulators (rows inside this film's, of the same
+    /// scale: partial films of different scales are refused before) into this
+    /// one: exact for the sums and counts whatever the order of the parts. The
+    /// sums of squares are kept only if both have them. `None` if a count would
     /// exceed `u32::MAX` (parts that overlap; checked before, this is a guard).
     pub fn absorb(&mut self, other: &Film) -> Option<()> {
         assert!(other.width == self.width && other.rows.start >= self.rows.start && other.rows.end <= self.rows.end);
+        assert_eq!(other.scale, self.scale, "films of different fixed-point scales");
         if !other.has_moments() {
             self.sum_sq = Vec::new();
         }
@@ -315,7 +350,7 @@ impl Film {
         assert!(image.width == self.width && image.height == self.height);
         let off = self.rows.start as usize * self.width as usize;
         for (i, (s, &n)) in self.sum.iter().zip(&self.count).enumerate() {
-            image.data[off + i] = accum::mean(*s, n);
+            image.data[off + i] = self.scale.mean(*s, n);
         }
     }
 
@@ -351,7 +386,7 @@ impl Image {
     pub fn put_tile(&mut self, t: &TileFilm) {
         for local in 0..t.len() {
             let (x, y) = t.pixel_of(local);
-            self.data[(y * self.width + x) as usize] = accum::mean(t.sum[local], t.count[local]);
+            self.data[(y * self.width + x) as usize] = t.scale.mean(t.sum[local], t.count[local]);
         }
     }
 
@@ -533,7 +568,7 @@ mod tests {
         let samples: Vec<[f32; 3]> = (0..locals.len() * 6)
             .map(|i| match i % 11 {
                 3 => [f32::NAN, 1.0, 0.0],
-                7 => [0.0, 0.0, 3e9],
+                7 => [0.0, 0.0, 3e19],
                 _ => std::array::from_fn(|_| f32::from_bits(next() % 0x4100_0000) - 1e-3),
             })
             .collect();
@@ -549,8 +584,10 @@ mod tests {
                 }
                 batch.add_rounds(&locals, half);
             }
-            assert!(one.rejected > 0 && one.count.iter().any(|&n| n > 0));
+            assert!(one.rejected > one.rejected_out_of_range && one.rejected_out_of_range > 0);
+            assert!(one.count.iter().any(|&n| n > 0));
             assert_eq!((&one.sum, &one.count, one.rejected), (&batch.sum, &batch.count, batch.rejected));
+            assert_eq!(one.rejected_out_of_range, batch.rejected_out_of_range);
             let bits = |t: &TileFilm| t.sum_sq.iter().flatten().map(|v| v.to_bits()).collect::<Vec<_>>();
             assert_eq!(bits(&one), bits(&batch));
         }
@@ -573,18 +610,44 @@ mod tests {
     #[test]
     fn a_sample_out_of_range_is_rejected() {
         // Colours are unbounded; a sample beyond the fixed-point range is
-        // rejected whole, like NaN and Inf, and the pixel keeps its other samples.
+        // rejected whole, like NaN and Inf, counted as out of range, and the
+        // pixel keeps its other samples.
         let mut t = TileFilm::new(0, 0, 1, 1);
         t.add(0, [f32::MAX, 1.0, 1.0]);
         t.add(0, [1.0, 1.0, -(accum::SAMPLE_LIMIT as f32)]);
+        t.add(0, [3.0e19, 1.0, 1.0]);
+        t.add(0, [1.0e9, 1.0, 1.0]);
         t.add(0, [3.0e9, 1.0, 1.0]);
-        t.add(0, [1.0e9, 1.0, 1.0]);
-        t.add(0, [1.0e9, 1.0, 1.0]);
-        assert_eq!(t.rejected, 3);
+        t.add(0, [f32::NAN, 1.0, 1.0]);
+        assert_eq!((t.rejected, t.rejected_out_of_range), (4, 3));
         assert_eq!(t.count[0], 2);
         let mut img = Image::new(1, 1);
         img.put_tile(&t);
-        assert_eq!(img.get(0, 0), [1.0e9, 1.0, 1.0]);
+        assert_eq!(img.get(0, 0), [2.0e9, 1.0, 1.0]);
+    }
+
+    /// A film scaled for a bright emitter holds its samples (the unit film
+    /// rejects them) and reads back their exact mean; dark samples round to
+    /// its coarser step.
+    #[test]
+    fn a_scaled_film_holds_what_the_unit_film_rejects() {
+        let scale = accum::Scale::for_brightness(1e30);
+        assert_eq!(scale.exponent(), 53);
+        let mut unit = TileFilm::new(0, 0, 2, 1);
+        let mut t = TileFilm::new(0, 0, 2, 1).scaled(scale);
+        for film in [&mut unit, &mut t] {
+            film.add(0, [1e30, 1e30, 5e29]);
+            film.add(0, [1e30, 0.0, 5e29]);
+            film.add_rounds(&[1], &[[f32::MAX, 0.5, 0.0], [3e34, 0.5, 1.0]]);
+        }
+        assert_eq!((unit.rejected, unit.rejected_out_of_range, unit.count[0]), (4, 4, 0));
+        assert_eq!((t.rejected, t.rejected_out_of_range, t.count.as_slice()), (1, 1, &[2, 1][..]));
+        let mut img = Image::new(2, 1);
+        img.put_tile(&t);
+        assert_eq!(img.get(0, 0), [1e30, 5e29, 5e29]);
+        // 0.5 and 1.0 are far below the step (2^21): they round to 0.
+        assert_eq!(img.get(1, 0), [3e34, 0.0, 0.0]);
+        assert_eq!(t.moments(0).sum, [2e30f32 as f64, 1e30f32 as f64, 2.0 * 5e29f32 as f64]);
     }
 
     #[test]
@@ -597,47 +660,66 @@ mod tests {
 
     /// Random samples split among tiles, resumed and merged in any grouping
     /// give the film a one-pass render gives.
+    /// Random samples split among tiles, resumed and merged in any grouping
+    /// give the film a one-pass render gives, at exponent 0 and at a scaled
+    /// film's (samples 2^70 times brighter, exponent 40).
     #[test]
     fn films_merge_exactly_in_any_grouping() {
-        let (w, h) = (5u32, 4u32);
-        let sample = |x: u32, y: u32, s: u32| {
-            let v = crate::sampling::ScalarStream::for_path(7, (y * w + x) as u64, s as u64);
-            let mut v = v;
-            use crate::sampling::Stream;
-            let f = |u: f32| u * u * 3.0 + 1e-7 / (u + 1e-3);
-            [f(v.next()), f(v.next()), f(v.next())]
-        };
-        let spp = 37;
-        let render = |rows: Range<u32>, samples: Range<u32>, from: Option<&Film>| {
-            let mut f = from.cloned().unwrap_or_else(|| Film::new(w, h, rows.clone(), false));
-            for y in rows.clone() {
-                let mut t = f.tile(0, y, w, 1);
-                for x in 0..w {
-                    for s in samples.clone() {
-                        t.add(x as usize, sample(x, y, s));
+        for (scale, up) in [(accum::Scale::UNIT, 1.0f32), (accum::Scale::new(40).unwrap(), 2.0f32.powi(70))] {
+            let (w, h) = (5u32, 4u32);
+            let sample = |x: u32, y: u32, s: u32| {
+                let v = crate::sampling::ScalarStream::for_path(7, (y * w + x) as u64, s as u64);
+                let mut v = v;
+                use crate::sampling::Stream;
+                let f = |u: f32| (u * u * 3.0 + 1e-7 / (u + 1e-3)) * up;
+                [f(v.next()), f(v.next()), f(v.next())]
+            };
+            let spp = 37;
+            let empty = |rows: Range<u32>| Film::new(w, h, rows, false).scaled(scale);
+            let render = |rows: Range<u32>, samples: Range<u32>, from: Option<&Film>| {
+                let mut f = from.cloned().unwrap_or_else(|| empty(rows.clone()));
+                for y in rows.clone() {
+                    let mut t = f.tile(0, y, w, 1);
+                    for x in 0..w {
+                        for s in samples.clone() {
+                            t.add(x as usize, sample(x, y, s));
+                        }
                     }
+                    assert_eq!(t.rejected, 0);
+                    f.put_tile(&t);
                 }
-                f.put_tile(&t);
+                f
+            };
+            let whole = render(0..h, 0..spp, None);
+            // By samples, merged in reverse order.
+            let mut by_samples = empty(0..h);
+            for r in [30..37, 11..30, 0..11].iter() {
+                by_samples.absorb(&render(0..h, r.clone(), None)).unwrap();
             }
-            f
-        };
-        let whole = render(0..h, 0..spp, None);
-        // By samples, merged in reverse order.
-        let mut by_samples = Film::new(w, h, 0..h, false);
-        for r in [30..37, 11..30, 0..11].iter() {
-            by_samples.absorb(&render(0..h, r.clone(), None)).unwrap();
+            assert_eq!(by_samples, whole);
+            // By rows.
+            let mut by_rows = empty(0..h);
+            for r in [2..4, 0..1, 1..2] {
+                by_rows.absorb(&render(r, 0..spp, None)).unwrap();
+            }
+            assert_eq!(by_rows, whole);
+            // Resumed.
+            let first = render(0..h, 0..9, None);
+            assert_eq!(render(0..h, 9..spp, Some(&first)), whole);
+            assert_eq!(by_rows.image().hash(), whole.image().hash());
+            // The image is the samples' mean at either scale (u^2 * 3 has mean 1).
+            let img = whole.image();
+            assert!(img.data.iter().flatten().all(|&v| v > 0.0 && v < 3.1 * up), "{:?}", img.data[0]);
+            let mean = img.data.iter().flatten().map(|&v| v as f64).sum::<f64>() / (3 * w * h) as f64;
+            assert!(mean > 0.5 * up as f64 && mean < 1.5 * up as f64, "{mean:e}");
         }
-        assert_eq!(by_samples, whole);
-        // By rows.
-        let mut by_rows = Film::new(w, h, 0..h, false);
-        for r in [2..4, 0..1, 1..2] {
-            by_rows.absorb(&render(r, 0..spp, None)).unwrap();
-        }
-        assert_eq!(by_rows, whole);
-        // Resumed.
-        let first = render(0..h, 0..9, None);
-        assert_eq!(render(0..h, 9..spp, Some(&first)), whole);
-        assert_eq!(by_rows.image().hash(), whole.image().hash());
+    }
+
+    #[test]
+    #[should_panic(expected = "different fixed-point scales")]
+    fn films_of_different_scales_are_never_added() {
+        let mut a = Film::new(2, 2, 0..2, false);
+        a.absorb(&Film::new(2, 2, 0..2, false).scaled(accum::Scale::new(1).unwrap()));
     }
 
     #[test]

@@ -2,18 +2,18 @@
 //! render, in a file that `rtow merge` and `rtow render --resume` read back, and
 //! that refuses to be combined with anything it does not fit.
 //!
-//! # Format, version 2
+//! # Format, version 3
 //!
 //! All integers little-endian.
 //!
 //! | bytes | content |
 //! |---|---|
 //! | 8 | magic `RTOWFILM` |
-//! | 4 | format version (`u32`, 2) |
+//! | 4 | format version (`u32`, 3) |
 //! | 4 | header length `H` in bytes (`u32`, at most [`MAX_HEADER_BYTES`]) |
 //! | `H` | header: one JSON object ([`Header`]) |
 //! | `S` | the scene: its canonical JSON (the bytes its `scene_hash` hashes), `scene_bytes` long |
-//! | `D` | data: for every pixel of the film's rows, row-major: the accepted samples (`u32`), the three fixed-point channel sums ([`super::accum`]) as two's complement integers of `sum_bytes` bytes each, then, if `moments`, the three f64 sums of squares |
+//! | `D` | data: for every pixel of the film's rows, row-major: the accepted samples (`u32`), the three fixed-point channel sums ([`super::accum`], in the scale of the header's `film_exponent`) as two's complement integers of `sum_bytes` bytes each, then, if `moments`, the three f64 sums of squares |
 //! | 4 | CRC-32 (IEEE) of everything before it |
 //!
 //! The header names the image (`key`: a hash of the scene, the rtow version
@@ -21,8 +21,10 @@
 //! `settings` too, so a refusal can name the difference), the image size and
 //! samples per pixel, the split (`samples` or `rows`, shard K of N, or `none`
 //! for a whole render), the sample range and the rows it covers, the
-//! fixed-point layout, and the kernel-independent counters (rays, samples,
-//! rejected samples).
+//! fixed-point layout (fractional bits and the film's scale exponent: parts
+//! of different exponents are never merged), and the kernel-independent
+//! counters (rays, samples, rejected samples and how many of those were out
+//! of the film's range).
 //!
 //! A part is self-contained: with its scene and settings, `rtow merge` can
 //! render any of its pixels again and compare them with its data (the
@@ -30,7 +32,9 @@
 //!
 //! Readers refuse a file whose version is newer than theirs before looking
 //! further, so a later version may change anything after the first 16 bytes.
-//! Version 1 (no embedded scene) is refused: it cannot be verified.
+//! Version 1 (no embedded scene) is refused: it cannot be verified. Version 2
+//! (no scale exponent, rejected samples not counted by cause) is refused:
+//! its rejections cannot be reported by cause.
 //!
 //! Every header field is checked against the limits every render is held to
 //! before anything is allocated, and the file's length against the length
@@ -49,7 +53,7 @@ use std::path::{Path, PathBuf};
 /// The first 8 bytes of every partial film.
 pub const MAGIC: &[u8; 8] = b"RTOWFILM";
 /// The format version this rtow writes and reads.
-pub const VERSION: u32 = 2;
+pub const VERSION: u32 = 3;
 /// Largest partial film read (bytes): `MAX_PIXELS` pixels with the widest
 /// sums and the sums of squares, and a header.
 pub const MAX_FILM_BYTES: u64 =
@@ -258,6 +262,8 @@ pub struct PartCounters {
     pub samples: u64,
     /// Samples rejected (NaN, Inf or out of the fixed-point range).
     pub rejected_samples: u64,
+    /// Of those, the finite ones out of the film's range.
+    pub rejected_out_of_range: u64,
 }
 
 impl PartCounters {
@@ -265,6 +271,7 @@ impl PartCounters {
         self.rays += o.rays;
         self.samples += o.samples;
         self.rejected_samples += o.rejected_samples;
+        self.rejected_out_of_range += o.rejected_out_of_range;
     }
 }
 
@@ -288,8 +295,11 @@ pub struct Header {
     pub samples: [u32; 2],
     /// Rows covered: `[start, end)`.
     pub rows: [u32; 2],
-    /// Fractional bits of the fixed-point sums.
+    /// Fractional bits of the fixed-point sums at exponent 0.
     pub fraction_bits: i32,
+    /// The film's scale exponent ([`accum::Scale`]): the sums have
+    /// `fraction_bits - film_exponent` fractional bits.
+    pub film_exponent: u32,
     /// Bytes per stored channel sum.
     pub sum_bytes: u32,
     /// Whether the per-pixel sums of squares follow the sums.
@@ -344,6 +354,7 @@ impl Part {
             samples: [samples.start, samples.end],
             rows: [film.rows.start, film.rows.end],
             fraction_bits: accum::FRACTION_BITS,
+            film_exponent: film.scale.exponent(),
             sum_bytes: sum_bytes(&film),
             moments: film.has_moments(),
             scene_bytes: scene.len() as u64,
@@ -424,7 +435,7 @@ impl Part {
     /// The part an opened reader holds, read whole.
     fn read_from<R: Read>(r: PartReader<R>) -> Result<Part> {
         let h = r.header().clone();
-        let mut film = Film::new(h.width, h.height, h.rows[0]..h.rows[1], h.moments);
+        let mut film = Film::new(h.width, h.height, h.rows[0]..h.rows[1], h.moments).scaled(Part::scale(&h));
         let (header, scene) = r.read_pixels(|i, p| film.set_pixel(i, p))?;
         Ok(Part { header, film, scene })
     }
@@ -544,9 +555,14 @@ impl<R: Read> PartReader<R> {
             return Err(early("corrupted: format version 0 does not exist".into()));
         }
         if version < VERSION {
+            let why = if version == 1 {
+                "it carries no scene, so its data cannot be verified"
+            } else {
+                "it records no film scale and does not count its rejected samples by cause"
+            };
             return Err(early(format!(
-                "format version {version} is older than this rtow reads ({VERSION}): it carries no scene, so its \
-                 data cannot be verified; merge or resume it with the rtow that wrote it, or render it again"
+                "format version {version} is older than this rtow reads ({VERSION}): {why}; merge or resume it \
+                 with the rtow that wrote it, or render it again"
             )));
         }
         let hlen = u32::from_le_bytes(pre[12..16].try_into().expect("4 bytes"));
@@ -698,8 +714,8 @@ fn decode(h: &Header, raw: &[u8], max_count: u32) -> std::result::Result<Pixel, 
         b[..nb].copy_from_slice(&raw[at..at + nb]);
         at += nb;
         *s = i128::from_le_bytes(b);
-        // Each accepted sample is below 2^63 in fixed point.
-        if s.unsigned_abs() > (p.count as u128) << 63 {
+        // Each accepted sample is below 2^95 in fixed point.
+        if s.unsigned_abs() > (p.count as u128) << 95 {
             return Err("corrupted: a pixel's sum is out of range for its samples".into());
         }
     }
@@ -721,12 +737,30 @@ impl Part {
         h.width as u64 * (h.rows[1] as u64).saturating_sub(h.rows[0] as u64)
     }
 
+    /// The fixed-point scale of a checked header's sums.
+    pub fn scale(h: &Header) -> accum::Scale {
+        accum::Scale::new(h.film_exponent).expect("a checked header's exponent")
+    }
+
     fn check_header(h: &Header) -> std::result::Result<(), String> {
         if h.fraction_bits != accum::FRACTION_BITS {
             return Err(format!(
                 "sums with {} fractional bits; this rtow uses {}",
                 h.fraction_bits,
                 accum::FRACTION_BITS
+            ));
+        }
+        if h.film_exponent > accum::MAX_EXPONENT {
+            return Err(format!(
+                "film_exponent {} is more than the largest, {} (which holds every finite f32)",
+                h.film_exponent,
+                accum::MAX_EXPONENT
+            ));
+        }
+        if h.counters.rejected_out_of_range > h.counters.rejected_samples {
+            return Err(format!(
+                "{} samples rejected as out of range, more than the {} rejected",
+                h.counters.rejected_out_of_range, h.counters.rejected_samples
             ));
         }
         if h.scene_bytes > MAX_SCENE_BYTES {
@@ -814,6 +848,17 @@ pub fn same_image(p: &Path, h: &Header, p0: &Path, h0: &Header, consequence: &st
     }
     if (h.width, h.height) != (h0.width, h0.height) {
         return Err(refuse(format!("is {}x{}, {a} is {}x{}", h.width, h.height, h0.width, h0.height)));
+    }
+    if h.film_exponent != h0.film_exponent {
+        let range = |e: u32| accum::Scale::new(e).map_or(f64::INFINITY, |s| s.limit());
+        return Err(refuse(format!(
+            "its film has scale exponent {} (samples below {:.3e}), {a}'s has {} (below {:.3e}): their sums are \
+             in different fixed points",
+            h.film_exponent,
+            range(h.film_exponent),
+            h0.film_exponent,
+            range(h0.film_exponent)
+        )));
     }
     for name in h.settings.keys().chain(h0.settings.keys()) {
         let (v, v0) = (h.settings.get(name), h0.settings.get(name));
@@ -932,7 +977,8 @@ pub fn merge(parts: &[(PathBuf, Part)]) -> Result<Part> {
     let headers: Vec<(&Path, &Header)> = parts.iter().map(|(p, part)| (p.as_path(), &part.header)).collect();
     check_set(&headers).map_err(|(_, e)| e)?;
     let h0 = &parts[0].1.header;
-    let mut film = Film::new(h0.width, h0.height, 0..h0.height, parts.iter().all(|(_, p)| p.film.has_moments()));
+    let mut film = Film::new(h0.width, h0.height, 0..h0.height, parts.iter().all(|(_, p)| p.film.has_moments()))
+        .scaled(parts[0].1.film.scale);
     for (p, part) in parts {
         film.absorb(&part.film).ok_or_else(|| {
             Error::Input(format!("{}: overlaps the other parts (a pixel's count overflows)", p.display()))
@@ -971,6 +1017,9 @@ mod tests {
         if u[0] < 0.03 {
             return [f32::NAN, 0.0, 0.0];
         }
+        if u[0] > 0.98 {
+            return [0.0, 1e20, 0.0];
+        }
         [u[0] * 4.0 - 3.0, u[1] * u[1] * 1e-6, u[2] * 1e3]
     }
 
@@ -988,6 +1037,7 @@ mod tests {
                 }
             }
             counters.rejected_samples += t.rejected;
+            counters.rejected_out_of_range += t.rejected_out_of_range;
             film.put_tile(&t);
         }
         Part::new(&identity(0), SCENE.to_vec(), SPP, split, film, counters)
@@ -1018,7 +1068,8 @@ mod tests {
             let p = render(Split::WHOLE, moments);
             assert!(p.film.sum.iter().flatten().any(|&s| s < 0), "negative sums are exercised");
             assert_eq!(reread(&p, "a.rtfilm").unwrap(), p);
-            assert!(p.header.counters.rejected_samples > 0);
+            let c = p.header.counters;
+            assert!(c.rejected_samples > c.rejected_out_of_range && c.rejected_out_of_range > 0, "{c:?}");
         }
         let p = render(Split::WHOLE, false);
         // Sums of 11 samples below 1e3 need 32 + 4 + 10 + 1 bits: 6 bytes.
@@ -1026,7 +1077,7 @@ mod tests {
         let mut zero = p.clone();
         zero.film = Film::new(W, H, 0..H, false);
         // (Every sample rejected.)
-        zero.header.counters = PartCounters { rays: 0, samples: 330, rejected_samples: 330 };
+        zero.header.counters = PartCounters { rays: 0, samples: 330, rejected_samples: 330, rejected_out_of_range: 0 };
         assert_eq!(reread(&zero, "z.rtfilm").unwrap().header.sum_bytes, 1);
     }
 
@@ -1061,9 +1112,65 @@ mod tests {
                 }
             }
             c.rejected_samples += t.rejected;
+            c.rejected_out_of_range += t.rejected_out_of_range;
             film.put_tile(&t);
         }
         c
+    }
+
+    /// A film scaled for a bright scene (exponent 53: samples up to 8.3e34)
+    /// keeps its exponent through the file, merges exactly with parts of its
+    /// exponent, and reads back its samples' mean.
+    #[test]
+    fn scaled_parts_round_trip_and_merge() {
+        let scale = accum::Scale::new(53).unwrap();
+        // (The stand-in's out-of-range samples, 1e20, stay out of range: 1e35.)
+        let bright = |x: u32, y: u32, s: u32| sample(x, y, s).map(|v| if v == 1e20 { 1e35 } else { v * 1e30 });
+        let part = |split: Split| {
+            let (rows, samples) = (split.rows(H), split.samples(SPP));
+            let mut film = Film::new(W, H, rows.clone(), false).scaled(scale);
+            let mut counters = PartCounters::default();
+            for y in rows {
+                let mut t = film.tile(0, y, W, 1);
+                for x in 0..W {
+                    for s in samples.clone() {
+                        t.add(x as usize, bright(x, y, s));
+                        counters.samples += 1;
+                    }
+                }
+                counters.rejected_samples += t.rejected;
+                counters.rejected_out_of_range += t.rejected_out_of_range;
+                film.put_tile(&t);
+            }
+            Part::new(&identity(0), SCENE.to_vec(), SPP, split, film, counters)
+        };
+        let whole = part(Split::WHOLE);
+        assert_eq!(whole.header.film_exponent, 53);
+        // 1e35 is out of even this range; NaN is not finite.
+        let c = whole.header.counters;
+        assert!(c.rejected_samples > c.rejected_out_of_range && c.rejected_out_of_range > 0, "{c:?}");
+        let back = reread(&whole, "bright.rtfilm").unwrap();
+        assert_eq!(back, whole);
+        assert_eq!(back.film.scale, scale);
+        let parts: Vec<_> = (1..=3)
+            .map(|k| (PathBuf::from(format!("b{k}.rtfilm")), part(Split { kind: SplitKind::Rows, shard: k, of: 3 })))
+            .collect();
+        let merged = merge(&parts).unwrap();
+        assert_eq!(merged.film, whole.film);
+        assert_eq!(merged.header.film_exponent, 53);
+        // The mean of a pixel is its accepted samples' mean (to the step, 2^21).
+        let img = whole.film.image();
+        let i = (0..(W * H) as usize).find(|&i| whole.film.count[i] > 0).unwrap();
+        let (x, y) = (i as u32 % W, i as u32 / W);
+        let accepted: Vec<[f32; 3]> =
+            (0..SPP).map(|s| bright(x, y, s)).filter(|c| scale.to_fixed(*c).is_ok()).collect();
+        let want = (accepted.iter().map(|c| c[2] as f64).sum::<f64>() / accepted.len() as f64) as f32;
+        assert!((img.get(x, y)[2] / want - 1.0).abs() < 1e-6, "{:?} against {want}", img.get(x, y));
+        // Parts of exponent 0 do not merge with them.
+        let mut mixed = parts.clone();
+        mixed[1].1 = render(Split { kind: SplitKind::Rows, shard: 2, of: 3 }, false);
+        let m = refusal(merge(&mixed), "b2.rtfilm");
+        assert!(m.contains("scale exponent 0") && m.contains("b1.rtfilm's has 53"), "{m}");
     }
 
     #[test]
@@ -1110,6 +1217,9 @@ mod tests {
         assert!(m.contains("9.9.9"), "{m}");
         let m = refusal(merge(&with(&|h| h.key = "0".into())), "part-2.rtfilm");
         assert!(m.contains("image key"), "{m}");
+        // Another fixed-point scale: sums that cannot be added.
+        let m = refusal(merge(&with(&|h| h.film_exponent = 53)), "part-2.rtfilm");
+        assert!(m.contains("scale exponent 53") && m.contains("part-1.rtfilm's has 0"), "{m}");
         // Settings really change the key.
         assert_ne!(identity(0).key(), identity(1).key());
     }
@@ -1178,10 +1288,13 @@ mod tests {
         future[8..12].copy_from_slice(&(VERSION + 1).to_le_bytes());
         let m = refusal(read(&future[..20]), name);
         assert!(m.contains(&format!("format version {} is newer", VERSION + 1)), "{m}");
-        // An older version (no embedded scene) is refused as such.
+        // Older versions (no embedded scene; no scale, rejections not by cause) are refused as such.
         let mut old = bytes.clone();
         old[8..12].copy_from_slice(&1u32.to_le_bytes());
         assert!(refusal(read(&old), name).contains("format version 1 is older"));
+        old[8..12].copy_from_slice(&2u32.to_le_bytes());
+        let m = refusal(read(&old), name);
+        assert!(m.contains("format version 2 is older than this rtow reads (3)") && m.contains("film scale"), "{m}");
         let mut zero = bytes.clone();
         zero[8..12].copy_from_slice(&0u32.to_le_bytes());
         refusal(read(&zero), name);
@@ -1202,6 +1315,10 @@ mod tests {
         assert!(edit(&|q| q.header.split.shard = 4).contains("does not exist"));
         assert!(edit(&|q| q.header.split.kind = SplitKind::None).contains("does not exist"));
         assert!(edit(&|q| q.header.fraction_bits = 24).contains("fractional bits"));
+        let m = edit(&|q| q.header.film_exponent = accum::MAX_EXPONENT + 1);
+        assert!(m.contains("film_exponent 82 is more than the largest, 81"), "{m}");
+        let m = edit(&|q| q.header.counters.rejected_out_of_range = q.header.counters.rejected_samples + 1);
+        assert!(m.contains("rejected as out of range, more than"), "{m}");
         assert!(edit(&|q| q.header.counters.samples += 1).contains("samples counted"));
         // Header values are quoted on one line (found by the fuzzer).
         let m = edit(&|q| q.header.scene_hash = "x\ny".into());

@@ -7,6 +7,7 @@ use super::Images;
 use crate::camera::{PreparedCamera, View};
 use crate::choice::{AccelChoice, EstimatorChoice, Mode};
 use crate::estimator::Estimator;
+use crate::film::accum::Scale;
 use crate::geometry::{
     Boundary, Bvh, CuboidBvh, Cuboids, Emitters, LightQuad, LightSphere, Lights, Media, MovingBvh, MovingSpheres,
     QuadBvh, Quads, Spheres, Walk,
@@ -14,7 +15,7 @@ use crate::geometry::{
 use crate::material::{Kind, MaterialTables};
 use crate::plan::{Accel, KindSet, Plan, Prepared, SkyColours};
 use crate::sampling::layout::Bounces;
-use crate::scene::{Background, Camera, FlatBoundary, Material, Scene, Shape, Texture};
+use crate::scene::{Background, Camera, Flat, FlatBoundary, Material, Scene, Shape, Texture};
 use crate::settings::Settings;
 use crate::texture::{Checker, Noise, Perlin, TexKind, TexRef, TexSet, TextureTables, PERLIN_SEED};
 use glam::DVec3;
@@ -114,7 +115,46 @@ pub(super) fn plan(scene: &Scene, settings: &Settings, accel: AccelChoice) -> Pl
         moving: choose_quad_accel(accel, flat.spheres.iter().filter(|s| s.center1.is_some()).count(), scene.mode),
         sample_toward,
         nee,
+        film_exponent: Scale::for_brightness(brightest(scene, &flat) as f64).exponent(),
     }
+}
+
+/// The largest channel of any radiance a sample can carry at a throughput
+/// of at most 1, from which the film's scale is chosen ([`Scale::for_brightness`]):
+/// what rays that leave the scene see (the sky's two colours, of which the
+/// gradient is a blend, or the constant background), and, in path tracing,
+/// every emitter's radiance (`diffuse_light` spheres, moving spheres, quads
+/// and boxes, in groups too; lights have no textures); in the flat debug
+/// mode, every colour a hit can show (albedos, both checker colours,
+/// emitted radiance); 1 in the normals mode (`0.5 (n + 1)`). The gradient
+/// traces no samples. Every value is finite and at least 0 (validated).
+pub(crate) fn brightest(scene: &Scene, flat: &Flat) -> f32 {
+    let max3 = |c: [f32; 3]| c[0].max(c[1]).max(c[2]);
+    let background = match scene.background {
+        Background::Sky => max3(scene.sky.horizon).max(max3(scene.sky.zenith)),
+        Background::Constant(c) => max3(c),
+    };
+    let materials = || flat.spheres.iter().map(|s| &s.material).chain(flat.quads.iter().map(|q| &q.material));
+    let surfaces = match scene.mode {
+        Mode::Gradient => return 0.0,
+        Mode::Normals => 1.0,
+        Mode::Path => materials()
+            .map(|m| match *m {
+                Material::DiffuseLight { emit, .. } => max3(emit),
+                _ => 0.0,
+            })
+            .fold(0.0, f32::max),
+        Mode::Flat => materials()
+            .map(|m| match *m {
+                Material::DiffuseLight { emit: c, .. } | Material::Metal { albedo: c, .. } => max3(c),
+                Material::Lambertian { albedo: Texture::Solid(c) } => max3(c),
+                Material::Lambertian { albedo: Texture::Checker { even, odd, .. } } => max3(even).max(max3(odd)),
+                // Noise and image textures (8-bit texels) are at most 1, glass is white.
+                Material::Lambertian { .. } | Material::Dielectric { .. } => 1.0,
+            })
+            .fold(0.0, f32::max),
+    };
+    background.max(surfaces)
 }
 
 /// The scene's camera in f64.

@@ -17,6 +17,7 @@ mod bench_cli;
 mod cli;
 mod converge_cli;
 mod estimator;
+mod film_range;
 mod hostile;
 mod images;
 mod lambertian;

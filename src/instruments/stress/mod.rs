@@ -477,7 +477,7 @@ fn every_preset(cfg: &StressConfig, out: &mut Parts) -> Result<()> {
         _ => format!(" (not {}: their images need {})", skipped.join(", "), crate::job::IMAGES_ENV),
     };
     out.checks.push(Check::at_most(
-        format!("every preset ({presets}{skipped}), both kernels: NaN/Inf samples rejected"),
+        format!("every preset ({presets}{skipped}), both kernels: samples rejected (any cause)"),
         rejected as f64,
         0.0,
         "32x18, 2 spp",
