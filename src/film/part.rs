@@ -875,7 +875,8 @@ pub fn images_changed(now: Option<&String>, then: Option<&String>, now_is: &str,
         }
     }
     if changed.is_empty() {
-        let names = |v: &[(&str, &str)]| v.iter().map(|(_, n)| format!("'{}'", quoted(n))).collect::<Vec<_>>().join(", ");
+        let names =
+            |v: &[(&str, &str)]| v.iter().map(|(_, n)| format!("'{}'", quoted(n))).collect::<Vec<_>>().join(", ");
         changed.push(format!(
             "the image textures {now_is} ({}) are not the ones {then_is} ({})",
             names(&now),
@@ -1238,8 +1239,7 @@ mod tests {
         refusal(read(&zero), name);
     }
 
-    /// Files whose checksum is right but whose content is not: written by a
-    /// bug or by hand. They are refused, not trusted.
+    /// The image textures whose bytes changed are named; names may hold `, `.
     #[test]
     fn changed_images_are_named() {
         let then = "0123456789abcdef maps/earth, map.jpg, 00000000000000aa é.png".to_string();
@@ -1262,6 +1262,8 @@ mod tests {
         }
     }
 
+    /// Files whose checksum is right but whose content is not: written by a
+    /// bug or by hand. They are refused, not trusted.
     #[test]
     fn inconsistent_files_are_refused() {
         let p = render(Split { kind: SplitKind::Samples, shard: 2, of: 3 }, false);

@@ -33,8 +33,8 @@
 
 use crate::error::{Error, Result};
 use crate::film::part::fnv1a;
-use crate::output::{clip_to, printable};
 use crate::limits::{MAX_IMAGE_TEXTURES, MAX_TEXELS, MAX_TEXTURE_FILE_BYTES, MAX_TOTAL_TEXELS};
+use crate::output::{clip_to, printable};
 use crate::scene::Scene;
 use crate::texture::ImageTex;
 use std::fs::{File, Metadata};
@@ -149,7 +149,10 @@ impl Images {
             .iter()
             .map(|f| {
                 let bad = |what: String| {
-                    Error::invalid(f.field, format!("image texture '{}' {}{what}", shown_name(f.name), at(&f.path, f.name)))
+                    Error::invalid(
+                        f.field,
+                        format!("image texture '{}' {}{what}", shown_name(f.name), at(&f.path, f.name)),
+                    )
                 };
                 let mut file = &f.file;
                 std::io::Seek::rewind(&mut file).map_err(|e| bad(format!("cannot be read: {e}")))?;
@@ -308,9 +311,8 @@ fn not_a_file(meta: &Metadata) -> String {
 /// The file's bytes, refused beyond [`MAX_TEXTURE_FILE_BYTES`] (by its size
 /// before reading, and while reading a file that grows).
 fn read_bounded(file: &File, meta: &Metadata) -> std::result::Result<Vec<u8>, String> {
-    let too_large = || {
-        format!("is larger than {} MiB, the most an image texture file may take", MAX_TEXTURE_FILE_BYTES >> 20)
-    };
+    let too_large =
+        || format!("is larger than {} MiB, the most an image texture file may take", MAX_TEXTURE_FILE_BYTES >> 20);
     if meta.len() > MAX_TEXTURE_FILE_BYTES {
         return Err(too_large());
     }
@@ -369,7 +371,10 @@ fn decode(bytes: &[u8], format: image::ImageFormat, size: (u32, u32)) -> std::re
         }
     };
     if (width, height) != size {
-        return Err(corrupt(format, &format_args!("its header says {} x {}, its data {width} x {height}", size.0, size.1)));
+        return Err(corrupt(
+            format,
+            &format_args!("its header says {} x {}, its data {width} x {height}", size.0, size.1),
+        ));
     }
     ImageTex::from_rgb8(width, height, &rgb).ok_or_else(|| "is an empty image".to_string())
 }
@@ -467,10 +472,8 @@ fn decode_jpeg(bytes: &[u8]) -> std::result::Result<(u32, u32, Vec<u8>), String>
 /// decodes from them differs from what it decodes from zeros; a fixed
 /// pattern such as 0xFE repeated was seen to decode to the same texels as zeros.
 const FILLER: [u8; 32] = [
-    0xAF, 0x9C, 0x18, 0xF0, 0x9F, 0xAB, 0xD8, 0xC0,
-    0xD6, 0xA3, 0x84, 0x0A, 0xA2, 0xFC, 0x5F, 0x71,
-    0x88, 0xCB, 0x1C, 0xFC, 0xAF, 0x75, 0x9A, 0xCC,
-    0x49, 0xED, 0x61, 0xFA, 0xBD, 0x6D, 0x72, 0x25,
+    0xAF, 0x9C, 0x18, 0xF0, 0x9F, 0xAB, 0xD8, 0xC0, 0xD6, 0xA3, 0x84, 0x0A, 0xA2, 0xFC, 0x5F, 0x71, 0x88, 0xCB, 0x1C,
+    0xFC, 0xAF, 0x75, 0x9A, 0xCC, 0x49, 0xED, 0x61, 0xFA, 0xBD, 0x6D, 0x72, 0x25,
 ];
 
 /// Most runs of entropy-coded data (scans and restart intervals) a JPEG may
@@ -550,7 +553,8 @@ mod tests {
     /// A `w` x `h` image of varied texels, encoded as `format` (`image`'s
     /// encoders: a baseline JPEG, 4:2:0, no restarts).
     fn encoded(w: u32, h: u32, format: image::ImageFormat) -> Vec<u8> {
-        let img = image::RgbImage::from_fn(w, h, |x, y| image::Rgb([(x * 13) as u8, (y * 29) as u8, ((x * y) ^ 0x5a) as u8]));
+        let img =
+            image::RgbImage::from_fn(w, h, |x, y| image::Rgb([(x * 13) as u8, (y * 29) as u8, ((x * y) ^ 0x5a) as u8]));
         let mut out = std::io::Cursor::new(Vec::new());
         img.write_to(&mut out, format).unwrap();
         out.into_inner()
@@ -625,11 +629,8 @@ mod tests {
 
     #[test]
     fn cut_jpegs_and_pngs_are_refused_wherever_they_are_cut() {
-        let files = [
-            encoded(40, 24, image::ImageFormat::Png),
-            encoded(40, 24, image::ImageFormat::Jpeg),
-            progressive(),
-        ];
+        let files =
+            [encoded(40, 24, image::ImageFormat::Png), encoded(40, 24, image::ImageFormat::Jpeg), progressive()];
         for bytes in &files {
             // Every length short of the whole file, the last bytes (a JPEG's
             // EOI, a PNG's IEND) included.
@@ -738,7 +739,10 @@ mod tests {
         let mut more = names.clone();
         more.push("b.png".into());
         let e = Images::load_within(&scene_of(&more), Some(&origin), None, 32).unwrap_err().to_string();
-        assert!(e.starts_with(&format!("spheres[{}].material.albedo.file: image texture 'b.png' at ", names.len())), "{e}");
+        assert!(
+            e.starts_with(&format!("spheres[{}].material.albedo.file: image texture 'b.png' at ", names.len())),
+            "{e}"
+        );
         assert!(e.contains("has 8 x 4 texels: with the 32 of the 1 image files before it, more than the 32"), "{e}");
         assert!(Images::load_within(&scene_of(&more), Some(&origin), None, 64).is_ok());
     }

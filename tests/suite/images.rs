@@ -438,8 +438,10 @@ fn shards_with_images_merge_and_are_verified_against_the_images_bytes() {
     let r = rtow(d, &["merge", "part-1.rtfilm", "part-2.rtfilm", "-o", "again.png", "-q"]);
     let e = failure(&r, 2, "merge with another image");
     assert!(
-        e.contains("part-1.rtfilm: cannot render it again to verify it: the image texture 'grid.png' read now is not \
-                    the one it was rendered with (its bytes hash to "),
+        e.contains(
+            "part-1.rtfilm: cannot render it again to verify it: the image texture 'grid.png' read now is not \
+                    the one it was rendered with (its bytes hash to "
+        ),
         "{e}"
     );
     assert!(!e.contains(env!("CARGO_PKG_VERSION")), "{e}");
@@ -503,7 +505,9 @@ fn class5_cut_and_corrupt_images_are_refused_naming_file_and_field() {
         std::fs::write(d.join(name), &bytes).unwrap();
         scene_file(d, name);
         let e = failure(&rtow(d, &["render", "scene.json", "-o", "a.png", "-q"]), 2, name);
-        let head = format!("error: scene.json: quads[0].material.albedo.file: image texture '{name}' is a truncated or corrupt ");
+        let head = format!(
+            "error: scene.json: quads[0].material.albedo.file: image texture '{name}' is a truncated or corrupt "
+        );
         assert!(e.starts_with(&head) && e.contains(want), "{name}: {e}");
         assert!(!d.join("a.png").exists(), "{name}: no output");
     }
@@ -687,7 +691,12 @@ fn class5_control_characters_from_a_scene_file_are_escaped_in_messages() {
     let camera = r#""camera": {"look_from": [0, 0, 1], "look_at": [0, 0, 0]}"#;
     let files = [
         ("scene.json", None),
-        ("type.json", Some(format!(r#"{{{camera}, "spheres": [{{"center": [0, 0, 0], "radius": 1, "material": {{"type": "\u001b[2J"}}}}]}}"#))),
+        (
+            "type.json",
+            Some(format!(
+                r#"{{{camera}, "spheres": [{{"center": [0, 0, 0], "radius": 1, "material": {{"type": "\u001b[2J"}}}}]}}"#
+            )),
+        ),
         ("key.json", Some(format!(r#"{{{camera}, "\u001b]0;title\u0007": 1}}"#))),
         ("key.toml", Some("\"\\u001b[2J\" = 1\n".to_string())),
     ];
