@@ -76,6 +76,12 @@ pub const MAX_TEXTURE_FILE_BYTES: u64 = 64 << 20;
 /// book's earth is 1024 x 512). Each texel takes 12 bytes prepared (linear
 /// f32 RGB), 192 MiB at the limit; the decoder is held to the same bound.
 pub const MAX_TEXELS: u64 = 1 << 24;
+/// Most texels the image textures of one scene may have together: 2^25
+/// (two maps at [`MAX_TEXELS`], or [`MAX_IMAGE_TEXTURES`] maps the size of
+/// the book's earth), 384 MiB prepared. Each distinct file counts once,
+/// however many names lead to it; the sum is checked from each file's
+/// header, before it is decoded.
+pub const MAX_TOTAL_TEXELS: u64 = 1 << 25;
 
 /// The world-length range where the kernels' intersection error bounds hold,
 /// the range `rtow stress` measures (radius and distance 1e-4 .. 1e6; its

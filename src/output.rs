@@ -263,6 +263,33 @@ pub fn clip_to(text: &str, n: usize) -> String {
     }
 }
 
+/// `text` safe to print: every control character (C0, DEL, C1) written as
+/// Rust escapes it (`\n`, `\t`, `\u{1b}`) and every Unicode bidirectional
+/// control as `\u{202e}`, so a string from an input (an image's file name in
+/// a scene file, a key the parser quotes) can never move the cursor, recolour
+/// or reorder a terminal's line. Everything else, `\` included, is kept, so
+/// escaping twice changes nothing.
+pub fn printable(text: &str) -> std::borrow::Cow<'_, str> {
+    let unsafe_char = |c: char| {
+        c.is_control()
+            || matches!(c, '\u{61c}' | '\u{200e}' | '\u{200f}' | '\u{202a}'..='\u{202e}' | '\u{2066}'..='\u{2069}')
+    };
+    if !text.chars().any(unsafe_char) {
+        return std::borrow::Cow::Borrowed(text);
+    }
+    let mut out = String::with_capacity(text.len() + 8);
+    for c in text.chars() {
+        if c.is_control() {
+            out.extend(c.escape_debug());
+        } else if unsafe_char(c) {
+            out.extend(c.escape_unicode());
+        } else {
+            out.push(c);
+        }
+    }
+    std::borrow::Cow::Owned(out)
+}
+
 /// Checks that the extension of `path` is one of `allowed` (lower case,
 /// without the dot); otherwise a usage error (exit status 2) naming them.
 pub fn check_extension(path: &Path, allowed: &[&str], flag: &str) -> Result<()> {
@@ -485,6 +512,16 @@ pub fn write_atomic(path: &Path, bytes: &[u8]) -> Result<()> {
 #[cfg(test)]
 mod tests {
     use super::*;
+
+    #[test]
+    fn control_characters_are_escaped_once() {
+        assert_eq!(printable("earth map.jpg"), "earth map.jpg");
+        let hostile = "a\u{1b}[31mred\u{7}\nb\tc\u{9b}d\u{202e}gpj.exe\\x";
+        let shown = printable(hostile);
+        assert_eq!(shown, "a\\u{1b}[31mred\\u{7}\\nb\\tc\\u{9b}d\\u{202e}gpj.exe\\x");
+        assert!(!shown.chars().any(char::is_control));
+        assert_eq!(printable(&shown), shown, "escaping is idempotent");
+    }
 
     /// Checks `path` as the one output of a run.
     fn check_writable(path: &Path) -> Result<()> {

@@ -324,13 +324,23 @@ fn verification_job(p: &Path, h: &Header, scene: &[u8]) -> Result<Job> {
     };
     let job = Job::from_scene_json(scene, p, &overrides, &options)
         .map_err(|e| cannot(part::quoted_to(&e.to_string(), 300)))?;
-    if format!("{:016x}", job.identity().key()) != h.key {
-        return Err(cannot(format!(
-            "its image key {} is not the one this rtow ({}) gives its scene and settings (it was written by rtow {})",
-            part::quoted(&h.key),
-            env!("CARGO_PKG_VERSION"),
-            part::quoted(&h.rtow)
-        )));
+    let now = job.identity();
+    if format!("{:016x}", now.key()) != h.key {
+        let version = env!("CARGO_PKG_VERSION");
+        let images = (now.settings.get("images"), h.settings.get("images"));
+        return Err(cannot(if h.rtow != version {
+            format!(
+                "it was written by rtow {}, and this is rtow {version}, which may render it differently",
+                part::quoted(&h.rtow)
+            )
+        } else if images.0 != images.1 {
+            part::images_changed(images.0, images.1, "read now", "it was rendered with")
+        } else {
+            format!(
+                "its image key {} is not the one this rtow ({version}) gives its scene and settings",
+                part::quoted(&h.key)
+            )
+        }));
     }
     if job.mode() == Mode::Gradient {
         return Err(cannot("its scene traces no samples".into()));

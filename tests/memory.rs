@@ -80,3 +80,120 @@ fn merge_memory_does_not_grow_with_the_number_of_parts() {
     assert!(peak[&100] < peak[&2] + 8 * 1024, "merge memory grows with the parts: {peak:?} KiB");
     assert!(peak[&100] < 64 * 1024, "merge of 100 parts of 192x108 peaks at {} KiB", peak[&100]);
 }
+
+/// Writes a `w` x `h` 8-bit RGB PNG whose row `y` is `row(y)`, a row at a
+/// time: stored (uncompressed) deflate blocks, so this process never holds
+/// more than a row, and the children it measures do not inherit a large
+/// resident set (an image built in memory and encoded would add tens of MB
+/// to every measurement in this binary, the merge's included).
+fn write_png(path: &Path, w: u32, h: u32, row: impl Fn(u32) -> Vec<u8>) {
+    use std::io::Write;
+    let mut f = std::io::BufWriter::new(std::fs::File::create(path).unwrap());
+    f.write_all(b"\x89PNG\r\n\x1a\n").unwrap();
+    let mut chunk = |kind: &[u8], data: &[u8]| {
+        let mut crc = crc32fast::Hasher::new();
+        crc.update(kind);
+        crc.update(data);
+        f.write_all(&(data.len() as u32).to_be_bytes()).unwrap();
+        f.write_all(kind).unwrap();
+        f.write_all(data).unwrap();
+        f.write_all(&crc.finalize().to_be_bytes()).unwrap();
+    };
+    let mut ihdr = w.to_be_bytes().to_vec();
+    ihdr.extend_from_slice(&h.to_be_bytes());
+    ihdr.extend_from_slice(&[8, 2, 0, 0, 0]);
+    chunk(b"IHDR", &ihdr);
+    // One IDAT chunk per row: the zlib header first, a stored block of the
+    // row (filter byte 0 and its pixels), the Adler-32 of all rows last.
+    let (mut a, mut b) = (1u32, 0u32);
+    for y in 0..h {
+        let mut raw = vec![0u8];
+        raw.extend(row(y));
+        assert_eq!(raw.len(), 1 + 3 * w as usize);
+        for &x in &raw {
+            a = (a + x as u32) % 65521;
+            b = (b + a) % 65521;
+        }
+        let mut data = if y == 0 { vec![0x78, 0x01] } else { vec![] };
+        let len = raw.len() as u16;
+        data.push((y + 1 == h) as u8);
+        data.extend_from_slice(&len.to_le_bytes());
+        data.extend_from_slice(&(!len).to_le_bytes());
+        data.extend_from_slice(&raw);
+        if y + 1 == h {
+            data.extend_from_slice(&((b << 16) | a).to_be_bytes());
+        }
+        chunk(b"IDAT", &data);
+    }
+    chunk(b"IEND", &[]);
+    f.flush().unwrap();
+}
+
+/// Issue 37, class 5: one file under many names is decoded once. A 2048 x
+/// 2048 PNG (48 MiB as a texture) under 64 names (links, `./`, `..`, its
+/// absolute path) peaks as it does under one name (decoded once per name it
+/// peaked at 3.0 GiB, 3,166,672 KiB against 67,792 under one name; a 4096 x
+/// 4096 map so named aborted on allocation). Distinct files over the scene's
+/// budget of texels (limits::MAX_TOTAL_TEXELS) are refused from their
+/// headers, before anything is decoded.
+#[test]
+fn one_image_under_many_names_is_decoded_once() {
+    let dir = tempfile::tempdir().unwrap();
+    let d = dir.path();
+    std::fs::create_dir(d.join("maps")).unwrap();
+    write_png(&d.join("maps/map.png"), 2048, 2048, |y| {
+        (0..2048u32).flat_map(|x| [(x / 8) as u8, (y / 8) as u8, 128]).collect()
+    });
+    let mut names = vec![
+        "maps/map.png".to_string(),
+        "./maps/map.png".into(),
+        "maps/./map.png".into(),
+        "maps/../maps/map.png".into(),
+        d.join("maps/map.png").to_string_lossy().into_owned(),
+    ];
+    for k in 0..30 {
+        std::os::unix::fs::symlink("maps/map.png", d.join(format!("link{k}.png"))).unwrap();
+        std::fs::hard_link(d.join("maps/map.png"), d.join(format!("hard{k}.png"))).unwrap();
+        names.extend([format!("link{k}.png"), format!("hard{k}.png")]);
+    }
+    names.truncate(64);
+    // A scene file of 64 quads, quad k under `name(k)`, rendered at 8 x 8, 1 sample.
+    let scene = |file: &str, name: &dyn Fn(usize) -> String| {
+        let quads: Vec<String> = (0..64)
+            .map(|k| {
+                format!(
+                    r#"{{"q": [{}, 0, 0], "u": [0.015625, 0, 0], "v": [0, 1, 0], "material": {{"type": "lambertian", "albedo": {{"type": "image", "file": {}}}}}}}"#,
+                    k as f32 / 64.0,
+                    serde_json::to_string(&name(k)).unwrap()
+                )
+            })
+            .collect();
+        let text = format!(
+            r#"{{"camera": {{"look_from": [0.5, 0.5, 2], "look_at": [0.5, 0.5, 0], "vfov_deg": 30}}, "quads": [{}],
+                "render": {{"width": 8, "height": 8, "samples_per_pixel": 1}}}}"#,
+            quads.join(", ")
+        );
+        std::fs::write(d.join(file), text).unwrap();
+    };
+    scene("one.json", &|_| "maps/map.png".to_string());
+    scene("many.json", &|k| names[k].clone());
+    let args = |file: &str, out: &str| ["render", file, "-o", out, "-q"].map(String::from).to_vec();
+    let (code, one) = rtow_peak_rss(d, &args("one.json", "one.png"));
+    assert_eq!(code, 0, "one name");
+    let (code, many) = rtow_peak_rss(d, &args("many.json", "many.png"));
+    assert_eq!(code, 0, "64 names");
+    assert_eq!(std::fs::read(d.join("one.png")).unwrap(), std::fs::read(d.join("many.png")).unwrap());
+    // Three distinct 4096 x 4096 files (2^24 texels each, 192 MiB as
+    // textures) against a budget of 2^25: refused before any is decoded.
+    for k in 0..3u8 {
+        write_png(&d.join(format!("big{k}.png")), 4096, 4096, |_| [k, 0, 0].repeat(4096));
+    }
+    scene("big.json", &|k| format!("big{}.png", k % 3));
+    let (code, big) = rtow_peak_rss(d, &args("big.json", "big.png"));
+    assert_eq!(code, 2, "over the budget of texels");
+    println!("peak RSS: one name {one} KiB, 64 names {many} KiB, three files over the budget {big} KiB");
+    // The texture (48 MiB) once, whatever the names; the refusal decodes nothing.
+    assert!(many < one + 8 * 1024, "64 names of one file peak at {many} KiB, one name at {one} KiB");
+    assert!(many < 160 * 1024, "64 names of one 2048 x 2048 file peak at {many} KiB");
+    assert!(big < 96 * 1024, "a refusal over the budget peaks at {big} KiB");
+}

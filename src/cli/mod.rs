@@ -158,7 +158,7 @@ fn clap_exit(e: clap::Error) -> ! {
         }
         line.push_str(part);
     }
-    tell!("error: {line}");
+    tell!("error: {}", rtow::output::printable(&line));
     std::process::exit(2)
 }
 
@@ -197,8 +197,10 @@ pub fn main() -> ExitCode {
         Ok(true) => ExitCode::SUCCESS,
         Ok(false) => ExitCode::from(1),
         Err(e) => {
-            // One line, bounded, whatever the input it quotes.
-            tell!("error: {}", rtow::output::clip_to(&message(&e).replace('\n', " "), 2000));
+            // One line, bounded, whatever the input it quotes, its control
+            // characters escaped (a file name in a scene file may hold any).
+            let line = message(&e).replace('\n', " ");
+            tell!("error: {}", rtow::output::clip_to(&rtow::output::printable(&line), 2000));
             ExitCode::from(e.exit_code() as u8)
         }
     }

@@ -96,7 +96,7 @@ pub fn run(a: RenderArgs) -> Result<()> {
     let options = a.estimator.options(a.run.options(a.kernel))?;
     let job = Job::from_source(&source, &a.image.overrides(), &options)?;
     for w in job.warnings() {
-        tell!("warning: {}", super::message(w));
+        tell!("warning: {}", rtow::output::printable(&super::message(w)));
     }
     let split = match &a.shard {
         Some(k) => Split::parse(k, a.split)?,

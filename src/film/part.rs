@@ -862,6 +862,9 @@ pub fn same_image(p: &Path, h: &Header, p0: &Path, h0: &Header, consequence: &st
     }
     for name in h.settings.keys().chain(h0.settings.keys()) {
         let (v, v0) = (h.settings.get(name), h0.settings.get(name));
+        if v != v0 && name == "images" {
+            return Err(refuse(images_changed(v0, v, &format!("of {a}"), "it was rendered with")));
+        }
         if v != v0 {
             let show = |v: Option<&String>| v.map_or_else(|| "(unset)".into(), |v| c(v));
             return Err(refuse(format!(
@@ -877,6 +880,55 @@ pub fn same_image(p: &Path, h: &Header, p0: &Path, h0: &Header, consequence: &st
         return Err(refuse(format!("its image key {} differs from {a}'s {}", c(&h.key), c(&h0.key))));
     }
     Ok(())
+}
+
+/// The entries of an identity's `images` setting (`"<hash> <name>, <hash>
+/// <name>"`, `job::Job::identity`), as (hash, name): split where `, ` is
+/// followed by a hash and a space, so a name may hold `, `.
+fn image_entries(v: &str) -> Vec<(&str, &str)> {
+    let starts_entry = |i: usize| {
+        v.as_bytes().get(i..i + 17).is_some_and(|b| b[..16].iter().all(u8::is_ascii_hexdigit) && b[16] == b' ')
+    };
+    let mut cuts = vec![0];
+    cuts.extend((1..v.len()).filter(|&i| v.as_bytes()[i..].starts_with(b", ") && starts_entry(i + 2)).map(|i| i + 2));
+    cuts.push(v.len() + 2);
+    cuts.windows(2)
+        .map(|w| {
+            let e = &v[w[0]..w[1] - 2];
+            match e.split_once(' ') {
+                Some((hash, name)) => (hash, name),
+                None => ("", e),
+            }
+        })
+        .collect()
+}
+
+/// Which image textures differ between two `images` settings, named with
+/// the hashes of their bytes, for a refusal: `now` is the setting of what
+/// `now_is` ("read now"), `then` of what `then_is` ("it was rendered with").
+pub fn images_changed(now: Option<&String>, then: Option<&String>, now_is: &str, then_is: &str) -> String {
+    let (now, then) = (now.map_or(vec![], |v| image_entries(v)), then.map_or(vec![], |v| image_entries(v)));
+    let mut changed = Vec::new();
+    for &(hash, name) in &now {
+        if let Some(&(h0, _)) = then.iter().find(|&&(h0, n)| n == name && h0 != hash) {
+            changed.push(format!(
+                "the image texture '{}' {now_is} is not the one {then_is} (its bytes hash to {}, not {})",
+                quoted(name),
+                quoted(hash),
+                quoted(h0)
+            ));
+        }
+    }
+    if changed.is_empty() {
+        let names =
+            |v: &[(&str, &str)]| v.iter().map(|(_, n)| format!("'{}'", quoted(n))).collect::<Vec<_>>().join(", ");
+        changed.push(format!(
+            "the image textures {now_is} ({}) are not the ones {then_is} ({})",
+            names(&now),
+            names(&then)
+        ));
+    }
+    changed.join("; ")
 }
 
 /// Checks that parts (their headers, with the paths they were read from)
@@ -1298,6 +1350,29 @@ mod tests {
         let mut zero = bytes.clone();
         zero[8..12].copy_from_slice(&0u32.to_le_bytes());
         refusal(read(&zero), name);
+    }
+
+    /// The image textures whose bytes changed are named; names may hold `, `.
+    #[test]
+    fn changed_images_are_named() {
+        let then = "0123456789abcdef maps/earth, map.jpg, 00000000000000aa é.png".to_string();
+        let now = "0123456789abcdef maps/earth, map.jpg, 00000000000000bb é.png".to_string();
+        assert_eq!(
+            image_entries(&then),
+            vec![("0123456789abcdef", "maps/earth, map.jpg"), ("00000000000000aa", "é.png")]
+        );
+        let m = images_changed(Some(&now), Some(&then), "read now", "it was rendered with");
+        assert_eq!(
+            m,
+            "the image texture 'é.png' read now is not the one it was rendered with (its bytes hash to \
+             00000000000000bb, not 00000000000000aa)"
+        );
+        // Nothing to match by name: both lists, by name.
+        let m = images_changed(Some(&now), None, "read now", "it was rendered with");
+        assert!(m.contains("('maps/earth, map.jpg', 'é.png') are not the ones it was rendered with ()"), "{m}");
+        for hostile in ["", ", ", "x, 0123456789abcdef", ", 0123456789abcdef é", "é, 0123456789abcdef "] {
+            image_entries(hostile);
+        }
     }
 
     /// Files whose checksum is right but whose content is not: written by a

@@ -20,7 +20,7 @@ mod images;
 mod prepare;
 
 pub(crate) use images::Images;
-pub use images::IMAGES_ENV;
+pub use images::{images_folder, IMAGES_ENV};
 
 use crate::camera::PreparedCamera;
 use crate::choice::{AccelChoice, EstimatorChoice, KernelChoice, Mode};

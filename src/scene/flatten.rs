@@ -267,21 +267,33 @@ impl Scene {
     /// The image files the scene's textures name, each once, in the order
     /// the scene first names them.
     pub fn image_files(&self) -> Vec<&str> {
-        let mut names: Vec<&str> = Vec::new();
-        let mut seen = std::collections::HashSet::new();
-        let materials = self.spheres.iter().map(|s| &s.material);
-        let materials = materials.chain(self.quads.iter().map(|q| &q.material));
-        let materials = materials.chain(self.boxes.iter().map(|b| &b.material));
-        let groups = self.groups.iter().flat_map(|g| {
-            let m = g.spheres.iter().map(|s| &s.material).chain(g.quads.iter().map(|q| &q.material));
-            m.chain(g.boxes.iter().map(|b| &b.material))
-        });
-        for m in materials.chain(groups) {
-            if let Material::Lambertian { albedo: super::Texture::Image { file } } = m {
-                if seen.insert(file.as_str()) {
-                    names.push(file);
+        self.image_file_fields().into_iter().map(|(name, _)| name).collect()
+    }
+
+    /// [`Scene::image_files`], each with the first field that names it
+    /// (`spheres[3].material.albedo.file`, `groups[0].boxes[1].material.albedo.file`).
+    pub fn image_file_fields(&self) -> Vec<(&str, String)> {
+        fn add<'a>(
+            names: &mut Vec<(&'a str, String)>,
+            seen: &mut std::collections::HashSet<&'a str>,
+            prefix: &str,
+            (spheres, quads, boxes): (&'a [Sphere], &'a [Quad], &'a [QuadBox]),
+        ) {
+            let materials = spheres.iter().enumerate().map(|(i, s)| ("spheres", i, &s.material));
+            let materials = materials.chain(quads.iter().enumerate().map(|(i, q)| ("quads", i, &q.material)));
+            let materials = materials.chain(boxes.iter().enumerate().map(|(i, b)| ("boxes", i, &b.material)));
+            for (list, i, m) in materials {
+                if let Material::Lambertian { albedo: super::Texture::Image { file } } = m {
+                    if seen.insert(file) {
+                        names.push((file, format!("{prefix}{list}[{i}].material.albedo.file")));
+                    }
                 }
             }
+        }
+        let (mut names, mut seen) = (Vec::new(), std::collections::HashSet::new());
+        add(&mut names, &mut seen, "", (&self.spheres, &self.quads, &self.boxes));
+        for (g, group) in self.groups.iter().enumerate() {
+            add(&mut names, &mut seen, &format!("groups[{g}]."), (&group.spheres, &group.quads, &group.boxes));
         }
         names
     }

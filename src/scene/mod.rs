@@ -373,22 +373,55 @@ pub struct Medium {
 
 /// A medium's boundary, written `{"sphere": {"center": [x, y, z], "radius":
 /// r}}` or `{"box": {"a": [x, y, z], "b": [x, y, z]}}` (the axis-aligned box of
-/// corners `a`, `b`, turned and moved with its group).
+/// corners `a`, `b`, turned and moved with its group): exactly one shape.
 #[derive(Serialize, Deserialize, Clone, Copy, Debug, PartialEq)]
-#[serde(rename_all = "lowercase", deny_unknown_fields)]
+#[serde(rename_all = "lowercase", try_from = "BoundaryFields")]
 pub enum MediumBoundary {
-    Sphere {
-        #[serde(deserialize_with = "de::vec3")]
-        center: [f32; 3],
-        #[serde(deserialize_with = "de::f32")]
-        radius: f32,
-    },
-    Box {
-        #[serde(deserialize_with = "de::vec3")]
-        a: [f32; 3],
-        #[serde(deserialize_with = "de::vec3")]
-        b: [f32; 3],
-    },
+    Sphere { center: [f32; 3], radius: f32 },
+    Box { a: [f32; 3], b: [f32; 3] },
+}
+
+/// A medium's boundary as a file writes it: either shape, checked to be
+/// exactly one afterwards (serde's enum would say "invalid type: map" of
+/// a boundary that gives both, and "expected value" of one that gives none).
+#[derive(Deserialize)]
+#[serde(deny_unknown_fields)]
+pub(crate) struct BoundaryFields {
+    #[serde(default)]
+    sphere: Option<BoundarySphere>,
+    #[serde(default, rename = "box")]
+    cuboid: Option<BoundaryBox>,
+}
+
+#[derive(Deserialize)]
+#[serde(deny_unknown_fields)]
+struct BoundarySphere {
+    #[serde(deserialize_with = "de::vec3")]
+    center: [f32; 3],
+    #[serde(deserialize_with = "de::f32")]
+    radius: f32,
+}
+
+#[derive(Deserialize)]
+#[serde(deny_unknown_fields)]
+struct BoundaryBox {
+    #[serde(deserialize_with = "de::vec3")]
+    a: [f32; 3],
+    #[serde(deserialize_with = "de::vec3")]
+    b: [f32; 3],
+}
+
+impl TryFrom<BoundaryFields> for MediumBoundary {
+    type Error = &'static str;
+    fn try_from(f: BoundaryFields) -> std::result::Result<Self, Self::Error> {
+        match (f.sphere, f.cuboid) {
+            (Some(s), None) => Ok(MediumBoundary::Sphere { center: s.center, radius: s.radius }),
+            (None, Some(b)) => Ok(MediumBoundary::Box { a: b.a, b: b.b }),
+            (Some(_), Some(_)) => Err("gives two shapes, a sphere and a box; a medium's boundary is one of them"),
+            (None, None) => Err("gives no shape; a medium's boundary is {\"sphere\": {\"center\": [x, y, z], \
+                                 \"radius\": r}} or {\"box\": {\"a\": [x, y, z], \"b\": [x, y, z]}}"),
+        }
+    }
 }
 
 /// Primitives under one transform, the book's instance order: first

@@ -319,6 +319,21 @@ pub fn cases() -> Vec<Case> {
             "media[0].boundary",
             Some(r#""cone""#),
         ),
+        // A boundary is one shape: two, or none, is said so.
+        case(
+            "medium_two_shapes.json",
+            json_media(
+                r#""boundary": {"sphere": {"center": [0, 0, -1], "radius": 0.5}, "box": {"a": [0, 0, 0], "b": [1, 1, 1]}}, "density": 1, "albedo": [1, 1, 1]"#,
+            ),
+            "media[0].boundary: gives two shapes, a sphere and a box; a medium's boundary is one of them",
+            None,
+        ),
+        case(
+            "medium_no_shape.toml",
+            format!("{CAMERA_TOML}\n[[media]]\ndensity = 0.5\nalbedo = [1, 1, 1]\nboundary = {{}}\n"),
+            "media[0].boundary: gives no shape; a medium's boundary is {\"sphere\"",
+            None,
+        ),
         case(
             "medium_flat_box.toml",
             format!(

@@ -341,19 +341,31 @@ fn images_are_found_in_rtow_images_and_missing_ones_are_named() {
     r.ok();
 }
 
+/// The CRC of a PNG chunk's type and data.
+fn crc32(bytes: &[u8]) -> u32 {
+    let mut c = !0u32;
+    for &b in bytes {
+        c ^= b as u32;
+        for _ in 0..8 {
+            c = if c & 1 != 0 { 0xEDB8_8320 ^ (c >> 1) } else { c >> 1 };
+        }
+    }
+    !c
+}
+
+/// [`png_header`] and the start of an empty IDAT chunk: a decoder reads
+/// the image's size, and fails only when it decodes the data.
+fn png_start(w: u32, h: u32) -> Vec<u8> {
+    let mut v = png_header(w, h);
+    v.extend_from_slice(&0u32.to_be_bytes());
+    v.extend_from_slice(b"IDAT");
+    v.extend_from_slice(&crc32(b"IDAT").to_be_bytes());
+    v
+}
+
 /// A PNG header (signature and IHDR with its CRC) claiming `w` x `h` 8-bit
 /// RGB pixels, and nothing after it.
 fn png_header(w: u32, h: u32) -> Vec<u8> {
-    fn crc32(bytes: &[u8]) -> u32 {
-        let mut c = !0u32;
-        for &b in bytes {
-            c ^= b as u32;
-            for _ in 0..8 {
-                c = if c & 1 != 0 { 0xEDB8_8320 ^ (c >> 1) } else { c >> 1 };
-            }
-        }
-        !c
-    }
     let mut ihdr = b"IHDR".to_vec();
     ihdr.extend_from_slice(&w.to_be_bytes());
     ihdr.extend_from_slice(&h.to_be_bytes());
@@ -419,10 +431,284 @@ fn shards_with_images_merge_and_are_verified_against_the_images_bytes() {
     // The whole render in one go is the merged image.
     rtow(d, &["render", "scene.json", "--spp", "4", "-o", "whole.png", "-q"]).ok();
     assert_eq!(std::fs::read(d.join("merged.png")).unwrap(), std::fs::read(d.join("whole.png")).unwrap());
-    // Other bytes under the same name: the parts cannot be verified with them.
+    rtow(d, &["render", "scene.json", "--spp", "4", "-o", "whole.rtfilm", "-q"]).ok();
+    // Other bytes under the same name: the parts cannot be verified with them,
+    // nor the film continued; the refusal names the image, not rtow's version.
     write_image(&d.join("grid.png"), 8, 4, |i, j| grid_pixel(j % 4, i % 4));
     let r = rtow(d, &["merge", "part-1.rtfilm", "part-2.rtfilm", "-o", "again.png", "-q"]);
     let e = failure(&r, 2, "merge with another image");
-    assert!(e.contains("cannot render it again") && e.contains("image key"), "{e}");
+    assert!(
+        e.contains(
+            "part-1.rtfilm: cannot render it again to verify it: the image texture 'grid.png' read now is not \
+                    the one it was rendered with (its bytes hash to "
+        ),
+        "{e}"
+    );
+    assert!(!e.contains(env!("CARGO_PKG_VERSION")), "{e}");
     assert!(!d.join("again.png").exists());
+    let r = rtow(d, &["render", "scene.json", "--spp", "8", "--resume", "whole.rtfilm", "-o", "more.png", "-q"]);
+    let e = failure(&r, 2, "resume with another image");
+    assert!(
+        e.contains("whole.rtfilm: the image texture 'grid.png' of this render is not the one it was rendered with"),
+        "{e}"
+    );
+    assert!(e.ends_with("this render cannot continue it") && !e.contains(env!("CARGO_PKG_VERSION")), "{e}");
+}
+
+/// A map of 40 x 24 texels, as a JPEG and as a PNG in `dir` (`map.jpg`, `map.png`): their bytes.
+fn maps(dir: &Path) -> (Vec<u8>, Vec<u8>) {
+    let map = |x: u32, y: u32| [(x * 7) as u8, (y * 11) as u8, ((x * y) % 251) as u8];
+    write_image(&dir.join("map.jpg"), 40, 24, map);
+    write_image(&dir.join("map.png"), 40, 24, map);
+    (std::fs::read(dir.join("map.jpg")).unwrap(), std::fs::read(dir.join("map.png")).unwrap())
+}
+
+/// Issue 37, class 5: a JPEG cut short, or whose header claims more rows than
+/// its scan holds, rendered with exit 0 (the decoder, run leniently by
+/// `image`, fills in grey); every file here is refused naming the file, the
+/// field and what is wrong. What is refused, precisely: a JPEG without its
+/// EOI marker, one the decoder finds inconsistent in strict mode, one whose
+/// scans end before their last block; a PNG with a CRC error in any chunk,
+/// or cut before the end of its IEND chunk. A JPEG has no checksum: a
+/// flipped bit that leaves a valid stream is not detected (src/job/images.rs
+/// flips every bit of small files).
+#[test]
+fn class5_cut_and_corrupt_images_are_refused_naming_file_and_field() {
+    let dir = tempfile::tempdir().unwrap();
+    let d = dir.path();
+    let (jpg, png) = maps(d);
+    let cut_jpg = jpg[..jpg.len() * 2 / 3].to_vec();
+    let mut closed = cut_jpg.clone();
+    closed.extend_from_slice(&[0xFF, 0xD9]);
+    // The height in the SOF0 segment (FF C0, length, precision, height), one
+    // bit flipped: 24 + 256 rows, of which the scan holds 24.
+    let sof = jpg.windows(2).position(|w| w == [0xFF, 0xC0]).unwrap();
+    let mut taller = jpg.clone();
+    taller[sof + 5] ^= 1;
+    let mut flipped = png.clone();
+    flipped[png.len() / 2] ^= 0x10;
+    let cut_iend = png[..png.len() - 4].to_vec();
+    // What `image` decodes (what rendered with exit 0): the JPEGs cut, closed
+    // and taller, and the PNG cut in its IEND chunk.
+    for bytes in [&cut_jpg, &closed, &taller, &cut_iend] {
+        assert!(image::load_from_memory(bytes).is_ok());
+    }
+    let cases = [
+        ("cut.jpg", cut_jpg, "JPEG file (no end-of-image marker: the file is cut short)"),
+        ("closed.jpg", closed, "JPEG file (a scan ends before its last block"),
+        ("taller.jpg", taller, "JPEG file"),
+        ("cut.png", png[..png.len() - 30].to_vec(), "PNG file"),
+        ("cut-iend.png", cut_iend, "PNG file (no IEND chunk: the file is cut short)"),
+        ("flipped.png", flipped, "PNG file (CRC error in the IDAT chunk at byte "),
+    ];
+    for (name, bytes, want) in cases {
+        std::fs::write(d.join(name), &bytes).unwrap();
+        scene_file(d, name);
+        let e = failure(&rtow(d, &["render", "scene.json", "-o", "a.png", "-q"]), 2, name);
+        let head = format!(
+            "error: scene.json: quads[0].material.albedo.file: image texture '{name}' is a truncated or corrupt "
+        );
+        assert!(e.starts_with(&head) && e.contains(want), "{name}: {e}");
+        assert!(!d.join("a.png").exists(), "{name}: no output");
+    }
+    // The whole files render, found in RTOW_IMAGES too (the error then names the path read).
+    for name in ["map.jpg", "map.png"] {
+        scene_file(d, name);
+        rtow(d, &["render", "scene.json", "-o", "a.png", "-q"]).ok();
+    }
+    std::fs::create_dir(d.join("maps")).unwrap();
+    std::fs::write(d.join("maps/cut.jpg"), &jpg[..jpg.len() / 2]).unwrap();
+    std::fs::create_dir(d.join("scenes")).unwrap();
+    scene_file(&d.join("scenes"), "cut.jpg");
+    let r = rtow_env(d, &["render", "scenes/scene.json", "-o", "a.png", "-q"], &[("RTOW_IMAGES", "maps")]);
+    let e = failure(&r, 2, "cut.jpg in RTOW_IMAGES");
+    assert!(e.contains("image texture 'cut.jpg' at maps/cut.jpg is a truncated or corrupt JPEG"), "{e}");
+}
+
+/// Runs `rtow args...` in `dir` with `env`, killed after `secs` seconds (a
+/// run that waits forever, say on a FIFO, fails the test instead of hanging it).
+fn rtow_within(dir: &Path, args: &[&str], env: &[(&str, &str)], secs: u64) -> Run {
+    let mut child = std::process::Command::new(BIN)
+        .args(args)
+        .envs(env.iter().copied())
+        .current_dir(dir)
+        .stdout(std::process::Stdio::piped())
+        .stderr(std::process::Stdio::piped())
+        .spawn()
+        .expect("rtow runs");
+    let start = std::time::Instant::now();
+    while child.try_wait().unwrap().is_none() {
+        if start.elapsed().as_secs() > secs {
+            child.kill().unwrap();
+            child.wait().unwrap();
+            panic!("rtow {args:?} still running after {secs} s");
+        }
+        std::thread::sleep(std::time::Duration::from_millis(20));
+    }
+    child.wait_with_output().unwrap().into()
+}
+
+/// Issue 37, classes 5 and 6: a path that exists but is not a regular file
+/// is called what it is (a folder, a FIFO, a link to nothing), never "not
+/// found", and a FIFO is not opened (that would wait for a writer).
+#[test]
+fn class5_a_folder_a_fifo_and_a_dangling_link_are_named_as_such() {
+    let dir = tempfile::tempdir().unwrap();
+    let d = dir.path();
+    std::fs::create_dir(d.join("maps.png")).unwrap();
+    let fifo = std::ffi::CString::new(d.join("pipe.png").to_str().unwrap()).unwrap();
+    // SAFETY: a valid NUL-terminated path and a mode.
+    assert_eq!(unsafe { libc::mkfifo(fifo.as_ptr(), 0o644) }, 0, "mkfifo");
+    std::os::unix::fs::symlink("gone.png", d.join("link.png")).unwrap();
+    let cases = [
+        ("maps.png", "is a folder, not an image file"),
+        ("pipe.png", "is a FIFO (named pipe), not an image file"),
+        ("link.png", "is a symbolic link to a file that does not exist"),
+    ];
+    for (name, want) in cases {
+        scene_file(d, name);
+        let r = rtow_within(d, &["render", "scene.json", "-o", "a.png", "-q"], &[], 60);
+        let e = failure(&r, 2, name);
+        assert!(e.contains(&format!("quads[0].material.albedo.file: image texture '{name}' {want}")), "{e}");
+        // Found in RTOW_IMAGES, the path read is named.
+        std::fs::create_dir_all(d.join("scenes")).unwrap();
+        scene_file(&d.join("scenes"), name);
+        let r = rtow_within(d, &["render", "scenes/scene.json", "-o", "a.png", "-q"], &[("RTOW_IMAGES", ".")], 60);
+        let e = failure(&r, 2, name);
+        assert!(e.contains(&format!("image texture '{name}' at ./{name} {want}")), "{e}");
+    }
+    // An absolute name.
+    let abs = d.join("maps.png").to_string_lossy().into_owned();
+    scene_file(d, &abs);
+    let e = failure(&rtow(d, &["render", "scene.json", "-o", "a.png", "-q"]), 2, "absolute folder");
+    assert!(e.contains(&format!("image texture '{abs}' is a folder")), "{e}");
+}
+
+/// Issue 37, class 5: images are found beside the scene file and in
+/// `RTOW_IMAGES`, nowhere else: an empty `RTOW_IMAGES` is unset (it named
+/// the working directory, where a preset then found its map), and a file
+/// that is only in the working directory is not found.
+#[test]
+fn class5_an_empty_rtow_images_is_unset_and_the_working_directory_is_not_searched() {
+    let dir = tempfile::tempdir().unwrap();
+    let d = dir.path();
+    write_image(&d.join("grid.png"), 8, 4, grid_pixel);
+    std::fs::copy(test_images().join("earthmap.jpg"), d.join("earthmap.jpg")).unwrap();
+    std::fs::create_dir(d.join("scenes")).unwrap();
+    scene_file(&d.join("scenes"), "grid.png");
+    for env in [&[][..], &[("RTOW_IMAGES", "")][..]] {
+        let r = rtow_env(d, &["render", "scenes/scene.json", "-o", "a.png", "-q"], env);
+        let e = failure(&r, 2, "grid.png only in the working directory");
+        assert!(e.contains("image texture 'grid.png' not found: looked in scenes; set RTOW_IMAGES"), "{e}");
+        let r = rtow_env(d, &["render", "nw-earth", "-o", "e.png", "-q"], env);
+        let e = failure(&r, 2, "nw-earth, earthmap.jpg in the working directory");
+        assert!(e.contains("image texture 'earthmap.jpg' not found: RTOW_IMAGES is not set"), "{e}");
+    }
+    // RTOW_IMAGES naming a file, or nothing: said so.
+    let r = rtow_env(d, &["render", "scenes/scene.json", "-o", "a.png", "-q"], &[("RTOW_IMAGES", "grid.png")]);
+    let e = failure(&r, 2, "RTOW_IMAGES a file");
+    assert!(e.contains("not found: looked in scenes, grid.png (RTOW_IMAGES, not a folder)"), "{e}");
+    // Beside the scene file it is found, from any working directory.
+    std::fs::copy(d.join("grid.png"), d.join("scenes/grid.png")).unwrap();
+    rtow_env(d, &["render", "scenes/scene.json", "-o", "a.png", "-q"], &[("RTOW_IMAGES", "")]).ok();
+}
+
+/// Issue 37, class 5: one small file under many names (links, `./`, `..`,
+/// its absolute path) is read and decoded once: the scene renders, as the
+/// same scene under one name does (it aborted on allocation when each name
+/// was decoded; tests/memory.rs measures its peak memory).
+#[test]
+fn class5_one_file_under_many_names_is_one_texture() {
+    let dir = tempfile::tempdir().unwrap();
+    let d = dir.path();
+    std::fs::create_dir(d.join("maps")).unwrap();
+    write_image(&d.join("maps/grid.png"), 8, 4, grid_pixel);
+    let mut names = vec![
+        "maps/grid.png".to_string(),
+        "./maps/grid.png".into(),
+        "maps/./grid.png".into(),
+        "maps/../maps/grid.png".into(),
+        d.join("maps/grid.png").to_string_lossy().into_owned(),
+    ];
+    for k in 0..30 {
+        std::os::unix::fs::symlink("maps/grid.png", d.join(format!("link{k}.png"))).unwrap();
+        std::fs::hard_link(d.join("maps/grid.png"), d.join(format!("hard{k}.png"))).unwrap();
+        names.push(format!("link{k}.png"));
+        names.push(format!("hard{k}.png"));
+    }
+    assert_eq!(names.len(), 65);
+    names.truncate(64);
+    // 64 strips across the view, strip k under name k.
+    let scene = |name: &dyn Fn(usize) -> String| {
+        let mut sc = square_scene("x");
+        sc.quads = (0..64)
+            .map(|k| Quad {
+                q: [k as f32 / 64.0, 0.0, 0.0],
+                u: [1.0 / 64.0, 0.0, 0.0],
+                v: [0.0, 1.0, 0.0],
+                material: Material::Lambertian { albedo: Texture::Image { file: name(k) } },
+            })
+            .collect();
+        sc.render.width = Some(32);
+        sc.render.height = Some(32);
+        sc.render.samples_per_pixel = Some(2);
+        sc
+    };
+    let many = scene(&|k| names[k].clone());
+    let one = scene(&|_| "maps/grid.png".to_string());
+    std::fs::write(d.join("many.json"), scene::scene_to_string(&many, scene::Format::Json)).unwrap();
+    std::fs::write(d.join("one.json"), scene::scene_to_string(&one, scene::Format::Json)).unwrap();
+    rtow(d, &["render", "many.json", "-o", "many.png", "-q"]).ok();
+    rtow(d, &["render", "one.json", "-o", "one.png", "-q"]).ok();
+    assert_eq!(std::fs::read(d.join("many.png")).unwrap(), std::fs::read(d.join("one.png")).unwrap());
+    // Distinct files count against the scene's budget of texels
+    // (limits::MAX_TOTAL_TEXELS, 2^25) from their headers, before any is decoded.
+    for k in 0..3 {
+        std::fs::write(d.join(format!("big{k}.png")), png_start(4096, 4096)).unwrap();
+    }
+    let big = scene(&|k| format!("big{}.png", k % 3));
+    std::fs::write(d.join("big.json"), scene::scene_to_string(&big, scene::Format::Json)).unwrap();
+    let e = failure(&rtow(d, &["render", "big.json", "-o", "big.png", "-q"]), 2, "over the budget");
+    assert!(
+        e.contains(
+            "big.json: quads[2].material.albedo.file: image texture 'big2.png' has 4096 x 4096 texels: with the \
+             33554432 of the 2 image files before it, more than the 33554432 the image textures of a scene may have \
+             together (limits::MAX_TOTAL_TEXELS)"
+        ),
+        "{e}"
+    );
+}
+
+/// Issue 37, class 5: control characters in a scene file's strings (an
+/// image's name, a key, a value the parser quotes) reach the terminal
+/// escaped, never raw.
+#[test]
+fn class5_control_characters_from_a_scene_file_are_escaped_in_messages() {
+    let dir = tempfile::tempdir().unwrap();
+    let d = dir.path();
+    let name = "\u{1b}[31mred\u{7}\u{202e}gnp.png";
+    scene_file(d, name);
+    let camera = r#""camera": {"look_from": [0, 0, 1], "look_at": [0, 0, 0]}"#;
+    let files = [
+        ("scene.json", None),
+        (
+            "type.json",
+            Some(format!(
+                r#"{{{camera}, "spheres": [{{"center": [0, 0, 0], "radius": 1, "material": {{"type": "\u001b[2J"}}}}]}}"#
+            )),
+        ),
+        ("key.json", Some(format!(r#"{{{camera}, "\u001b]0;title\u0007": 1}}"#))),
+        ("key.toml", Some("\"\\u001b[2J\" = 1\n".to_string())),
+    ];
+    for (file, text) in files {
+        if let Some(text) = text {
+            std::fs::write(d.join(file), text).unwrap();
+        }
+        let r = rtow(d, &["render", file, "-o", "a.png", "-q"]);
+        let e = failure(&r, 2, file);
+        assert!(!r.stderr.trim_end_matches('\n').chars().any(|c| c.is_control()), "{file}: {:?}", r.stderr);
+        assert!(e.contains("\\u{1b}"), "{file}: {e}");
+    }
+    let r = rtow(d, &["render", "scene.json", "-o", "a.png", "-q"]);
+    assert!(r.stderr.contains("image texture '\\u{1b}[31mred\\u{7}\\u{202e}gnp.png' not found"), "{}", r.stderr);
 }

@@ -462,7 +462,7 @@ fn every_preset(cfg: &StressConfig, out: &mut Parts) -> Result<()> {
     for p in scene::presets() {
         let scene = (p.build)();
         // A preset that names image files renders where RTOW_IMAGES holds them.
-        if !scene.image_files().is_empty() && std::env::var_os(crate::job::IMAGES_ENV).is_none() {
+        if !scene.image_files().is_empty() && crate::job::images_folder().is_none() {
             skipped.push(p.name);
             continue;
         }
