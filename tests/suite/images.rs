@@ -473,7 +473,7 @@ fn maps(dir: &Path) -> (Vec<u8>, Vec<u8>) {
 /// flipped bit that leaves a valid stream is not detected (src/job/images.rs
 /// flips every bit of small files).
 #[test]
-fn class5_cut_and_corrupt_images_are_refused_naming_file_and_field() {
+fn cut_and_corrupt_images_are_refused_naming_file_and_field() {
     let dir = tempfile::tempdir().unwrap();
     let d = dir.path();
     let (jpg, png) = maps(d);
@@ -552,7 +552,7 @@ fn rtow_within(dir: &Path, args: &[&str], env: &[(&str, &str)], secs: u64) -> Ru
 /// is called what it is (a folder, a FIFO, a link to nothing), never "not
 /// found", and a FIFO is not opened (that would wait for a writer).
 #[test]
-fn class5_a_folder_a_fifo_and_a_dangling_link_are_named_as_such() {
+fn a_folder_a_fifo_and_a_dangling_link_are_named_as_such() {
     let dir = tempfile::tempdir().unwrap();
     let d = dir.path();
     std::fs::create_dir(d.join("maps.png")).unwrap();
@@ -589,7 +589,7 @@ fn class5_a_folder_a_fifo_and_a_dangling_link_are_named_as_such() {
 /// the working directory, where a preset then found its map), and a file
 /// that is only in the working directory is not found.
 #[test]
-fn class5_an_empty_rtow_images_is_unset_and_the_working_directory_is_not_searched() {
+fn an_empty_rtow_images_is_unset_and_the_working_directory_is_not_searched() {
     let dir = tempfile::tempdir().unwrap();
     let d = dir.path();
     write_image(&d.join("grid.png"), 8, 4, grid_pixel);
@@ -618,7 +618,7 @@ fn class5_an_empty_rtow_images_is_unset_and_the_working_directory_is_not_searche
 /// same scene under one name does (it aborted on allocation when each name
 /// was decoded; tests/memory.rs measures its peak memory).
 #[test]
-fn class5_one_file_under_many_names_is_one_texture() {
+fn one_file_under_many_names_is_one_texture() {
     let dir = tempfile::tempdir().unwrap();
     let d = dir.path();
     std::fs::create_dir(d.join("maps")).unwrap();
@@ -683,7 +683,7 @@ fn class5_one_file_under_many_names_is_one_texture() {
 /// image's name, a key, a value the parser quotes) reach the terminal
 /// escaped, never raw.
 #[test]
-fn class5_control_characters_from_a_scene_file_are_escaped_in_messages() {
+fn control_characters_from_a_scene_file_are_escaped_in_messages() {
     let dir = tempfile::tempdir().unwrap();
     let d = dir.path();
     let name = "\u{1b}[31mred\u{7}\u{202e}gnp.png";
