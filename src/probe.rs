@@ -2,15 +2,20 @@
 //! parameter. Every method has an empty inlined default, so a render with the
 //! probe `()` compiles to the uninstrumented code (`rtow bench` shows it costs
 //! nothing). Tools that need to see inside a kernel (lane occupancy, work
-//! counters, `rtow stress`'s oracle) implement a probe; none copies a kernel.
+//! counters, `rtow stress`'s oracle, `rtow converge --split`) all run the one
+//! other probe, [`Observed`]: it counts work inline and hands path events, lane
+//! by lane, to a [`PathEvents`] object. Each probe type is one more copy of
+//! every kernel in the build (about as much compile time as the renderer's
+//! own), so the tools share one; none copies a kernel.
 //!
 //! The kernels call the path events with the lanes they hold: one lane for the
 //! scalar kernel (`R = f32`), 8 or 16 for the wavefront (`live` says which
 //! lanes are real paths). A path is named by its pixel (`y * width + x`) and
 //! sample index, which do not depend on kernel, tile or thread.
 
-use crate::real::Real;
+use crate::real::{Real, MAX_LANES};
 use crate::vec3::V3;
+use std::any::Any;
 
 /// Which (pixel, sample) each lane holds.
 #[derive(Clone, Copy, Debug)]
@@ -263,6 +268,13 @@ impl WorkByDepth {
         }
     }
 
+    /// The counters over every depth.
+    pub fn total(&self) -> WorkCounters {
+        let mut w = WorkCounters::default();
+        self.by_depth.iter().for_each(|d| w.merge(d));
+        w
+    }
+
     fn at(&mut self) -> &mut WorkCounters {
         if self.by_depth.len() <= self.depth {
             self.by_depth.resize(self.depth + 1, WorkCounters::default());
@@ -290,5 +302,158 @@ impl Probe for WorkByDepth {
     #[inline(always)]
     fn lanes(&mut self, stage: Stage, active: u32, issued: u32) {
         self.at().lanes(stage, active, issued);
+    }
+}
+
+/// One packet's path ids as plain values (lane `k` of each), for observers
+/// that are not generic over the lane type.
+#[derive(Clone, Copy, Debug)]
+pub struct Lanes {
+    /// Lanes in the packet (1 for the scalar kernel).
+    pub n: usize,
+    /// Which of them are real paths (bit `k`: lane `k`).
+    pub live: u32,
+    pub pixel: [u32; MAX_LANES],
+    pub sample: [u32; MAX_LANES],
+}
+
+impl Lanes {
+    fn of<R: Real>(id: PathId<R>, live: u32) -> Lanes {
+        Lanes {
+            n: R::LANES,
+            live,
+            pixel: std::array::from_fn(|k| if k < R::LANES { R::lane_u(id.pixel, k) } else { 0 }),
+            sample: std::array::from_fn(|k| if k < R::LANES { R::lane_u(id.sample, k) } else { 0 }),
+        }
+    }
+
+    /// The live lanes, in order.
+    pub fn live(&self) -> impl Iterator<Item = usize> + '_ {
+        (0..self.n).filter(|&k| self.live & (1 << k) != 0)
+    }
+}
+
+/// Lanes of `x`, then zeros.
+fn unpack<R: Real>(x: R) -> [f32; MAX_LANES] {
+    std::array::from_fn(|k| if k < R::LANES { x.lane(k) } else { 0.0 })
+}
+
+fn unpack_u<R: Real>(x: R::U32) -> [u32; MAX_LANES] {
+    std::array::from_fn(|k| if k < R::LANES { R::lane_u(x, k) } else { 0 })
+}
+
+fn unpack3<R: Real>(v: V3<R>) -> [V3<f32>; MAX_LANES] {
+    std::array::from_fn(|k| {
+        if k < R::LANES {
+            V3::new(v.x.lane(k), v.y.lane(k), v.z.lane(k))
+        } else {
+            V3::new(0.0, 0.0, 0.0)
+        }
+    })
+}
+
+/// A tool's view of the path events of [`Probe`], lane by lane and not
+/// generic over the lane type, so that every tool runs the same copy of the
+/// kernels ([`Observed`]). Arrays hold [`Lanes::n`] lanes.
+pub trait PathEvents: Send {
+    /// [`Probe::camera`]: may move the origins `o` (every lane, live or not).
+    fn camera(&mut self, _ids: &Lanes, _o: &mut [V3<f32>; MAX_LANES], _d: &[V3<f32>; MAX_LANES]) {}
+
+    /// [`Probe::traced`].
+    fn traced(
+        &mut self,
+        _ids: &Lanes,
+        _o: &[V3<f32>; MAX_LANES],
+        _d: &[V3<f32>; MAX_LANES],
+        _hit: &[u32; MAX_LANES],
+        _t: &[f32; MAX_LANES],
+    ) {
+    }
+
+    /// [`Probe::shaded`]; `front` bit `k`: lane `k` hit a front face.
+    fn shaded(&mut self, _ids: &Lanes, _radius: &[f32; MAX_LANES], _n: &[V3<f32>; MAX_LANES], _front: u32) {}
+
+    /// [`Probe::contributed`].
+    fn contributed(&mut self, _id: PathId<f32>, _length: u32, _strategy: Strategy, _c: V3<f32>) {}
+
+    /// What the tool keeps of this observer once its tile is rendered.
+    fn finish(self: Box<Self>) -> Box<dyn Any + Send>;
+}
+
+/// The tools' probe: exact work counters by ray depth, kept inline, and the
+/// path events of an optional [`PathEvents`] object.
+pub struct Observed<'a> {
+    pub work: WorkByDepth,
+    events: Option<Box<dyn PathEvents + 'a>>,
+}
+
+impl<'a> Observed<'a> {
+    /// Work counters only.
+    pub fn counting() -> Self {
+        Observed { work: WorkByDepth::default(), events: None }
+    }
+
+    /// Work counters and `events`.
+    pub fn with(events: impl PathEvents + 'a) -> Self {
+        Observed { work: WorkByDepth::default(), events: Some(Box::new(events)) }
+    }
+
+    /// What the events object kept ([`PathEvents::finish`]), as the type it
+    /// gave; `None` for a counting probe or another type.
+    pub fn finish<T: 'static>(self) -> Option<T> {
+        self.events?.finish().downcast().ok().map(|b| *b)
+    }
+}
+
+impl Probe for Observed<'_> {
+    const WORK: bool = true;
+    const PATHS: bool = true;
+
+    #[inline]
+    fn camera<R: Real>(&mut self, id: PathId<R>, o: V3<R>, d: V3<R>, live: u32) -> V3<R> {
+        match &mut self.events {
+            None => o,
+            Some(e) => {
+                let mut moved = unpack3(o);
+                e.camera(&Lanes::of(id, live), &mut moved, &unpack3(d));
+                V3::new(R::from_fn(|k| moved[k].x), R::from_fn(|k| moved[k].y), R::from_fn(|k| moved[k].z))
+            }
+        }
+    }
+
+    #[inline]
+    fn traced<R: Real>(&mut self, id: PathId<R>, o: V3<R>, d: V3<R>, hit: R::U32, t: R, live: u32) {
+        if let Some(e) = &mut self.events {
+            e.traced(&Lanes::of(id, live), &unpack3(o), &unpack3(d), &unpack_u::<R>(hit), &unpack(t));
+        }
+    }
+
+    #[inline]
+    fn shaded<R: Real>(&mut self, id: PathId<R>, _sphere: R::U32, radius: R, n: V3<R>, front: R::Mask, live: u32) {
+        if let Some(e) = &mut self.events {
+            e.shaded(&Lanes::of(id, live), &unpack(radius), &unpack3(n), R::mask_bits(front));
+        }
+    }
+
+    #[inline]
+    fn contributed(&mut self, id: PathId<f32>, length: u32, strategy: Strategy, c: V3<f32>) {
+        if let Some(e) = &mut self.events {
+            e.contributed(id, length, strategy, c);
+        }
+    }
+
+    #[inline(always)]
+    fn rays(&mut self, depth: u32, n: u32) {
+        self.work.rays(depth, n);
+    }
+
+    #[inline(always)]
+    fn work(&mut self, w: Work, n: u32) {
+        self.work.work(w, n);
+    }
+
+    #[inline(always)]
+    fn lanes(&mut self, stage: Stage, active: u32, issued: u32) {
+        self.work.lanes(stage, active, issued);
     }
 }

@@ -9,7 +9,7 @@ use crate::film::{Film, Image, TileFilm};
 use crate::job::Job;
 use crate::kernel::{gradient, isa, scalar, wavefront, Kernel};
 use crate::plan::{Plan, Prepared};
-use crate::probe::{Probe, WorkCounters};
+use crate::probe::{Observed, Probe, WorkCounters};
 use crate::real::Wide;
 use crate::sampling::{with_path_sampler, PathSampler, Sampler};
 use rayon::prelude::*;
@@ -179,9 +179,9 @@ pub fn render_pixels(job: &Job, pixels: &[(u32, u32)], samples: Range<u32>) -> V
 
 /// Renders with the exact work counters on (`Stats::work`).
 pub fn render_counted(job: &Job, progress: Option<&(dyn Fn(Progress) + Sync)>) -> Result<Rendered> {
-    let (mut r, probes) = render_probed(job, progress, &WorkCounters::default)?;
+    let (mut r, probes) = render_probed(job, progress, &Observed::counting)?;
     let mut w = WorkCounters::default();
-    probes.iter().for_each(|p| w.merge(p));
+    probes.iter().for_each(|p| w.merge(&p.work.total()));
     r.stats.work = Some(w);
     Ok(r)
 }

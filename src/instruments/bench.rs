@@ -605,9 +605,9 @@ pub fn work_by_depth_per_kernel(job: &Job, cfg: &BenchConfig) -> Result<Vec<(Ker
 /// The work at each ray depth of one render of `job` (how coherence is lost bounce by bounce).
 pub fn work_by_depth(job: &Job) -> Result<Vec<DepthRow>> {
     let lanes = job.kernel().lanes() as u64;
-    let (_, probes) = crate::render::render_probed(job, None, &crate::probe::WorkByDepth::default)?;
+    let (_, probes) = crate::render::render_probed(job, None, &crate::probe::Observed::counting)?;
     let mut all = crate::probe::WorkByDepth::default();
-    probes.iter().for_each(|p| all.merge(p));
+    probes.iter().for_each(|p| all.merge(&p.work));
     Ok(all
         .by_depth
         .iter()

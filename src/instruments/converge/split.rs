@@ -26,7 +26,7 @@ use super::Variant;
 use crate::choice::KernelChoice;
 use crate::error::{Error, Result};
 use crate::job::{Job, Overrides, RenderOptions};
-use crate::probe::{PathId, Probe, Strategy};
+use crate::probe::{Observed, PathEvents, PathId, Strategy};
 use crate::render::render_probed;
 use crate::sampling::mix64;
 use crate::vec3::V3;
@@ -62,11 +62,16 @@ pub fn length_label(l: usize) -> String {
 /// samples, per channel.
 #[derive(Default)]
 struct SplitProbe {
-    sums: HashMap<u32, Box<[[f64; 3]; BUCKETS]>>,
+    sums: Sums,
 }
 
-impl Probe for SplitProbe {
-    const PATHS: bool = true;
+/// Per pixel, each bucket's sum per channel.
+type Sums = HashMap<u32, Box<[[f64; 3]; BUCKETS]>>;
+
+impl PathEvents for SplitProbe {
+    fn finish(self: Box<Self>) -> Box<dyn std::any::Any + Send> {
+        Box::new(self.sums)
+    }
 
     fn contributed(&mut self, id: PathId<f32>, length: u32, strategy: Strategy, c: V3<f32>) {
         let b = self.sums.entry(id.pixel).or_insert_with(|| Box::new([[0.0; 3]; BUCKETS]));
@@ -147,7 +152,7 @@ pub(super) fn split(job: &Job, variant: Variant, seeds: u32, seconds: f64, want_
     let inv = 1.0 / s.spp as f64;
     for r in 0..seeds {
         let j = replicate(job, r)?;
-        let (rendered, probes) = render_probed(&j, None, &SplitProbe::default)?;
+        let (rendered, probes) = render_probed(&j, None, &|| Observed::with(SplitProbe::default()))?;
         if r == 0 && rendered.stats.image_hash != want_hash {
             return Err(Error::Input(format!(
                 "the split's scalar render of {} at {} spp is image {}, but converge measured {want_hash}: the kernels \
@@ -159,7 +164,8 @@ pub(super) fn split(job: &Job, variant: Variant, seeds: u32, seconds: f64, want_
         }
         let mut found = vec![[0f64; 3]; px];
         for p in probes {
-            for (pixel, b) in p.sums {
+            let sums: Sums = p.finish().unwrap_or_default();
+            for (pixel, b) in sums {
                 let base = pixel as usize * BUCKETS * 3;
                 for (k, v) in b.iter().enumerate() {
                     for ch in 0..3 {

@@ -15,12 +15,13 @@ use crate::film::Image;
 use crate::geometry::{Spheres, MISS};
 use crate::job::{Job, Overrides, RenderOptions, DEFAULT_TILE};
 use crate::plan::Prepared;
-use crate::probe::{PathId, Probe};
-use crate::real::Real;
+use crate::probe::{Lanes, Observed, PathEvents};
+use crate::real::MAX_LANES;
 use crate::render::{render, render_probed, Rendered};
 use crate::scene::{self, Material, Scene, Texture};
 use crate::vec3::V3;
 use glam::DVec3;
+use std::any::Any;
 use std::collections::HashMap;
 
 /// The sphere a ray just left: its index and the outward unit normal the kernel used.
@@ -159,31 +160,26 @@ impl<'a> StressProbe<'a> {
     }
 }
 
-fn lanes<R: Real>(live: u32) -> impl Iterator<Item = usize> {
-    (0..R::LANES).filter(move |k| live & (1 << k) != 0)
-}
-
-fn lane3<R: Real>(v: V3<R>, k: usize) -> V3<f32> {
-    V3::new(v.x.lane(k), v.y.lane(k), v.z.lane(k))
-}
-
-impl Probe for StressProbe<'_> {
-    const PATHS: bool = true;
-
-    fn camera<R: Real>(&mut self, _id: PathId<R>, o: V3<R>, d: V3<R>, _live: u32) -> V3<R> {
-        match self.shift {
-            None => o,
-            Some(f) => {
-                let moved: Vec<V3<f32>> = (0..R::LANES).map(|k| f(lane3(o, k), lane3(d, k))).collect();
-                V3::new(R::from_fn(|k| moved[k].x), R::from_fn(|k| moved[k].y), R::from_fn(|k| moved[k].z))
+impl PathEvents for StressProbe<'_> {
+    fn camera(&mut self, ids: &Lanes, o: &mut [V3<f32>; MAX_LANES], d: &[V3<f32>; MAX_LANES]) {
+        if let Some(f) = self.shift {
+            for k in 0..ids.n {
+                o[k] = f(o[k], d[k]);
             }
         }
     }
 
-    fn traced<R: Real>(&mut self, id: PathId<R>, o: V3<R>, d: V3<R>, hit: R::U32, t: R, live: u32) {
-        for k in lanes::<R>(live) {
-            let key = (R::lane_u(id.pixel, k), R::lane_u(id.sample, k));
-            let (o, d, hit, t) = (lane3(o, k), lane3(d, k), R::lane_u(hit, k), t.lane(k));
+    fn traced(
+        &mut self,
+        ids: &Lanes,
+        o: &[V3<f32>; MAX_LANES],
+        d: &[V3<f32>; MAX_LANES],
+        hit: &[u32; MAX_LANES],
+        t: &[f32; MAX_LANES],
+    ) {
+        for k in ids.live() {
+            let key = (ids.pixel[k], ids.sample[k]);
+            let (o, d, hit, t) = (o[k], d[k], hit[k], t[k]);
             let log = self.paths.entry(key).or_default();
             log.hash.v(o);
             log.hash.v(d);
@@ -197,10 +193,9 @@ impl Probe for StressProbe<'_> {
         }
     }
 
-    fn shaded<R: Real>(&mut self, id: PathId<R>, _sphere: R::U32, radius: R, n: V3<R>, front: R::Mask, live: u32) {
-        let front = R::mask_bits(front);
-        for k in lanes::<R>(live) {
-            let key = (R::lane_u(id.pixel, k), R::lane_u(id.sample, k));
+    fn shaded(&mut self, ids: &Lanes, radius: &[f32; MAX_LANES], n: &[V3<f32>; MAX_LANES], front: u32) {
+        for k in ids.live() {
+            let key = (ids.pixel[k], ids.sample[k]);
             let log = self.paths.entry(key).or_default();
             let Some((o, d, hit, t)) = log.pending.take() else {
                 self.tally.wrong += 1; // a shading without its ray: the probe's events are out of order
@@ -208,8 +203,13 @@ impl Probe for StressProbe<'_> {
             };
             let f = front & (1 << k) != 0;
             self.oracle.check(&mut self.tally, o, d, hit, t, f, log.prev);
-            log.prev = Some(Leaving::new(hit, lane3(n, k), radius.lane(k), f));
+            log.prev = Some(Leaving::new(hit, n[k], radius[k], f));
         }
+    }
+
+    fn finish(self: Box<Self>) -> Box<dyn Any + Send> {
+        let paths: Vec<((u32, u32), u64)> = self.paths.into_iter().map(|(k, v)| (k, v.hash.value())).collect();
+        Box::new((self.tally, paths))
     }
 }
 
@@ -225,12 +225,13 @@ pub(super) struct Traced {
 
 /// Renders `job` with the real renderer and the stress probe.
 pub(super) fn trace(job: &Job, oracle: &SceneOracle, shift: Option<&Shift>) -> Result<Traced> {
-    let (r, probes) = render_probed(job, None, &|| StressProbe::new(oracle, shift))?;
+    let (r, probes) = render_probed(job, None, &|| Observed::with(StressProbe::new(oracle, shift)))?;
     let mut tally = Tally::default();
     let mut paths: Vec<((u32, u32), u64)> = Vec::new();
     for p in probes {
-        add(&mut tally, &p.tally);
-        paths.extend(p.paths.into_iter().map(|(k, v)| (k, v.hash.value())));
+        let (t, p): (Tally, Vec<((u32, u32), u64)>) = p.finish().unwrap_or_default();
+        add(&mut tally, &t);
+        paths.extend(p);
     }
     paths.sort_unstable();
     let mut h = Fnv::new();
