@@ -208,10 +208,13 @@ impl PathEvents for StressProbe<'_> {
     }
 
     fn finish(self: Box<Self>) -> Box<dyn Any + Send> {
-        let paths: Vec<((u32, u32), u64)> = self.paths.into_iter().map(|(k, v)| (k, v.hash.value())).collect();
+        let paths: PathHashes = self.paths.into_iter().map(|(k, v)| (k, v.hash.value())).collect();
         Box::new((self.tally, paths))
     }
 }
+
+/// Each path's ray hash, by (pixel, sample).
+type PathHashes = Vec<((u32, u32), u64)>;
 
 /// What a probed render of a scene found.
 pub(super) struct Traced {
@@ -229,7 +232,7 @@ pub(super) fn trace(job: &Job, oracle: &SceneOracle, shift: Option<&Shift>) -> R
     let mut tally = Tally::default();
     let mut paths: Vec<((u32, u32), u64)> = Vec::new();
     for p in probes {
-        let (t, p): (Tally, Vec<((u32, u32), u64)>) = p.finish().unwrap_or_default();
+        let (t, p): (Tally, PathHashes) = p.finish().unwrap_or_default();
         add(&mut tally, &t);
         paths.extend(p);
     }
