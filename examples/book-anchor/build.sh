@@ -92,7 +92,7 @@ cp "$here/final-layout.cc" "$src/"
 # and the final scene"): `-metal` the metal as fixed upstream after this commit (unit reflected
 # direction plus fuzz times a unit vector: RayTracing/raytracing.github.io#1496 and #1499; rtow's
 # metal), `-metal-white`
-# also keeps pure-white texels white (rtow's fix of the byte overflow, BOOKS23.md section 4),
+# also keeps pure-white texels white (rtow's fix of the byte overflow: a channel of 255 became 256.0, out of a byte's range),
 # `-grey-mt19937` also makes final_scene()'s marble sphere a grey lambertian 0.5 and draws the
 # render's numbers from std::mt19937. One line changed per difference, each checked.
 variant() { # NAME CXX-EXTRA FILE:SED-EXPRESSION...
