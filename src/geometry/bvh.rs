@@ -287,8 +287,8 @@ pub struct SahCost {
 }
 
 impl SahCost {
-    /// The costs the walk pays, measured (docs/performance.md, "A tree for the
-    /// walk"): for the one-by-one walks a binary inner node costs 3 sphere
+    /// The costs the walk pays, measured (docs/history.md, the instruction
+    /// budget's first round: the tree's cost model per walk): for the one-by-one walks a binary inner node costs 3 sphere
     /// tests (a sweep of 1, 2, 3, 4 and 6 gave the packet walk 273, 243, 237,
     /// 239 and 249 traversal instructions per ray on the final scene); for the
     /// 8-wide walk half an 8-wide leaf test, as before.
