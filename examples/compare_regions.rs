@@ -1,5 +1,5 @@
 //! A scene, rtow against the book's own C++, region by region (the Cornell box, the Cornell smoke,
-//! the final scene: docs/nextweek.md).
+//! the final scene: docs/books.md).
 //!
 //! Reads two renders of each side with different seeds, the book's as the 8-bit P3 PPM its
 //! code writes and rtow's as a linear PFM (`rtow render ... --float x.pfm`), of the same size.

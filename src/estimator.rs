@@ -1,8 +1,20 @@
-//! Optional changes to the estimator that trade noise for work: Russian roulette
-//! and adaptive sampling. Both are off by default; with both off the kernels
-//! draw and add exactly what they drew and added before.
+//! The estimator's parts that both kernels share, so they take the same
+//! decisions:
 //!
-//! Both kernels call the functions here, so they take the same decisions:
+//! - How a path chooses its direction at a diffuse vertex (a lambertian hit
+//!   or a medium's isotropic scattering), three estimators
+//!   (`crate::choice::EstimatorChoice`): `bsdf`, the material's own density
+//!   (books one and two); `book`, The Rest of Your Life's one-sample
+//!   mixture, half the directions toward the `sample_toward` shapes or the
+//!   lights ([`book_mixture`]); `nee-mis`, a shadow ray toward a point on a
+//!   light at every diffuse vertex ([`next_event`]), weighted against the
+//!   scattered direction by the power heuristic ([`mis_light`],
+//!   [`mis_bsdf`]). All three are unbiased: they change the noise, not the
+//!   expected image.
+//! - Optional changes that trade noise for work, off by default (with both
+//!   off the kernels draw and add exactly what they drew and added before):
+//!   Russian roulette and adaptive sampling:
+//!
 //! - Russian roulette is width-generic ([`roulette`]) and draws one value from
 //!   the path's own stream, at the same bounce in both kernels.
 //! - Adaptive sampling decides at fixed sample counts ([`Adaptive::round_end`]),

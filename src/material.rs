@@ -1,8 +1,13 @@
-//! Scatter functions of the book's three materials, for both widths, and the
-//! per-kind material tables, and the material kinds themselves (the kernels
-//! keep one queue and one scatter pass per kind).
+//! The material kinds (the kernels keep one queue and one pass per kind):
+//! book one's lambertian, metal and dielectric, The Next Week's
+//! `diffuse_light` (emission, two-sided or one-sided, and the path ends) and
+//! `isotropic` (the scattering inside a constant medium); the per-kind
+//! material tables (a lambertian's albedo a colour or a texture reference);
+//! and the scatter functions, at one lane and every width.
 //!
-//! Physics as in the book (v4), not the seed's slips (SEED-NOTES.md): a true
+//! Physics as in the book (v4), not the slips of the C# retelling this
+//! project grew from (its Lambertian was the normal plus a normalized cube
+//! sample): a true
 //! Lambertian (normal + uniform unit vector, falling back to the normal when the
 //! sum nearly vanishes), metal fuzz from a unit-sphere sample, dielectrics with
 //! Snell refraction, total internal reflection and Schlick's reflectance drawn

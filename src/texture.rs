@@ -17,7 +17,7 @@
 //!   beyond that every f32 is an even integer and the checker reads "even".
 //! * **Noise**: the book's marble, `0.5 (1 + sin(scale p.z + 10 turb(p)))`,
 //!   with `turb` the 7-octave sum of Perlin gradient noise of the unscaled
-//!   point (v4's code, not its text: BOOKS23.md). [`Perlin`]'s lattice
+//!   point (v4's code; its text and v4.0.0-alpha.1 scale the point first). [`Perlin`]'s lattice
 //!   tables come from rtow's own seeded generator: the book's come from
 //!   `random_double()` in the order its program happens to call it, which
 //!   cannot be reproduced (and need not be: the pattern is the same

@@ -5,7 +5,7 @@
 #
 # BOOK_REPO: where to clone the books' repository from (default: GitHub; a local clone
 #            or mirror works). The commit is pinned: the v4 `dev` branch's head that
-#            ../../docs/nextweek.md was measured at.
+#            ../../docs/books.md was measured at.
 # CXX, CXXFLAGS: the compiler and flags (default: g++ -std=c++17 -O3 -march=x86-64-v3).
 # DIAGNOSTICS=1: also the diagnostic variants book-anchor-{metal,metal-white,grey-mt19937}.
 set -euo pipefail
@@ -83,16 +83,16 @@ cp "$here/anchor.cc" "$src/"
 cp "$here/final-layout.cc" "$src/"
 # shellcheck disable=SC2086
 "$CXX" $CXXFLAGS -I"$src" -I"$out/book/src" -o "$out/book-final-layout" "$src/final-layout.cc"
-# The same with std::mt19937 in place of glibc's rand() (a diagnostic: docs/nextweek.md).
+# The same with std::mt19937 in place of glibc's rand() (a diagnostic: docs/books.md).
 # shellcheck disable=SC2086
 "$CXX" $CXXFLAGS -DANCHOR_MT19937 -I"$src" -I"$out/book/src" -o "$out/book-anchor-mt19937" "$src/anchor.cc"
 
 # DIAGNOSTICS=1: three variants of book-anchor, each the book with some of its known
-# differences from rtow taken away, to tell them apart (docs/nextweek.md, "The Cornell smoke
+# differences from rtow taken away, to tell them apart (docs/books.md, "The Cornell smoke
 # and the final scene"): `-metal` the metal as fixed upstream after this commit (unit reflected
 # direction plus fuzz times a unit vector: RayTracing/raytracing.github.io#1496 and #1499; rtow's
 # metal), `-metal-white`
-# also keeps pure-white texels white (rtow's fix of the byte overflow, BOOKS23.md section 4),
+# also keeps pure-white texels white (rtow's fix of the byte overflow: a channel of 255 became 256.0, out of a byte's range),
 # `-grey-mt19937` also makes final_scene()'s marble sphere a grey lambertian 0.5 and draws the
 # render's numbers from std::mt19937. One line changed per difference, each checked.
 variant() { # NAME CXX-EXTRA FILE:SED-EXPRESSION...

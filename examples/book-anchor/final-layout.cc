@@ -5,7 +5,7 @@
 // point3::random(0, 165). book-anchor builds final_scene() from the same draws. Prints
 // `h Y1` per box and `c X Y Z` per sphere, in the order rtow's nw-final lists its boxes and
 // its group's spheres, to write the book's layout into a scene file exported from nw-final
-// (docs/nextweek.md, "The Cornell smoke and the final scene").
+// (docs/books.md, "The Cornell smoke and the final scene").
 //
 //   book-final-layout > layout.txt
 #include "rtweekend.h"

@@ -1,6 +1,13 @@
-//! A bounding volume hierarchy over spheres: built with the surface area
+//! A bounding volume hierarchy, one per primitive kind: static spheres
+//! ([`Bvh`]), the quads that are not a box's face ([`QuadBvh`]), cuboids
+//! ([`CuboidBvh`]) and moving spheres ([`MovingBvh`], each sphere's box the
+//! union of its boxes at the shutter's two ends). One build and one set of
+//! walks, generic over the leaf ([`LeafPrim`]): built with the surface area
 //! heuristic (binned, binary), then collapsed to 8-wide nodes with leaves of
-//! up to 8 spheres. The heuristic's costs are those of the walk the tree is
+//! up to 8 primitives. Quad leaves are sorted into runs of one form of the
+//! test. The sections below are written for spheres; every leaf kind keeps
+//! the same rule (the leaf test is brute force's, the boxes padded from the
+//! scene's extent), and a flat quad's box is thick enough by that padding. The heuristic's costs are those of the walk the tree is
 //! built for ([`Walk`], [`SahCost`]): the packet walk and the scalar kernel
 //! test one child box and one leaf sphere at a time (small leaves pay), the
 //! one-ray walk tests 8 child boxes and 8 leaf spheres at once (`f32x8`; full
@@ -280,8 +287,8 @@ pub struct SahCost {
 }
 
 impl SahCost {
-    /// The costs the walk pays, measured (docs/performance.md, "A tree for the
-    /// walk"): for the one-by-one walks a binary inner node costs 3 sphere
+    /// The costs the walk pays, measured (docs/history.md, the instruction
+    /// budget's first round: the tree's cost model per walk): for the one-by-one walks a binary inner node costs 3 sphere
     /// tests (a sweep of 1, 2, 3, 4 and 6 gave the packet walk 273, 243, 237,
     /// 239 and 249 traversal instructions per ray on the final scene); for the
     /// 8-wide walk half an 8-wide leaf test, as before.

@@ -1,4 +1,13 @@
-//! Ray-sphere intersection in the numerically robust form, for both widths.
+//! Closest-hit and any-hit searches by brute force for every primitive kind
+//! (spheres, quads run by run of one form of the test, cuboids, moving
+//! spheres at each lane's time), the closest hit's tie rule ([`Closest`]:
+//! the smallest `t`, ties to the lowest hit index, across kinds), the hit
+//! surface and where a new ray starts; and the ray-sphere test in its
+//! numerically robust form, at one lane and every width. The any-hit forms
+//! serve `nee-mis`'s shadow rays. The quad and cuboid tests themselves are
+//! in `quads.rs` and `cuboids.rs`; their bounds are stated there.
+//!
+//! # The sphere test
 //!
 //! Rays have unit directions `d`. With `f = o - c`, the hit distances solve
 //! `t^2 + 2 b t + c' = 0` with `b = f.d` and `c' = f.f - r^2`. Following Ray

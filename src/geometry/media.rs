@@ -17,7 +17,7 @@
 //! depend on the traversal: every path draws one value per medium per bounce,
 //! at fixed dimensions, so the scalar kernel and every lane width agree.
 //!
-//! The book's pitfalls are avoided by construction (BOOKS23.md section 6):
+//! The book's pitfalls with media are avoided by construction:
 //! both ends of the chord come from one analytic computation, not from a
 //! second boundary hit at `t + 0.0001` (a no-op in f32 at t = 5000, inside
 //! the book's mist), and a ray that starts inside a medium (the camera in

@@ -757,7 +757,7 @@ fn classify_packets<W: Wide, P: Probe, S: PathSampler, const M: bool, const Q: b
     const SURF: usize = Kind::SURFACES.len();
     // The fewest hits a packet scattered in place has: its lanes' arithmetic
     // is a whole packet's whatever their number, so an emptier one costs
-    // more than the queue it saves (measured: docs/performance.md).
+    // more than the queue it saves (measured: docs/history.md, the fifth round).
     let full_enough = W::LANES * 3 / 4;
     let kind_of = &prep.spheres.kind[..];
     let kind_mask = kind_of.len().wrapping_sub(1);

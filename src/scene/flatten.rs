@@ -2,8 +2,9 @@
 //! quads, groups apply `rotate_y` then `translate` (the book's instance order)
 //! to their members, once, in f64, each result rounded to f32 once.
 //!
-//! Flattening avoids the book's instance pitfalls by construction (BOOKS23.md
-//! section 6): there is no object space at render time, so the front face is
+//! Flattening avoids the book's known instance pitfalls by construction (the
+//! issue numbers are those of the books' repository,
+//! RayTracing/raytracing.github.io): there is no object space at render time, so the front face is
 //! decided in world space only (#965), the rotation is applied once with the
 //! book's sign, `x' = cos x + sin z, z' = -sin x + cos z` (#544), and the
 //! bounding box of a rotated box is that of its world-space quads, each

@@ -1,4 +1,6 @@
-//! A preset for every image of the seed (SEED-NOTES.md), with the book's physics.
+//! A preset for every image of the three books (book one chapter by chapter,
+//! The Next Week's and The Rest of Your Life's scenes), with the book's
+//! physics, and the numerical stress scenes of `rtow stress`.
 
 use super::{
     Background, BookTable, Camera, Group, Material, Medium, MediumBoundary, Mode, Quad, QuadBox, RenderTable, Scene,

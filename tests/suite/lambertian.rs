@@ -1,5 +1,5 @@
 //! The Lambertian sampler follows cos(theta) / pi, by a chi-square test; the
-//! seed's slip (normal + a normalized cube sample, SEED-NOTES.md) fails the same test.
+//! slip of the C# retelling rtow grew from (normal + a normalized cube sample) fails the same test.
 //!
 //! For a cosine-distributed direction about n, mu = cos(theta) has density 2 mu
 //! on [0, 1], so mu^2 is uniform; the azimuth phi is uniform on [0, 2 pi) and

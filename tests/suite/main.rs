@@ -30,6 +30,7 @@ mod physics;
 mod sampler;
 mod sampler_cli;
 mod scene_files;
+mod scene_format;
 mod shards;
 mod split;
 mod stability;
