@@ -137,6 +137,14 @@ pub trait Probe {
     /// [`Probe::traced`] and [`Probe::shaded`] (false: the events are not called).
     const PATHS: bool = false;
 
+    /// Whether this probe, as it is now, wants the path events (only asked
+    /// when [`Probe::PATHS`]): a tool's probe that counts work only says no,
+    /// and the kernels skip the path ids and the events.
+    #[inline(always)]
+    fn paths(&self) -> bool {
+        Self::PATHS
+    }
+
     /// A camera ray was generated; returns its origin (a probe may move it
     /// along the ray, as `rtow stress`'s far-camera check does).
     #[inline(always)]
@@ -399,15 +407,27 @@ impl<'a> Observed<'a> {
     }
 
     /// What the events object kept ([`PathEvents::finish`]), as the type it
-    /// gave; `None` for a counting probe or another type.
-    pub fn finish<T: 'static>(self) -> Option<T> {
-        self.events?.finish().downcast().ok().map(|b| *b)
+    /// gives.
+    ///
+    /// # Panics
+    ///
+    /// For a counting probe, or a `T` that is not the type its events object
+    /// gives: a tool asks for what its own object keeps, so either is a bug,
+    /// and an empty result would pass for a clean one.
+    pub fn finish<T: 'static>(self) -> T {
+        let kept = self.events.expect("Observed::finish on a probe that counts work only").finish();
+        *kept.downcast().expect("Observed::finish: the events object keeps another type")
     }
 }
 
 impl Probe for Observed<'_> {
     const WORK: bool = true;
     const PATHS: bool = true;
+
+    #[inline(always)]
+    fn paths(&self) -> bool {
+        self.events.is_some()
+    }
 
     #[inline]
     fn camera<R: Real>(&mut self, id: PathId<R>, o: V3<R>, d: V3<R>, live: u32) -> V3<R> {

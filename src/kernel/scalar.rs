@@ -220,7 +220,7 @@ fn trace_in<P: Probe, const M: bool>(
     probe: &mut P,
 ) -> ([f32; 3], u32, u32) {
     let (o, mut d) = camera_ray(prep, x, y, rng);
-    let mut o = if P::PATHS { probe.camera(id, o, d, 1) } else { o };
+    let mut o = if P::PATHS && probe.paths() { probe.camera(id, o, d, 1) } else { o };
     // The path's time (scenes with moving spheres only), inherited by every
     // ray it scatters.
     let time = if M {
@@ -244,7 +244,7 @@ fn trace_in<P: Probe, const M: bool>(
         let nee = prep.plan.nee > 0 && rays < prep.settings.max_depth;
         probe.rays(depth, 1);
         let (hit, t) = closest_hit::<P, M>(prep, o, d, time, probe);
-        if P::PATHS {
+        if P::PATHS && probe.paths() {
             probe.traced(id, o, d, hit, t, 1);
         }
         // Scenes with media: the nearest of the surface and a free-flight sample per medium.
@@ -255,7 +255,7 @@ fn trace_in<P: Probe, const M: bool>(
             // (`SkyColours::is_black`): the wavefront shades no miss then.
             let black = prep.sky.is_black();
             let c = if black { V3::splat3([0.0; 3]) } else { thr.mul_elem(background(&prep.sky, d)) };
-            if P::PATHS {
+            if P::PATHS && probe.paths() {
                 probe.contributed(id, rays, Strategy::Background, c);
             }
             return ((if black { sum } else { sum + c }).to_array(), rays, shadow_rays);
@@ -280,7 +280,7 @@ fn trace_in<P: Probe, const M: bool>(
                 match shade::<P, M>(prep, o, d, t, time, hit, id, depth, thr, pdf, nee, rng, probe) {
                     Ok(s) => s,
                     Err(c) => {
-                        if P::PATHS {
+                        if P::PATHS && probe.paths() {
                             let how = if scattered { Strategy::Scattered } else { Strategy::Specular };
                             probe.contributed(id, rays, how, c);
                         }
@@ -297,7 +297,7 @@ fn trace_in<P: Probe, const M: bool>(
                 shadow_rays += 1;
                 if !prep.occluded_one::<P, M>(sh.o, sh.d, sh.tmax, time, probe) {
                     let c = if prep.media.is_empty() { c } else { c * transmittance(&prep.media, sh.o, sh.d, sh.tmax) };
-                    if P::PATHS {
+                    if P::PATHS && probe.paths() {
                         probe.contributed(id, rays + 1, Strategy::LightSample, c);
                     }
                     sum = sum + c;
@@ -352,7 +352,7 @@ fn shade<P: Probe, const M: bool>(
     let (srf, kind, row) = if hit < QUAD_BASE {
         let i = hit as usize;
         let srf = surface(o, d, t, V3::new(sp.cx[i], sp.cy[i], sp.cz[i]), sp.r[i]);
-        if P::PATHS {
+        if P::PATHS && probe.paths() {
             probe.shaded(id, hit, sp.r[i], srf.n, srf.front, 1);
         }
         (srf, sp.kind[i], sp.row[i] as usize)
@@ -360,7 +360,7 @@ fn shade<P: Probe, const M: bool>(
         let (m, i) = (&prep.moving, (hit - MOVING_BASE) as usize);
         let r = m.s.r[i];
         let srf = surface(o, d, t, m.centre(i, time), r);
-        if P::PATHS {
+        if P::PATHS && probe.paths() {
             probe.shaded(id, hit, r, srf.n, srf.front, 1);
         }
         (srf, m.s.kind[i], m.s.row[i] as usize)
@@ -369,7 +369,7 @@ fn shade<P: Probe, const M: bool>(
         let i = (hit - QUAD_BASE) as usize;
         let [nx, ny, nz, dn, ..] = qs.shade[i].0;
         let srf = quad_surface(o, d, t, V3::new(nx, ny, nz), dn);
-        if P::PATHS {
+        if P::PATHS && probe.paths() {
             probe.shaded(id, hit, 0.0, srf.n, srf.front, 1);
         }
         (srf, qs.kind[i], qs.row[i] as usize)

@@ -164,7 +164,7 @@ pub(super) fn split(job: &Job, variant: Variant, seeds: u32, seconds: f64, want_
         }
         let mut found = vec![[0f64; 3]; px];
         for p in probes {
-            let sums: Sums = p.finish().unwrap_or_default();
+            let sums: Sums = p.finish();
             for (pixel, b) in sums {
                 let base = pixel as usize * BUCKETS * 3;
                 for (k, v) in b.iter().enumerate() {

@@ -232,7 +232,7 @@ pub(super) fn trace(job: &Job, oracle: &SceneOracle, shift: Option<&Shift>) -> R
     let mut tally = Tally::default();
     let mut paths: Vec<((u32, u32), u64)> = Vec::new();
     for p in probes {
-        let (t, p): (Tally, PathHashes) = p.finish().unwrap_or_default();
+        let (t, p): (Tally, PathHashes) = p.finish();
         add(&mut tally, &t);
         paths.extend(p);
     }

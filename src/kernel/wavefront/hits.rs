@@ -35,7 +35,7 @@ pub(super) fn surfaces<W: Wide, P: Probe, const M: bool>(
         let r = rec[Shade::R];
         let d = at.v3(&ws.cur.d);
         let srf = surface(at.v3(&ws.cur.o), d, at.f(&ws.t), c, r);
-        if P::PATHS {
+        if P::PATHS && probe.paths() {
             probe.shaded(ws.ids::<W>(&at.idx()), sph, r, srf.n, srf.front, at.live());
         }
         let a = Shade::ALBEDO;
@@ -51,7 +51,7 @@ pub(super) fn surfaces<W: Wide, P: Probe, const M: bool>(
         // then selects away are not computed (the same lanes, bit for bit).
         let rec = W::gather_rows8(&prep.quads.shade, &W::idx_of(sph & q_mask));
         let srf = quad_surface(o, d, t, V3::new(rec[0], rec[1], rec[2]), rec[3]);
-        if P::PATHS {
+        if P::PATHS && probe.paths() {
             probe.shaded(ws.ids::<W>(&at.idx()), sph, W::splat(0.0), srf.n, srf.front, at.live());
         }
         let a = Shade::ALBEDO;
@@ -74,7 +74,7 @@ pub(super) fn surfaces<W: Wide, P: Probe, const M: bool>(
             front: W::select(is_sphere, s_srf.front, q_srf.front),
             offset: W::select(is_sphere, s_srf.offset, q_srf.offset),
         };
-        if P::PATHS {
+        if P::PATHS && probe.paths() {
             probe.shaded(ws.ids::<W>(&at.idx()), sph, r, srf.n, srf.front, at.live());
         }
         (srf, std::array::from_fn(|k| W::select(is_sphere, srec[k], qrec[k])))

@@ -155,7 +155,7 @@ pub(super) fn render_round<W: Wide, P: Probe, S: PathSampler, const M: bool>(
         let pixel = y * st.width + x;
         ws.pixel_xy.push([x as f32, y as f32]);
         ws.pixel_words.push(sampler.pixel_words(st.seed, pixel as u64));
-        if P::PATHS {
+        if P::PATHS && probe.paths() {
             ws.pixel.push(pixel);
         }
     }
@@ -221,7 +221,7 @@ pub(super) fn generate<W: Wide, P: Probe, S: PathSampler, const M: bool>(
             let time: W = rng.next();
             time.store_pow2(&mut ws.cur.time, i);
         }
-        let o = if P::PATHS {
+        let o = if P::PATHS && probe.paths() {
             let idx: W::Idx = index_run::<W>(i);
             let id = ws.ids::<W>(&idx);
             probe.camera(id, o, d, low_bits(n - i))

@@ -44,7 +44,7 @@ pub(super) fn intersect<W: Wide, P: Probe, const M: bool>(
         W::store_u_pow2(hit, &mut ws.hit, i);
         t.store_pow2(&mut ws.t, i);
         probe.lanes(Stage::Intersect, live as u32, W::LANES as u32);
-        if P::PATHS {
+        if P::PATHS && probe.paths() {
             let idx = index_run::<W>(i);
             probe.traced(ws.ids::<W>(&idx), o, d, hit, t, low_bits(live));
         }
