@@ -17,7 +17,7 @@
 
 use criterion::{criterion_group, criterion_main, BenchmarkGroup, Criterion, Throughput};
 use rtow::film::TileFilm;
-use rtow::internals::geometry::closest_hit;
+use rtow::internals::geometry::closest_brute;
 use rtow::internals::kernel::{scalar, wavefront};
 use rtow::internals::plan::Prepared;
 use rtow::internals::real::Wide;
@@ -69,7 +69,7 @@ fn intersect_wide<W: Wide>(
             for i in (0..n).step_by(W::LANES) {
                 let o = V3::new(W::load(&r[0], i), W::load(&r[1], i), W::load(&r[2], i));
                 let d = V3::new(W::load(&r[3], i), W::load(&r[4], i), W::load(&r[5], i));
-                let (hit, _) = closest_hit::<W, ()>(&prep.spheres, o, d, &mut ());
+                let (hit, _) = closest_brute(&prep.shapes.spheres, o, d, W::splat(0.0), &mut ());
                 acc = acc.wrapping_add(W::lane_u(hit, 0));
             }
             black_box(acc)
@@ -91,7 +91,7 @@ fn intersect(c: &mut Criterion) {
             for i in 0..n {
                 let o = V3::new(r[0][i], r[1][i], r[2][i]);
                 let d = V3::new(r[3][i], r[4][i], r[5][i]);
-                acc = acc.wrapping_add(closest_hit(&prep.spheres, o, d, &mut ()).0);
+                acc = acc.wrapping_add(closest_brute(&prep.shapes.spheres, o, d, 0.0, &mut ()).0);
             }
             black_box(acc)
         })

@@ -7,17 +7,11 @@ use crate::camera::PreparedCamera;
 use crate::choice::Mode;
 use crate::estimator::Estimator;
 use crate::film::accum::Scale;
-use crate::geometry::{
-    self, Bvh, Closest, CuboidBvh, Cuboids, Emitters, Lights, Media, MovingBvh, MovingSpheres, QuadBvh, Quads, Spheres,
-    MISS, QUAD_BASE,
-};
+use crate::geometry::{Emitters, Lights, Media, Shapes};
 use crate::material::{Kind, MaterialTables};
-use crate::probe::Probe;
-use crate::real::{Real, Wide};
 use crate::sampling::layout::Bounces;
 use crate::settings::Settings;
 use crate::texture::{TexSet, TextureTables};
-use crate::vec3::V3;
 use serde::{Serialize, Serializer};
 
 /// A set of material kinds (serialized as the list of their names).
@@ -239,9 +233,9 @@ impl SkyColours {
 pub struct Prepared {
     pub plan: Plan,
     pub settings: Settings,
-    pub spheres: Spheres,
-    /// The quads (empty for a scene without: padding only).
-    pub quads: Quads,
+    /// Every primitive kind and its tree where the plan chose one, searched
+    /// as one aggregate.
+    pub shapes: Shapes,
     /// The constant media (empty for a scene without, and in the debug modes).
     pub media: Media,
     pub materials: MaterialTables,
@@ -249,18 +243,6 @@ pub struct Prepared {
     pub textures: TextureTables,
     pub camera: PreparedCamera,
     pub sky: SkyColours,
-    /// Present when the plan chose a BVH.
-    pub bvh: Option<Bvh>,
-    /// The quads' tree, when the plan chose one for them.
-    pub quad_bvh: Option<QuadBvh>,
-    /// The boxes, each tested whole (empty for a scene without).
-    pub cuboids: Cuboids,
-    /// Their tree, when the plan chose one for them.
-    pub cuboid_bvh: Option<CuboidBvh>,
-    /// The moving spheres (empty for a scene without: padding only).
-    pub moving: MovingSpheres,
-    /// Their tree, when the plan chose one for them.
-    pub moving_bvh: Option<MovingBvh>,
     /// Russian roulette and adaptive sampling (off unless the render options say so).
     pub estimator: Estimator,
     /// The shapes the `book` estimator samples toward (empty unless
@@ -271,179 +253,4 @@ pub struct Prepared {
     /// The sampler dimensions of each bounce (the `book` estimator's when
     /// it samples toward shapes, else the `bsdf` estimator's).
     pub bounces: Bounces,
-}
-
-impl Prepared {
-    /// The closest hit of one ray at time `time` (scalar kernel): the BVH one
-    /// box at a time, or brute force. `M`: the scene has moving spheres
-    /// (`false` compiles to the search of a scene without).
-    #[inline(always)]
-    pub fn closest_hit<P: Probe, const M: bool>(&self, o: V3<f32>, d: V3<f32>, time: f32, probe: &mut P) -> (u32, f32) {
-        let (index, t) = match &self.bvh {
-            Some(b) => b.closest_hit_scalar(o, d, probe),
-            None => geometry::closest_hit(&self.spheres, o, d, probe),
-        };
-        if !M && self.quads.is_empty() {
-            return (index, t);
-        }
-        let mut best = Closest { t, index };
-        if !M || !self.quads.is_empty() {
-            match &self.quad_bvh {
-                Some(b) => best = b.walk_scalar(o, d, best, probe),
-                None => geometry::closest_quad_hit(&self.quads, o, d, &mut best, probe),
-            }
-            if !self.cuboids.is_empty() {
-                match &self.cuboid_bvh {
-                    Some(b) => best = b.walk_scalar(o, d, best, probe),
-                    None => geometry::closest_cuboid_hit(&self.cuboids, o, d, &mut best, probe),
-                }
-            }
-        }
-        if M {
-            match &self.moving_bvh {
-                Some(b) => best = b.walk_scalar_at(o, d, time, best, probe),
-                None => geometry::closest_moving_hit(&self.moving, o, d, time, &mut best, probe),
-            }
-        }
-        (best.index, best.t)
-    }
-
-    /// The closest hits of a packet of rays (wavefront kernel; bit k of `live`
-    /// marks a real ray), as the plan says: brute force, BVH packets, or the BVH
-    /// one ray at a time. `M`: the scene has moving spheres (`false` compiles
-    /// to the search of a scene without); `time` gives the rays' times, called
-    /// only when `M`.
-    #[cfg_attr(not(feature = "phases"), inline(always))]
-    #[cfg_attr(feature = "phases", inline(never))]
-    pub fn closest_hits<W: Wide, P: Probe, const M: bool>(
-        &self,
-        o: V3<W>,
-        d: V3<W>,
-        live: u32,
-        time: impl FnOnce() -> W,
-        probe: &mut P,
-    ) -> (W::U32, W) {
-        let (index, t) = match (&self.bvh, self.plan.accel) {
-            (Some(b), Accel::BvhRays) => b.closest_hits_one_by_one(o, d, live, probe),
-            (Some(b), _) => b.closest_hit_packet(o, d, live, probe),
-            (None, _) => geometry::closest_hit(&self.spheres, o, d, probe),
-        };
-        if !M && self.quads.is_empty() {
-            return (index, t);
-        }
-        // Lanes not in `live` take no part (t = -inf), as in the packet walk.
-        let t = W::select(W::mask_from_bits(live), t, W::splat(f32::NEG_INFINITY));
-        let mut best = Closest { t, index };
-        if !M || !self.quads.is_empty() {
-            match &self.quad_bvh {
-                Some(b) => best = b.walk_packet(o, d, best, probe),
-                None => geometry::closest_quad_hit(&self.quads, o, d, &mut best, probe),
-            }
-            if !self.cuboids.is_empty() {
-                match &self.cuboid_bvh {
-                    Some(b) => best = b.walk_packet(o, d, best, probe),
-                    None => geometry::closest_cuboid_hit(&self.cuboids, o, d, &mut best, probe),
-                }
-            }
-        }
-        if M {
-            let time = time();
-            match &self.moving_bvh {
-                Some(b) => best = b.walk_packet_at(o, d, time, best, probe),
-                None => geometry::closest_moving_hit(&self.moving, o, d, time, &mut best, probe),
-            }
-        }
-        (best.index, best.t)
-    }
-
-    /// Whether something lies on the segment `o + t d`, `0 < t < tmax`, of
-    /// one ray at time `time` (a shadow ray, scalar kernel): any hit, the
-    /// search stopping at the first. Media do not block (their
-    /// transmittance is [`geometry::transmittance`]).
-    #[inline(always)]
-    pub fn occluded_one<P: Probe, const M: bool>(
-        &self,
-        o: V3<f32>,
-        d: V3<f32>,
-        tmax: f32,
-        time: f32,
-        probe: &mut P,
-    ) -> bool {
-        let mut best = Closest { t: tmax, index: MISS };
-        match &self.bvh {
-            Some(b) => best = b.any_hit_scalar_at(o, d, 0.0, best, probe),
-            None => geometry::any_sphere_hit(&self.spheres, o, d, &mut best, probe),
-        }
-        if best.index == MISS && !self.quads.is_empty() {
-            match &self.quad_bvh {
-                Some(b) => best = b.any_hit_scalar_at(o, d, 0.0, best, probe),
-                None => geometry::any_quad_hit(&self.quads, o, d, &mut best, probe),
-            }
-        }
-        if best.index == MISS && !self.cuboids.is_empty() {
-            match &self.cuboid_bvh {
-                Some(b) => best = b.any_hit_scalar_at(o, d, 0.0, best, probe),
-                None => geometry::any_cuboid_hit(&self.cuboids, o, d, &mut best, probe),
-            }
-        }
-        if M && best.index == MISS {
-            match &self.moving_bvh {
-                Some(b) => best = b.any_hit_scalar_at(o, d, time, best, probe),
-                None => geometry::any_moving_hit(&self.moving, o, d, time, &mut best, probe),
-            }
-        }
-        best.index != MISS
-    }
-
-    /// [`Prepared::occluded_one`] for a packet of shadow rays (bit k of
-    /// `live` marks a real one; the others are not occluded): the packet
-    /// walks in their any-hit form, each lane leaving at its first hit and
-    /// each search stopping once no lane is left. The same answer as one ray
-    /// at a time, whatever the order: a hit below `tmax` is one whatever
-    /// else was found.
-    #[inline(always)]
-    pub fn occluded<W: Wide, P: Probe, const M: bool>(
-        &self,
-        o: V3<W>,
-        d: V3<W>,
-        tmax: W,
-        live: u32,
-        time: impl FnOnce() -> W,
-        probe: &mut P,
-    ) -> <W as Real>::Mask {
-        let mut best = Closest {
-            t: W::select(W::mask_from_bits(live), tmax, W::splat(f32::NEG_INFINITY)),
-            index: W::u_splat(MISS),
-        };
-        match &self.bvh {
-            Some(b) => best = b.any_hit_packet_at(o, d, W::splat(0.0), best, probe),
-            None => geometry::any_sphere_hit(&self.spheres, o, d, &mut best, probe),
-        }
-        if !best.leave_found() && !self.quads.is_empty() {
-            match &self.quad_bvh {
-                Some(b) => best = b.any_hit_packet_at(o, d, W::splat(0.0), best, probe),
-                None => geometry::any_quad_hit(&self.quads, o, d, &mut best, probe),
-            }
-        }
-        if !best.leave_found() && !self.cuboids.is_empty() {
-            match &self.cuboid_bvh {
-                Some(b) => best = b.any_hit_packet_at(o, d, W::splat(0.0), best, probe),
-                None => geometry::any_cuboid_hit(&self.cuboids, o, d, &mut best, probe),
-            }
-        }
-        if M && !best.leave_found() {
-            let time = time();
-            match &self.moving_bvh {
-                Some(b) => best = b.any_hit_packet_at(o, d, time, best, probe),
-                None => geometry::any_moving_hit(&self.moving, o, d, time, &mut best, probe),
-            }
-        }
-        !W::u_eq(best.index, W::u_splat(MISS))
-    }
-
-    /// Whether hit index `hit` (not `MISS`) is a quad's.
-    #[inline(always)]
-    pub fn is_quad(hit: u32) -> bool {
-        hit >= QUAD_BASE
-    }
 }

@@ -13,6 +13,7 @@
 //! lanes are real paths). A path is named by its pixel (`y * width + x`) and
 //! sample index, which do not depend on kernel, tile or thread.
 
+pub use crate::geometry::work::{Counter, Work};
 use crate::real::{Real, MAX_LANES};
 use crate::vec3::V3;
 use std::any::Any;
@@ -22,72 +23,6 @@ use std::any::Any;
 pub struct PathId<R: Real> {
     pub pixel: R::U32,
     pub sample: R::U32,
-}
-
-/// What is counted: traversal work, in the units the traversal issues it (one
-/// packet-node visit, one box or sphere test of a packet, one square root of a
-/// packet; for the scalar kernel and `bvh-ray`, of one ray).
-#[derive(Clone, Copy, Debug, PartialEq, Eq)]
-#[repr(u8)]
-pub enum Work {
-    /// A BVH node whose children are tested.
-    Node,
-    /// A child box tested (the slab test).
-    Box,
-    /// A sphere tested (the discriminant).
-    Sphere,
-    /// A sphere test that reached the square root (some lane's discriminant >= 0).
-    Root,
-    /// A quad tested (The Next Week's primitives).
-    Quad,
-    /// A cuboid tested (a box's six faces, by one slab test).
-    Cuboid,
-}
-
-impl Work {
-    pub const ALL: [Work; 6] = [Work::Node, Work::Box, Work::Sphere, Work::Root, Work::Quad, Work::Cuboid];
-}
-
-/// The work of one traversal, counted in registers and handed to the probe
-/// once at its end: counting each test through `&mut P` in the inner loops
-/// cost about 9% of the render (measured; docs/performance.md). Nothing is
-/// counted, and nothing is left in the code, unless `P::WORK`.
-pub struct WorkTally<P> {
-    n: [u32; 6],
-    _probe: std::marker::PhantomData<fn(&mut P)>,
-}
-
-impl<P: Probe> WorkTally<P> {
-    #[inline(always)]
-    pub fn new() -> Self {
-        WorkTally { n: [0; 6], _probe: std::marker::PhantomData }
-    }
-
-    #[inline(always)]
-    pub fn flush(self, probe: &mut P) {
-        if P::WORK {
-            for (w, n) in Work::ALL.into_iter().zip(self.n) {
-                probe.work(w, n);
-            }
-        }
-    }
-}
-
-impl<P: Probe> Default for WorkTally<P> {
-    fn default() -> Self {
-        WorkTally::new()
-    }
-}
-
-impl<P: Probe> Probe for WorkTally<P> {
-    const WORK: bool = P::WORK;
-
-    #[inline(always)]
-    fn work(&mut self, w: Work, n: u32) {
-        if P::WORK {
-            self.n[w as usize] += n;
-        }
-    }
 }
 
 /// Where a term of a path's radiance came from: the strategies whose
@@ -128,11 +63,9 @@ pub enum Stage {
     Scatter,
 }
 
-pub trait Probe {
-    /// Whether this probe counts [`Work`] (traversals then keep counts in
-    /// registers, [`WorkTally`], and hand them over once per traversal).
-    const WORK: bool = false;
-
+/// An observer of the kernels; its traversal work counting is its
+/// [`Counter`] side.
+pub trait Probe: Counter {
     /// Whether the kernels must compute path ids for [`Probe::camera`],
     /// [`Probe::traced`] and [`Probe::shaded`] (false: the events are not called).
     const PATHS: bool = false;
@@ -175,10 +108,6 @@ pub trait Probe {
     /// `n` rays are traced next, each the `depth`-th of its path (0: camera rays).
     #[inline(always)]
     fn rays(&mut self, _depth: u32, _n: u32) {}
-
-    /// `n` units of traversal work.
-    #[inline(always)]
-    fn work(&mut self, _w: Work, _n: u32) {}
 
     /// A SIMD pass over `issued` lanes of which `active` were real paths.
     #[inline(always)]
@@ -227,7 +156,7 @@ impl WorkCounters {
     }
 }
 
-impl Probe for WorkCounters {
+impl Counter for WorkCounters {
     const WORK: bool = true;
 
     #[inline(always)]
@@ -242,7 +171,9 @@ impl Probe for WorkCounters {
         };
         *c += n as u64;
     }
+}
 
+impl Probe for WorkCounters {
     #[inline(always)]
     fn lanes(&mut self, stage: Stage, active: u32, issued: u32) {
         let (a, l) = match stage {
@@ -292,19 +223,21 @@ impl WorkByDepth {
     }
 }
 
-impl Probe for WorkByDepth {
+impl Counter for WorkByDepth {
     const WORK: bool = true;
 
+    #[inline(always)]
+    fn work(&mut self, w: Work, n: u32) {
+        self.at().work(w, n);
+    }
+}
+
+impl Probe for WorkByDepth {
     #[inline(always)]
     fn rays(&mut self, depth: u32, n: u32) {
         self.depth = depth as usize;
         self.at();
         self.rays[self.depth] += n as u64;
-    }
-
-    #[inline(always)]
-    fn work(&mut self, w: Work, n: u32) {
-        self.at().work(w, n);
     }
 
     #[inline(always)]
@@ -420,8 +353,16 @@ impl<'a> Observed<'a> {
     }
 }
 
-impl Probe for Observed<'_> {
+impl Counter for Observed<'_> {
     const WORK: bool = true;
+
+    #[inline(always)]
+    fn work(&mut self, w: Work, n: u32) {
+        self.work.work(w, n);
+    }
+}
+
+impl Probe for Observed<'_> {
     const PATHS: bool = true;
 
     #[inline(always)]
@@ -465,11 +406,6 @@ impl Probe for Observed<'_> {
     #[inline(always)]
     fn rays(&mut self, depth: u32, n: u32) {
         self.work.rays(depth, n);
-    }
-
-    #[inline(always)]
-    fn work(&mut self, w: Work, n: u32) {
-        self.work.work(w, n);
     }
 
     #[inline(always)]

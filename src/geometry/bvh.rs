@@ -1,17 +1,19 @@
-//! A bounding volume hierarchy, one per primitive kind: static spheres
-//! ([`Bvh`]), the quads that are not a box's face ([`QuadBvh`]), cuboids
-//! ([`CuboidBvh`]) and moving spheres ([`MovingBvh`], each sphere's box the
-//! union of its boxes at the shutter's two ends). One build and one set of
-//! walks, generic over the leaf ([`LeafPrim`]): built with the surface area
-//! heuristic (binned, binary), then collapsed to 8-wide nodes with leaves of
-//! up to 8 primitives. Quad leaves are sorted into runs of one form of the
-//! test. The sections below are written for spheres; every leaf kind keeps
-//! the same rule (the leaf test is brute force's, the boxes padded from the
-//! scene's extent), and a flat quad's box is thick enough by that padding. The heuristic's costs are those of the walk the tree is
-//! built for ([`Walk`], [`SahCost`]): the packet walk and the scalar kernel
-//! test one child box and one leaf sphere at a time (small leaves pay), the
-//! one-ray walk tests 8 child boxes and 8 leaf spheres at once (`f32x8`; full
-//! leaves pay).
+//! A bounding volume hierarchy over one primitive kind ([`Bvh`], generic
+//! over the kind's [`Primitive`] and its [`Leaf`]): built with the surface
+//! area heuristic (binned, binary) from the kind's padded boxes, then
+//! collapsed to 8-wide nodes with leaves of up to 8 primitives. One walk,
+//! written once ([`Bvh::walk`]), serves one ray (the scalar kernel) and
+//! packets (the wavefront), closest hit and any hit; what differs between
+//! one ray and a packet is [`Walker`]'s. The spheres have a second walk for
+//! `--accel bvh-ray`, one ray against 8 child boxes and 8 leaf spheres at
+//! once ([`Bvh::closest_hit_wide`]). The sections below are written for
+//! spheres; every kind keeps the same rule (the leaf test is brute force's,
+//! the boxes padded from the scene's extent), and a flat quad's box is thick
+//! enough by that padding. The heuristic's costs are those of the walk the
+//! tree is built for ([`Walk`], [`SahCost`]): the packet walk and the scalar
+//! kernel test one child box and one leaf primitive at a time (small leaves
+//! pay), the one-ray walk tests 8 child boxes and 8 leaf spheres at once
+//! (`f32x8`; full leaves pay).
 //!
 //! # Same closest hit as brute force, bit for bit
 //!
@@ -39,51 +41,22 @@
 //!   by `1 + 2 gamma_3` (Ize 2013, "Robust BVH ray traversal") and a box is
 //!   pruned only when its entry exceeds `best * (1 + 2^-20)`.
 
-use super::cuboids::{CuboidRec, Cuboids};
-use super::intersect::{sphere_disc, sphere_t, Closest};
-use super::moving::{centre_at, MovingSpheres, MOVING_BASE};
-use super::quads::{next_down, next_up, QuadRec, Quads, QUAD_BASE};
-use super::spheres::{Spheres, MISS};
-use crate::probe::{Probe, Work, WorkTally};
-use crate::real::{Real, Wide, MAX_LANES};
+use super::hit::{Closest, MISS};
+use super::primitive::{Leaf, Primitive};
+use super::slab::{slab, slab_ray, Aabb, EXIT_SCALE, PAD, PRUNE_SCALE};
+use super::spheres::{sphere_disc, sphere_t, LeafSphere, Spheres};
+use super::work::{Counter, Work, WorkTally};
+use crate::real::{Mask, Real, Wide, MAX_LANES};
 use crate::vec3::V3;
 use std::mem::MaybeUninit;
 use wide::f32x8;
 
-const PAD: f32 = 1.0 / 524_288.0; // 2^-19
-/// 1 + 2 gamma_3 with gamma_3 = 3u / (1 - 3u), rounded up.
-const EXIT_SCALE: f32 = 1.0 + 2.0 * (3.0 / 16_777_216.0) * 1.000_001;
-/// Prune a box only when its entry is beyond `best * PRUNE_SCALE`.
-const PRUNE_SCALE: f32 = 1.0 + 1.0 / 1_048_576.0;
-/// Directions components smaller than this are replaced by it (with their
-/// sign) in the slab test, so that `0 * inf` never makes a NaN.
-const TINY_DIR: f32 = 1e-30;
 /// Binary build depth beyond which splits are forced to the median, so the
 /// tree stays shallow whatever the scene (and the traversal stack bounded).
 const MAX_SAH_DEPTH: usize = 32;
 /// Traversal stack: each 8-wide level pushes at most 7 more entries than it
 /// pops, and the tree has at most MAX_SAH_DEPTH + 24 levels (2^24 spheres).
 const STACK: usize = 7 * (MAX_SAH_DEPTH + 24) + 1;
-
-#[derive(Clone, Copy, Debug)]
-struct Aabb {
-    min: [f32; 3],
-    max: [f32; 3],
-}
-
-impl Aabb {
-    const EMPTY: Aabb = Aabb { min: [f32::INFINITY; 3], max: [f32::NEG_INFINITY; 3] };
-    fn grow(&mut self, o: &Aabb) {
-        for a in 0..3 {
-            self.min[a] = self.min[a].min(o.min[a]);
-            self.max[a] = self.max[a].max(o.max[a]);
-        }
-    }
-    fn area(&self) -> f32 {
-        let e: [f32; 3] = std::array::from_fn(|a| (self.max[a] - self.min[a]).max(0.0));
-        2.0 * (e[0] * e[1] + e[1] * e[2] + e[2] * e[0])
-    }
-}
 
 /// A node of the 8-wide tree: 8 child boxes in SoA, each an inner node, a
 /// leaf (a run of up to 8 spheres in leaf order) or empty. The children fill
@@ -115,130 +88,21 @@ impl Node8 {
     }
 }
 
-/// A leaf's sphere as the one-box-at-a-time walks read it (scalar, packets):
-/// everything the sphere test needs in one record, so a leaf is one slice,
-/// bounds-checked once.
-#[derive(Clone, Copy, Debug)]
-#[repr(C)]
-pub struct LeafSphere {
-    c: [f32; 3],
-    r2: f32,
-    /// The sphere's index in the scene (the tie rule's order).
-    index: u32,
-}
-
-/// A leaf's quad: its record and its hit index (`QUAD_BASE + i`). A leaf's
-/// quads are sorted by the form of their test ([`QuadRec::axis`]: those with
-/// a normal along x, y, z, then those upright about x, y, z, then the
-/// others), and the first record of each run of one form says how long the
-/// run is (`run`), so that the leaf is tested in one loop per run, each with
-/// its form of the test ([`LeafPrim::test_leaf`]).
-#[derive(Clone, Copy, Debug)]
-#[repr(C)]
-pub struct LeafQuad {
-    rec: QuadRec,
-    index: u32,
-    /// In the first record of a run of quads of one form: the run's length.
-    run: u32,
-}
-
-/// A leaf's cuboid (its record holds its faces' hit indices).
-#[derive(Clone, Copy, Debug)]
-#[repr(C)]
-pub struct LeafCuboid {
-    rec: CuboidRec,
-}
-
-/// A leaf's moving sphere: its centre at time 0, motion, squared radius and
-/// hit index (`MOVING_BASE + i`).
-#[derive(Clone, Copy, Debug)]
-#[repr(C)]
-pub struct LeafMoving {
-    c0: [f32; 3],
-    v: [f32; 3],
-    r2: f32,
-    index: u32,
-}
-
-/// A primitive kind stored in a tree's leaves: its test against a group of
-/// rays at times `time` (only moving primitives read it), improving the
-/// closest hit (the tie rule is [`Closest::offer`]'s).
-pub trait LeafPrim: Copy + std::fmt::Debug {
-    fn test<R: Real, P: Probe>(&self, o: V3<R>, d: V3<R>, time: R, best: &mut Closest<R>, probe: &mut P);
-
-    /// The primitives of one leaf, each tested in turn.
-    #[inline(always)]
-    fn test_leaf<R: Real, P: Probe>(leaf: &[Self], o: V3<R>, d: V3<R>, time: R, best: &mut Closest<R>, probe: &mut P) {
-        for s in leaf {
-            s.test(o, d, time, best, probe);
-        }
-    }
-}
-
-impl LeafPrim for LeafSphere {
-    #[inline(always)]
-    fn test<R: Real, P: Probe>(&self, o: V3<R>, d: V3<R>, _time: R, best: &mut Closest<R>, probe: &mut P) {
-        let c = V3::new(R::splat(self.c[0]), R::splat(self.c[1]), R::splat(self.c[2]));
-        best.test(o, d, c, R::splat(self.r2), self.index, probe);
-    }
-}
-
-impl LeafPrim for LeafQuad {
-    #[inline(always)]
-    fn test<R: Real, P: Probe>(&self, o: V3<R>, d: V3<R>, _time: R, best: &mut Closest<R>, probe: &mut P) {
-        best.test_quad(o, d, &self.rec, self.index, probe);
-    }
-
-    /// The leaf's quads run by run, one loop per run with its form of the
-    /// test (with the form chosen per quad, the compiler shares the forms'
-    /// common end and moves the closest hit between registers on every test;
-    /// with one loop per form, every form costs a leaf its loop's set-up).
-    /// The tie rule does not depend on the order of the tests.
-    #[inline(always)]
-    fn test_leaf<R: Real, P: Probe>(leaf: &[Self], o: V3<R>, d: V3<R>, _time: R, best: &mut Closest<R>, probe: &mut P) {
-        let mut rest = leaf;
-        while let Some(first) = rest.first() {
-            let (run, next) = rest.split_at((first.run as usize).clamp(1, rest.len()));
-            debug_assert!(run.iter().all(|q| q.rec.axis == first.rec.axis));
-            best.test_quad_run(first.rec.axis, run.iter().map(|q| (&q.rec, q.index)), o, d, probe);
-            rest = next;
-        }
-    }
-}
-
-impl LeafPrim for LeafCuboid {
-    #[inline(always)]
-    fn test<R: Real, P: Probe>(&self, o: V3<R>, d: V3<R>, _time: R, best: &mut Closest<R>, probe: &mut P) {
-        best.test_cuboid(o, d, &self.rec, probe);
-    }
-}
-
-impl LeafPrim for LeafMoving {
-    #[inline(always)]
-    fn test<R: Real, P: Probe>(&self, o: V3<R>, d: V3<R>, time: R, best: &mut Closest<R>, probe: &mut P) {
-        let c = centre_at(V3::splat3(self.c0), V3::splat3(self.v), time);
-        best.test(o, d, c, R::splat(self.r2), self.index, probe);
-    }
-}
-
-/// The tree over a scene's quads (one tree per primitive kind: a
-/// sphere-only scene's walks are exactly what they were).
-pub type QuadBvh = Bvh<LeafQuad>;
-
-/// The tree over a scene's cuboids.
-pub type CuboidBvh = Bvh<LeafCuboid>;
-
-/// The tree over a scene's moving spheres, on their boxes over the shutter
-/// interval (traversal ignores time; the leaves test at each ray's time).
-pub type MovingBvh = Bvh<LeafMoving>;
-
-/// The tree plus the spheres in leaf order: as records for the walks that
-/// test one sphere at a time, and as SoA padded by 8 for whole loads (the
-/// one-ray walk's 8-wide leaf test).
+/// The tree over one kind's primitives: its nodes and the primitives'
+/// leaf records in leaf order; for spheres also their SoA in leaf order,
+/// padded by 8 for whole loads (the one-ray walk's 8-wide leaf test).
 #[derive(Clone, Debug)]
-pub struct Bvh<L = LeafSphere> {
+pub struct Bvh<L> {
     nodes: Vec<Node8>,
     leaf: Vec<L>,
+    /// The walk the tree was built for.
+    walk: Walk,
+    lanes: SphereLanes,
+}
+
+/// The spheres of a sphere tree in leaf order, as SoA (empty for other kinds).
+#[derive(Clone, Debug, Default)]
+struct SphereLanes {
     cx: Vec<f32>,
     cy: Vec<f32>,
     cz: Vec<f32>,
@@ -417,174 +281,36 @@ fn build_binary(boxes: &[Aabb], centroid: Vec<[f32; 3]>, walk: Walk) -> (Vec<BNo
     (b.nodes, b.order)
 }
 
-impl Bvh {
-    /// Builds the tree for the one-by-one walks (packets, scalar); `extent`
-    /// bounds |coordinates| of every ray origin (the camera and its lens),
-    /// used to pad the boxes.
-    pub fn build(s: &Spheres, extent: f32) -> Bvh {
-        Bvh::build_for(s, extent, Walk::OneByOne)
-    }
-
-    /// Builds the tree for `walk` (see [`Bvh::build`]).
-    pub fn build_for(s: &Spheres, extent: f32, walk: Walk) -> Bvh {
-        let n = s.len;
-        let mut d = extent.abs();
-        for i in 0..n {
-            d = d.max(s.cx[i].abs().max(s.cy[i].abs()).max(s.cz[i].abs()) + s.r[i].abs());
-        }
-        let pad = 2.0 * d * PAD;
-        let boxes: Vec<Aabb> = (0..n)
-            .map(|i| {
-                let c = [s.cx[i], s.cy[i], s.cz[i]];
-                let r = s.r[i].abs();
-                Aabb { min: c.map(|x| x - r - pad), max: c.map(|x| x + r + pad) }
-            })
-            .collect();
-        let centroid = (0..n).map(|i| [s.cx[i], s.cy[i], s.cz[i]]).collect();
+impl<L: Leaf> Bvh<L> {
+    /// Builds the tree over `prims` for `walk`; `extent` bounds
+    /// |coordinates| of every ray origin (the camera and its lens), from
+    /// which the kind's [`Primitive::extent`] pads the boxes by
+    /// `2 extent 2^-19` on every side (see the module's bounds).
+    pub fn build<K: Primitive<Leaf = L>>(prims: &K, extent: f32, walk: Walk) -> Bvh<L> {
+        let pad = 2.0 * prims.extent(extent) * PAD;
+        let n = prims.count();
+        let boxes: Vec<Aabb> = (0..n).map(|k| prims.bounds(k, pad)).collect();
+        let centroid = (0..n).map(|k| prims.centroid(k, pad)).collect();
         let (bnodes, order) = build_binary(&boxes, centroid, walk);
-        let mut bvh =
-            Bvh { nodes: Vec::new(), leaf: vec![], cx: vec![], cy: vec![], cz: vec![], r2: vec![], index: vec![] };
-        for &i in &order {
-            let i = i as usize;
-            bvh.leaf.push(LeafSphere { c: [s.cx[i], s.cy[i], s.cz[i]], r2: s.r2[i], index: i as u32 });
-            bvh.cx.push(s.cx[i]);
-            bvh.cy.push(s.cy[i]);
-            bvh.cz.push(s.cz[i]);
-            bvh.r2.push(s.r2[i]);
-            bvh.index.push(i as u32);
-        }
-        for _ in 0..8 {
-            bvh.cx.push(0.0);
-            bvh.cy.push(0.0);
-            bvh.cz.push(0.0);
-            bvh.r2.push(-1.0); // never hit
-            bvh.index.push(MISS);
-        }
-        bvh.nodes.push(Node8::EMPTY);
+        let leaf = order.iter().map(|&k| prims.leaf(k as usize)).collect();
+        let mut bvh = Bvh { nodes: vec![Node8::EMPTY], leaf, walk, lanes: SphereLanes::default() };
         if n > 0 {
             bvh.collapse(&bnodes, 0, 0);
         }
-        bvh
-    }
-}
-
-impl QuadBvh {
-    /// Builds the tree over the quads for the one-by-one walks; `extent`
-    /// bounds |coordinates| of every ray origin and every primitive.
-    ///
-    /// A quad's box covers its four corners widened by the edge tolerance
-    /// ([`QuadRec::bounds`]), then padded by `2 * extent * 2^-19` on every
-    /// side, as the spheres' boxes are: an axis-aligned quad's box is flat,
-    /// and the padding gives it a thickness of `2^-17 extent`, well above
-    /// what the quad test's rounding needs (the computed hit point lies within
-    /// about `10u extent` of the plane, u = 2^-24) and the slab test's (see
-    /// the module's bounds). So a flat box is entered by every ray the quad
-    /// test can accept, and brute force and the tree agree bit for bit.
-    ///
-    /// The tree holds the loose quads ([`Quads::loose`]); the cuboids' faces
-    /// are in the cuboids' search.
-    pub fn build_quads(q: &Quads, extent: f32) -> QuadBvh {
-        let pad = 2.0 * extent.abs() * PAD;
-        let boxes: Vec<Aabb> = q
-            .loose
-            .iter()
-            .map(|&i| {
-                let (min, max) = q.rec[i as usize].bounds();
-                Aabb { min: min.map(|x| x - pad), max: max.map(|x| x + pad) }
-            })
-            .collect();
-        let mut bvh = Bvh::one_by_one(&boxes, |k| {
-            let i = q.loose[k];
-            LeafQuad { rec: q.rec[i as usize], index: QUAD_BASE + i, run: 0 }
-        });
-        // Each leaf's quads sorted by form (the general ones last), each
-        // run's length in its first record.
-        let leaves: Vec<(usize, usize)> = bvh
-            .nodes
-            .iter()
-            .flat_map(|node| {
-                (0..node.kids())
-                    .filter(|&k| node.count[k] != 0)
-                    .map(|k| (node.child[k] as usize, node.count[k] as usize))
-            })
-            .collect();
-        for (start, count) in leaves {
-            let leaf = &mut bvh.leaf[start..start + count];
-            let order = |axis: u32| if axis == 3 { 7 } else { axis };
-            leaf.sort_by_key(|q| order(q.rec.axis));
-            let mut start = 0;
-            while start < leaf.len() {
-                let form = leaf[start].rec.axis;
-                let len = leaf[start..].iter().take_while(|q| q.rec.axis == form).count();
-                leaf[start].run = len as u32;
-                start += len;
+        for node in 0..bvh.nodes.len() {
+            for k in 0..bvh.nodes[node].kids() {
+                let (start, count) = (bvh.nodes[node].child[k] as usize, bvh.nodes[node].count[k] as usize);
+                if count != 0 {
+                    L::arrange(&mut bvh.leaf[start..start + count]);
+                }
             }
         }
         bvh
     }
-}
 
-impl CuboidBvh {
-    /// Builds the tree over the cuboids for the one-by-one walks. A cuboid's
-    /// box is the union of its faces' ([`QuadRec::bounds`]: the four corners
-    /// widened by the edge tolerance, rounded outwards), padded as the quads'
-    /// are (`2 extent 2^-19` on every side): far more than the distance
-    /// between the faces' planes and the slabs' (both rounded once from one
-    /// box) and the slab test's rounding, so every ray the cuboid test takes
-    /// enters the box, and brute force and the tree agree bit for bit.
-    pub fn build_cuboids(c: &Cuboids, q: &Quads, extent: f32) -> CuboidBvh {
-        let pad = 2.0 * extent.abs() * PAD;
-        let boxes: Vec<Aabb> = c
-            .rec
-            .iter()
-            .map(|r| {
-                let mut b = Aabb::EMPTY;
-                for face in r.faces.as_flattened() {
-                    let (min, max) = q.rec[(face - QUAD_BASE) as usize].bounds();
-                    b.grow(&Aabb { min: min.map(|x| x - pad), max: max.map(|x| x + pad) });
-                }
-                b
-            })
-            .collect();
-        Bvh::one_by_one(&boxes, |i| LeafCuboid { rec: c.rec[i] })
-    }
-}
-
-impl MovingBvh {
-    /// Builds the tree over the moving spheres for the one-by-one walks;
-    /// `extent` bounds |coordinates| of every ray origin and every primitive
-    /// at every time. A sphere's box is the union of its boxes at `t = 0` and
-    /// `t = 1` ([`MovingSpheres::bounds`]), rounded outwards and padded as the
-    /// static spheres' are (`2 extent 2^-19` on every side): the centre a
-    /// kernel computes, `c0 + t v` in f32, lies within `2u (|c0| + |v|)` of
-    /// the exact segment, far inside the padding.
-    pub fn build_moving(m: &MovingSpheres, extent: f32) -> MovingBvh {
-        let n = m.len();
-        let pad = 2.0 * extent.abs() * PAD;
-        let boxes: Vec<Aabb> = (0..n)
-            .map(|i| {
-                let (lo, hi) = m.bounds(i);
-                Aabb { min: lo.map(|x| next_down(x) - pad), max: hi.map(|x| next_up(x) + pad) }
-            })
-            .collect();
-        Bvh::one_by_one(&boxes, |i| LeafMoving { c0: m.c0(i), v: m.v(i), r2: m.s.r2[i], index: MOVING_BASE + i as u32 })
-    }
-}
-
-impl<L: LeafPrim> Bvh<L> {
-    /// The tree for the one-by-one walks over primitives whose (padded)
-    /// boxes are `boxes`, with leaf record `leaf(i)` for primitive `i`, in
-    /// the build's order.
-    fn one_by_one(boxes: &[Aabb], leaf: impl Fn(usize) -> L) -> Bvh<L> {
-        let centroid = boxes.iter().map(|b| std::array::from_fn(|k| 0.5 * b.min[k] + 0.5 * b.max[k])).collect();
-        let (bnodes, order) = build_binary(boxes, centroid, Walk::OneByOne);
-        let leaf = order.iter().map(|&i| leaf(i as usize)).collect();
-        let mut bvh =
-            Bvh { nodes: vec![Node8::EMPTY], leaf, cx: vec![], cy: vec![], cz: vec![], r2: vec![], index: vec![] };
-        if !boxes.is_empty() {
-            bvh.collapse(&bnodes, 0, 0);
-        }
-        bvh
+    /// The walk the tree was built for.
+    pub fn built_for(&self) -> Walk {
+        self.walk
     }
 
     /// Fills node `at` with up to 8 descendants of binary node `root`.
@@ -625,182 +351,32 @@ impl<L: LeafPrim> Bvh<L> {
         }
     }
 
-    /// The spheres of a leaf (leaf-order slots `start..start + count`), each
-    /// broadcast against the rays: the leaf test of the scalar and the packet
-    /// walks (the sphere test and the tie rule are [`Closest::test`]'s).
+    /// The one walk: the rays `o + t d` at times `time` (moving primitives'
+    /// leaves read it) from `best` (lanes at `t = -inf` take no part),
+    /// improving it: the closest hit, or (`ANY`) any hit below `best.t`, a
+    /// lane that found one leaving (its `t` becomes `-inf`, its index is not
+    /// `MISS`) and the walk stopping once every lane has left. A child is
+    /// entered when any ray of the group enters its box; a leaf's primitives
+    /// are each tested against the whole group, as in brute force.
     #[inline(always)]
-    #[allow(clippy::too_many_arguments)]
-    fn leaf<R: Real, P: Probe>(
+    pub fn walk<R: Walker, C: Counter, const ANY: bool>(
         &self,
-        start: usize,
-        count: usize,
         o: V3<R>,
         d: V3<R>,
         time: R,
         best: &mut Closest<R>,
-        probe: &mut P,
+        counter: &mut C,
     ) {
-        L::test_leaf(&self.leaf[start..start + count], o, d, time, best, probe);
-    }
-
-    /// The closest hit of one ray, one box and one sphere at a time (scalar kernel).
-    #[inline(always)]
-    pub fn closest_hit_scalar<P: Probe>(&self, o: V3<f32>, d: V3<f32>, probe: &mut P) -> (u32, f32) {
-        let best = self.walk_scalar(o, d, Closest::<f32>::none(), probe);
-        (best.index, best.t)
-    }
-
-    /// The scalar walk from `best` (a closest hit found so far, by another
-    /// tree, say), returning the improved closest hit.
-    #[inline(always)]
-    pub fn walk_scalar<P: Probe>(&self, o: V3<f32>, d: V3<f32>, best: Closest<f32>, probe: &mut P) -> Closest<f32> {
-        self.walk_scalar_at(o, d, 0.0, best, probe)
-    }
-
-    /// [`Bvh::walk_scalar`] for a ray at time `time` (moving primitives' leaves read it).
-    #[inline(always)]
-    pub fn walk_scalar_at<P: Probe>(
-        &self,
-        o: V3<f32>,
-        d: V3<f32>,
-        time: f32,
-        best: Closest<f32>,
-        probe: &mut P,
-    ) -> Closest<f32> {
-        self.walk_scalar_impl::<P, false>(o, d, time, best, probe)
-    }
-
-    /// Any hit of one ray below `best.t` (a shadow ray's length; `best`
-    /// found none yet): the scalar walk, which stops at the first leaf that
-    /// holds one (its index is then not `MISS`).
-    #[inline(always)]
-    pub fn any_hit_scalar_at<P: Probe>(
-        &self,
-        o: V3<f32>,
-        d: V3<f32>,
-        time: f32,
-        best: Closest<f32>,
-        probe: &mut P,
-    ) -> Closest<f32> {
-        self.walk_scalar_impl::<P, true>(o, d, time, best, probe)
-    }
-
-    /// The scalar walk: the closest hit, or (`ANY`) any hit, stopping early.
-    #[inline(always)]
-    fn walk_scalar_impl<P: Probe, const ANY: bool>(
-        &self,
-        o: V3<f32>,
-        d: V3<f32>,
-        time: f32,
-        mut best: Closest<f32>,
-        probe: &mut P,
-    ) -> Closest<f32> {
-        let mut tally = WorkTally::<P>::new();
+        let mut tally = WorkTally::<C>::new();
         let (inv, noi) = slab_ray(o, d);
-        let mut stack = Stack::new((0, 0.0));
+        let mut stack = Stack::new((0u32, R::root()));
+        let exit = R::constant(EXIT_SCALE);
+        let zero = R::constant(0.0);
+        let prune = R::splat(PRUNE_SCALE);
         while let Some((ni, entry)) = stack.pop() {
-            if entry > best.t * PRUNE_SCALE {
+            if R::pruned(entry, best.t) {
                 continue;
             }
-            tally.work(Work::Node, 1);
-            let node = &self.nodes[ni as usize];
-            for k in 0..node.kids() {
-                tally.work(Work::Box, 1);
-                let (near, far) = slab(
-                    V3::new(node.min[0][k], node.min[1][k], node.min[2][k]),
-                    V3::new(node.max[0][k], node.max[1][k], node.max[2][k]),
-                    inv,
-                    noi,
-                    0.0,
-                );
-                if !(near <= far * EXIT_SCALE && near <= best.t * PRUNE_SCALE) {
-                    continue;
-                }
-                match node.count[k] {
-                    0 => stack.push((node.child[k], near)),
-                    count => {
-                        self.leaf(node.child[k] as usize, count as usize, o, d, time, &mut best, &mut tally);
-                        if ANY && best.index != MISS {
-                            tally.flush(probe);
-                            return best;
-                        }
-                    }
-                }
-            }
-        }
-        tally.flush(probe);
-        best
-    }
-
-    /// The closest hits of a packet of rays walking the tree together: a child
-    /// is entered when any live ray (bit k of `live`) enters its box; a leaf's
-    /// spheres are each broadcast against the packet, as in brute force.
-    /// Lanes not in `live` return `MISS` with `t = -inf`: starting them at
-    /// `best.t = -inf` keeps them out of every box (entries are at least 0)
-    /// without a mask per box test.
-    #[inline(always)]
-    pub fn closest_hit_packet<W: Wide, P: Probe>(&self, o: V3<W>, d: V3<W>, live: u32, probe: &mut P) -> (W::U32, W) {
-        let best = self.walk_packet(o, d, Closest::<W>::live(W::mask_from_bits(live)), probe);
-        (best.index, best.t)
-    }
-
-    /// The packet walk from `best` (lanes at `t = -inf` take no part),
-    /// returning the improved closest hit.
-    #[inline(always)]
-    pub fn walk_packet<W: Wide, P: Probe>(&self, o: V3<W>, d: V3<W>, best: Closest<W>, probe: &mut P) -> Closest<W> {
-        self.walk_packet_at(o, d, W::splat(0.0), best, probe)
-    }
-
-    /// [`Bvh::walk_packet`] for rays at times `time` (moving primitives' leaves read it).
-    #[inline(always)]
-    pub fn walk_packet_at<W: Wide, P: Probe>(
-        &self,
-        o: V3<W>,
-        d: V3<W>,
-        time: W,
-        best: Closest<W>,
-        probe: &mut P,
-    ) -> Closest<W> {
-        self.walk_packet_impl::<W, P, false>(o, d, time, best, probe)
-    }
-
-    /// Any hit of each ray of a packet below its `best.t` (shadow rays'
-    /// lengths; lanes at `-inf` take no part): the packet walk, in which a
-    /// lane that found a hit leaves (its `t` becomes `-inf`, its index is
-    /// not `MISS`), and which stops once every lane has left.
-    #[inline(always)]
-    pub fn any_hit_packet_at<W: Wide, P: Probe>(
-        &self,
-        o: V3<W>,
-        d: V3<W>,
-        time: W,
-        best: Closest<W>,
-        probe: &mut P,
-    ) -> Closest<W> {
-        self.walk_packet_impl::<W, P, true>(o, d, time, best, probe)
-    }
-
-    /// The packet walk: closest hits, or (`ANY`) any hits, stopping early.
-    #[inline(always)]
-    fn walk_packet_impl<W: Wide, P: Probe, const ANY: bool>(
-        &self,
-        o: V3<W>,
-        d: V3<W>,
-        time: W,
-        mut best: Closest<W>,
-        probe: &mut P,
-    ) -> Closest<W> {
-        let mut tally = WorkTally::<P>::new();
-        let (inv, noi) = slab_ray(o, d);
-        let mut stack = Stack::new(0u32);
-        // The box loop needs every vector register on AVX2 (16): constants
-        // the compiler may rebuild are rebuilt inside it, one instruction
-        // each per box test. Opaque, they are kept in memory and read as the
-        // operands of the instructions that use them, for free.
-        let exit = std::hint::black_box(W::splat(EXIT_SCALE));
-        let zero = std::hint::black_box(W::splat(0.0));
-        let prune = W::splat(PRUNE_SCALE);
-        while let Some(ni) = stack.pop() {
             tally.work(Work::Node, 1);
             let node = &self.nodes[ni as usize];
             let kids = node.kids();
@@ -814,26 +390,132 @@ impl<L: LeafPrim> Bvh<L> {
                     continue;
                 }
                 match node.count[k] {
-                    0 => stack.push(node.child[k]),
+                    0 => stack.push((node.child[k], R::entry(near))),
                     count => {
-                        self.leaf(node.child[k] as usize, count as usize, o, d, time, &mut best, &mut tally);
+                        let (start, count) = (node.child[k] as usize, count as usize);
+                        L::test_leaf(&self.leaf[start..start + count], o, d, time, best, &mut tally);
                         if ANY && best.leave_found() {
-                            tally.flush(probe);
-                            return best;
+                            tally.flush(counter);
+                            return;
                         }
                     }
                 }
             }
         }
-        tally.flush(probe);
-        best
+        tally.flush(counter);
     }
 }
 
-impl Bvh {
+/// How a group of rays walks a tree: the loop is written once
+/// ([`Bvh::walk`]); what differs between one ray (`f32`) and a packet (a
+/// [`Wide`] type) is here.
+pub trait Walker: Real {
+    /// What the stack keeps beside a node: one ray its entry distance (a
+    /// node popped once the ray found a closer hit is skipped); a packet
+    /// nothing (a node is entered for any ray, and rechecked box by box).
+    type Entry: Copy;
+    fn entry(near: Self) -> Self::Entry;
+    /// The root's entry.
+    fn root() -> Self::Entry;
+    /// Whether a popped node is skipped.
+    fn pruned(entry: Self::Entry, best: Self) -> bool;
+    /// A constant the box loop reads. The packets' box loop needs every
+    /// vector register on AVX2 (16): constants the compiler may rebuild are
+    /// rebuilt inside it, one instruction each per box test. Opaque, they
+    /// are kept in memory and read as the operands of the instructions that
+    /// use them, for free.
+    fn constant(x: f32) -> Self;
+    /// The spheres' closest hits on a tree built for [`Walk::Wide8`]: each
+    /// ray of a packet on its own ([`Bvh::closest_hit_wide`]); one ray walks
+    /// it as any tree.
+    fn closest_wide8<C: Counter>(
+        bvh: &Bvh<LeafSphere>,
+        o: V3<Self>,
+        d: V3<Self>,
+        best: &mut Closest<Self>,
+        counter: &mut C,
+    );
+}
+
+impl Walker for f32 {
+    type Entry = f32;
+    #[inline(always)]
+    fn entry(near: f32) -> f32 {
+        near
+    }
+    #[inline(always)]
+    fn root() -> f32 {
+        0.0
+    }
+    #[inline(always)]
+    fn pruned(entry: f32, best: f32) -> bool {
+        entry > best * PRUNE_SCALE
+    }
+    #[inline(always)]
+    fn constant(x: f32) -> f32 {
+        x
+    }
+    #[inline(always)]
+    fn closest_wide8<C: Counter>(
+        bvh: &Bvh<LeafSphere>,
+        o: V3<f32>,
+        d: V3<f32>,
+        best: &mut Closest<f32>,
+        counter: &mut C,
+    ) {
+        bvh.walk::<f32, C, false>(o, d, 0.0, best, counter);
+    }
+}
+
+impl<W: Wide> Walker for W {
+    type Entry = ();
+    #[inline(always)]
+    fn entry(_near: W) {}
+    #[inline(always)]
+    fn root() {}
+    #[inline(always)]
+    fn pruned(_entry: (), _best: W) -> bool {
+        false
+    }
+    #[inline(always)]
+    fn constant(x: f32) -> W {
+        std::hint::black_box(W::splat(x))
+    }
+    #[inline(always)]
+    fn closest_wide8<C: Counter>(bvh: &Bvh<LeafSphere>, o: V3<W>, d: V3<W>, best: &mut Closest<W>, counter: &mut C) {
+        let live = W::mask_bits(best.t.gt(W::splat(f32::NEG_INFINITY)));
+        let (index, t) = bvh.closest_hits_one_by_one(o, d, live, counter);
+        best.offer(W::mask_from_bits(live), t, index);
+    }
+}
+
+impl Bvh<LeafSphere> {
+    /// The tree over `s` for `walk` ([`Bvh::build`]), with the spheres' SoA
+    /// in leaf order for the one-ray walk ([`Bvh::closest_hit_wide`]).
+    pub fn build_spheres(s: &Spheres, extent: f32, walk: Walk) -> Bvh<LeafSphere> {
+        let mut bvh = Bvh::build(s, extent, walk);
+        let l = &mut bvh.lanes;
+        for leaf in &bvh.leaf {
+            let i = leaf.index as usize;
+            l.cx.push(s.cx[i]);
+            l.cy.push(s.cy[i]);
+            l.cz.push(s.cz[i]);
+            l.r2.push(s.r2[i]);
+            l.index.push(i as u32);
+        }
+        for _ in 0..8 {
+            l.cx.push(0.0);
+            l.cy.push(0.0);
+            l.cz.push(0.0);
+            l.r2.push(-1.0); // never hit
+            l.index.push(MISS);
+        }
+        bvh
+    }
+
     /// The closest hit of one ray: 8 child boxes, or 8 leaf spheres, per `f32x8` test.
-    pub fn closest_hit_wide<P: Probe>(&self, o: V3<f32>, d: V3<f32>, probe: &mut P) -> (u32, f32) {
-        let mut tally = WorkTally::<P>::new();
+    pub fn closest_hit_wide<C: Counter>(&self, o: V3<f32>, d: V3<f32>, counter: &mut C) -> (u32, f32) {
+        let mut tally = WorkTally::<C>::new();
         let (inv, noi) = slab_ray(o, d);
         let (o8, d8) = (splat3(o), splat3(d));
         let (inv8, noi8) = (splat3(inv), splat3(noi));
@@ -872,18 +554,18 @@ impl Bvh {
                 stack.push(e);
             }
         }
-        tally.flush(probe);
+        tally.flush(counter);
         (best.index, best.t)
     }
 
     /// The closest hits of a packet's rays, each walking the tree on its own
     /// with [`Bvh::closest_hit_wide`] (`--accel bvh-ray`). Lanes not in `live` miss.
-    pub fn closest_hits_one_by_one<W: Wide, P: Probe>(
+    pub fn closest_hits_one_by_one<W: Wide, C: Counter>(
         &self,
         o: V3<W>,
         d: V3<W>,
         live: u32,
-        probe: &mut P,
+        counter: &mut C,
     ) -> (W::U32, W) {
         let mut hit = [MISS; MAX_LANES];
         let mut t = [f32::INFINITY; MAX_LANES];
@@ -892,7 +574,7 @@ impl Bvh {
             let k = m.trailing_zeros() as usize;
             m &= m - 1;
             let lane = |v: V3<W>| V3::new(v.x.lane(k), v.y.lane(k), v.z.lane(k));
-            (hit[k], t[k]) = self.closest_hit_wide(lane(o), lane(d), probe);
+            (hit[k], t[k]) = self.closest_hit_wide(lane(o), lane(d), counter);
         }
         (W::u_from_fn(|k| hit[k]), W::from_fn(|k| t[k]))
     }
@@ -900,32 +582,32 @@ impl Bvh {
     /// One ray against the up-to-8 spheres of a leaf at once (`f32x8` lanes are
     /// spheres here); hits are offered to `best` in lane order.
     #[inline(always)]
-    fn leaf_wide<P: Probe>(
+    fn leaf_wide<C: Counter>(
         &self,
         start: usize,
         cnt: usize,
         o: V3<f32x8>,
         d: V3<f32x8>,
         best: &mut Closest<f32>,
-        probe: &mut P,
+        counter: &mut C,
     ) {
-        probe.work(Work::Sphere, cnt as u32);
+        counter.work(Work::Sphere, cnt as u32);
         let ld = |v: &[f32]| f32x8::new(v[start..start + 8].try_into().unwrap());
-        let c = V3::new(ld(&self.cx), ld(&self.cy), ld(&self.cz));
-        let r2 = ld(&self.r2);
+        let c = V3::new(ld(&self.lanes.cx), ld(&self.lanes.cy), ld(&self.lanes.cz));
+        let r2 = ld(&self.lanes.r2);
         let (disc, f, b) = sphere_disc(o, d, c, r2);
         let live = (1u32 << cnt) - 1;
         if disc.ge(f32x8::splat(0.0)).to_bitmask() & live == 0 {
             return;
         }
-        probe.work(Work::Root, 1);
+        counter.work(Work::Root, 1);
         let (hit, t) = sphere_t(disc, f, b, r2);
         let mut m = hit.to_bitmask() & live;
         let t = t.to_array();
         while m != 0 {
             let k = m.trailing_zeros() as usize;
             m &= m - 1;
-            best.offer(true, t[k], self.index[start + k]);
+            best.offer(true, t[k], self.lanes.index[start + k]);
         }
     }
 }
@@ -964,36 +646,4 @@ impl<T: Copy> Stack<T> {
 #[inline(always)]
 fn splat3(v: V3<f32>) -> V3<f32x8> {
     V3::new(f32x8::splat(v.x), f32x8::splat(v.y), f32x8::splat(v.z))
-}
-
-/// `1 / x` per lane; components smaller than `TINY_DIR` are replaced by it
-/// (with their sign), so the slab test never computes `0 * inf` (the
-/// boxes' slab tests and the cuboids', [`super::cuboids`]).
-#[inline(always)]
-pub(super) fn inv_lanes<R: Real>(x: R) -> R {
-    let tiny = R::splat(TINY_DIR);
-    R::splat(1.0) / R::select(x.abs().lt(tiny), tiny.copysign(x), x)
-}
-
-/// What the slab test needs of the rays `o + t d`: `1/d` (see [`inv_lanes`])
-/// and `-(o * (1/d))`.
-#[inline(always)]
-fn slab_ray<R: Real>(o: V3<R>, d: V3<R>) -> (V3<R>, V3<R>) {
-    let inv = V3::new(inv_lanes(d.x), inv_lanes(d.y), inv_lanes(d.z));
-    (inv, -o.mul_elem(inv))
-}
-
-/// Entry and exit distances of the rays through boxes, entry clamped at
-/// `zero` (0, passed in so that a caller can make it opaque), given [`slab_ray`]'s `1/d` and `-(o * (1/d))`: each face's distance is one
-/// fused multiply-add (see the module's error bounds).
-#[inline(always)]
-fn slab<R: Real>(bmin: V3<R>, bmax: V3<R>, inv: V3<R>, noi: V3<R>, zero: R) -> (R, R) {
-    let face = |b: R, inv: R, noi: R| b.mul_add_bound(inv, noi);
-    let t0 = V3::new(face(bmin.x, inv.x, noi.x), face(bmin.y, inv.y, noi.y), face(bmin.z, inv.z, noi.z));
-    let t1 = V3::new(face(bmax.x, inv.x, noi.x), face(bmax.y, inv.y, noi.y), face(bmax.z, inv.z, noi.z));
-    // No NaN can arise (|1/d| <= 1e30, finite coordinates) and the test only
-    // needs to be conservative, so the one-instruction min/max do.
-    let near = t0.x.fast_min(t1.x).fast_max(t0.y.fast_min(t1.y)).fast_max(t0.z.fast_min(t1.z)).fast_max(zero);
-    let far = t0.x.fast_max(t1.x).fast_min(t0.y.fast_max(t1.y)).fast_min(t0.z.fast_max(t1.z));
-    (near, far)
 }

@@ -42,8 +42,11 @@
 //!   `3u |f|`). `tests/suite/nextweek.rs` checks it, and the hits against an
 //!   f64 oracle.
 
-use super::bvh::inv_lanes;
-use super::quads::QUAD_BASE;
+use super::hit::{Closest, QUAD_BASE};
+use super::primitive::{brute, Leaf, Primitive};
+use super::quads::Quads;
+use super::slab::{inv_lanes, Aabb};
+use super::work::{Counter, Work};
 use crate::real::{Mask, Real};
 use crate::vec3::V3;
 
@@ -66,6 +69,8 @@ pub struct CuboidRec {
 #[derive(Clone, Debug, Default)]
 pub struct Cuboids {
     pub rec: Vec<CuboidRec>,
+    /// Per cuboid, the union of its faces' boxes ([`Cuboids::bound_faces`]).
+    faces_box: Vec<Aabb>,
 }
 
 impl Cuboids {
@@ -88,6 +93,84 @@ impl Cuboids {
             axes: axes.map(f),
             half: f(half),
             faces: [[face(3), face(1)], [face(5), face(4)], [face(2), face(0)]],
+        });
+    }
+
+    /// Records each cuboid's box for a tree's build: the union of its faces'
+    /// ([`super::QuadRec::bounds`]: the four corners widened by the edge
+    /// tolerance, rounded outwards), from the quads that hold them.
+    pub fn bound_faces(&mut self, q: &Quads) {
+        self.faces_box = self
+            .rec
+            .iter()
+            .map(|r| {
+                let mut b = Aabb::EMPTY;
+                for face in r.faces.as_flattened() {
+                    let (min, max) = q.rec[(face - QUAD_BASE) as usize].bounds();
+                    b.grow(&Aabb { min, max });
+                }
+                b
+            })
+            .collect();
+    }
+}
+
+/// A cuboid against the rays ([`cuboid_hit`]), improving `best`: its faces'
+/// hit indices enter the tie rule as any quad's.
+#[inline(always)]
+pub fn test_cuboid<R: Real, C: Counter>(best: &mut Closest<R>, o: V3<R>, d: V3<R>, b: &CuboidRec, counter: &mut C) {
+    counter.work(Work::Cuboid, 1);
+    let (hit, t, index) = cuboid_hit(o, d, b);
+    best.offer(hit, t, index);
+}
+
+/// A leaf's cuboid (its record holds its faces' hit indices).
+#[derive(Clone, Copy, Debug)]
+#[repr(C)]
+pub struct LeafCuboid {
+    rec: CuboidRec,
+}
+
+impl Leaf for LeafCuboid {
+    #[inline(always)]
+    fn test<R: Real, C: Counter>(&self, o: V3<R>, d: V3<R>, _time: R, best: &mut Closest<R>, counter: &mut C) {
+        test_cuboid(best, o, d, &self.rec, counter);
+    }
+}
+
+impl Primitive for Cuboids {
+    type Leaf = LeafCuboid;
+
+    fn count(&self) -> usize {
+        self.rec.len()
+    }
+
+    #[inline(always)]
+    fn leaf(&self, i: usize) -> LeafCuboid {
+        LeafCuboid { rec: self.rec[i] }
+    }
+
+    /// The union of its faces' boxes ([`Cuboids::bound_faces`]), padded as
+    /// the quads' are: far more than the distance between the faces' planes
+    /// and the slabs' (both rounded once from one box) and the slab test's
+    /// rounding, so every ray the cuboid test takes enters the box, and
+    /// brute force and the tree agree bit for bit.
+    fn bounds(&self, i: usize, pad: f32) -> Aabb {
+        let b = self.faces_box[i];
+        Aabb::padded(b.min, b.max, pad)
+    }
+
+    #[inline(always)]
+    fn brute<R: Real, C: Counter, const ANY: bool>(
+        &self,
+        o: V3<R>,
+        d: V3<R>,
+        _time: R,
+        best: &mut Closest<R>,
+        counter: &mut C,
+    ) {
+        brute::<R, C, ANY>(self.rec.len(), best, counter, |i, best, tally| {
+            test_cuboid(best, o, d, &self.rec[i], tally)
         });
     }
 }

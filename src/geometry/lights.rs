@@ -53,7 +53,7 @@
 //! each lane keeps its own: the list is short (at most
 //! [`crate::limits::MAX_SAMPLED_SHAPES`]) and the same for every lane.
 
-use crate::geometry::intersect::{sphere_disc, sphere_t};
+use super::spheres::{sphere_disc, sphere_t};
 use crate::material::emission;
 use crate::real::Real;
 use crate::sampling::cos_sin_turn;

@@ -23,14 +23,11 @@
 //! the book's mist), and a ray that starts inside a medium (the camera in
 //! the mist, a ray scattered inside) gets `t_in < 0`, clamped to 0.
 
+use super::hit::MEDIUM_BASE;
 use crate::math::ln;
 use crate::real::Real;
 use crate::sampling::{layout, Stream};
 use crate::vec3::V3;
-
-/// The hit index of medium `k` is `MEDIUM_BASE + k`: above every quad's
-/// (`QUAD_BASE + i`, `i < 2^20`), below `MISS`.
-pub const MEDIUM_BASE: u32 = 3 << 30;
 
 /// A medium's boundary, in f32, as the kernels read it.
 #[derive(Clone, Copy, Debug, PartialEq)]
@@ -80,7 +77,7 @@ impl Media {
 pub fn chord<R: Real>(b: &Boundary, o: V3<R>, d: V3<R>) -> (R, R) {
     match *b {
         Boundary::Sphere { c, r2 } => {
-            // The robust form of the sphere test (`intersect.rs`), both roots.
+            // The robust form of the sphere test (`spheres.rs`), both roots.
             let r2 = R::splat(r2);
             let g = V3::splat3(c) - o;
             let b = g.dot(d);

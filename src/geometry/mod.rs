@@ -1,47 +1,51 @@
 //! Geometry: every primitive kind as structure of arrays, its intersection
 //! test written once over `Real` (the scalar kernel and every lane width
-//! compute the same bits), and the trees over them.
+//! compute the same bits), the trees over them and the one aggregate that
+//! searches them all.
 //!
-//! - [`spheres`]: static spheres (a negative radius is the book's hollow
-//!   sphere) and their 32-byte shading records; [`intersect`]: the robust
-//!   ray-sphere test, the brute-force closest-hit and any-hit loops of every
-//!   kind, the surface and where a new ray starts.
-//! - [`quads`]: The Next Week's parallelograms, with forms of the test for
-//!   quads whose normal lies along an axis or that stand upright about one.
-//! - [`cuboids`]: a box (six quads after the search) tested whole, by one
-//!   slab test in its own frame.
-//! - [`moving`]: spheres whose centre moves over the shutter interval,
-//!   tested at each path's time.
+//! - [`hit`]: hit indices (a kind's range and the primitive's index in it)
+//!   and the closest-hit rule every search uses; [`work`]: what a search
+//!   counts; [`slab`]: rays against boxes; [`surface`]: the hit surface and
+//!   where a new ray starts.
+//! - [`primitive`]: what a kind gives the searches ([`Primitive`], [`Leaf`]).
+//! - The kinds, a file each: [`spheres`] (static spheres, a negative radius
+//!   the book's hollow sphere, and the robust ray-sphere test), [`quads`]
+//!   (The Next Week's parallelograms, with forms of the test for quads whose
+//!   normal lies along an axis or that stand upright about one), [`cuboids`]
+//!   (a box, six quads after the search, tested whole by one slab test in
+//!   its own frame), [`moving`] (spheres whose centre moves over the
+//!   shutter interval, tested at each path's time).
+//! - [`bvh`]: an 8-wide SAH tree over any kind, its one walk written once for
+//!   one ray and for packets; [`shapes`]: every kind and its tree, searched
+//!   in one closest-hit and one any-hit search.
 //! - [`media`]: constant media (a sphere or box boundary), sampled after the
-//!   closest hit; not in a tree.
-//! - [`lights`]: the shapes the `book` and `nee-mis` estimators sample
-//!   (static spheres and quads), their points and densities.
-//! - [`bvh`]: one 8-wide SAH tree per kind (spheres, loose quads, cuboids,
-//!   moving spheres), generic over the leaf.
-//!
-//! One tie order across kinds: hit indices are spheres `i`, then
-//! `QUAD_BASE + i` (quads, a cuboid's hit being its face's), then
-//! `MOVING_BASE + i`, then `MEDIUM_BASE + k`, below `MISS`; the smallest `t`
-//! wins, ties to the lowest index, so brute force and every walk find the
-//! same hit bit for bit whatever the order the kinds are searched in.
+//!   closest hit; not in a tree. [`lights`]: the shapes the `book` and
+//!   `nee-mis` estimators sample (static spheres and quads), their points
+//!   and densities.
 
 pub mod bvh;
 pub mod cuboids;
-pub mod intersect;
+pub mod hit;
 pub mod lights;
 pub mod media;
 pub mod moving;
+pub mod primitive;
 pub mod quads;
+pub mod shapes;
+pub mod slab;
 pub mod spheres;
+pub mod surface;
+pub mod work;
 
-pub use bvh::{Bvh, CuboidBvh, LeafCuboid, LeafMoving, LeafQuad, MovingBvh, QuadBvh, SahCost, Walk};
-pub use cuboids::{cuboid_hit, CuboidRec, Cuboids};
-pub use intersect::{
-    any_cuboid_hit, any_moving_hit, any_quad_hit, any_sphere_hit, closest_cuboid_hit, closest_hit, closest_moving_hit,
-    closest_quad_hit, spawn, sphere_disc, sphere_t, surface, Closest, Surface, OFFSET_ULPS,
-};
+pub use bvh::{Bvh, SahCost, Walk, Walker};
+pub use cuboids::{cuboid_hit, CuboidRec, Cuboids, LeafCuboid};
+pub use hit::{Closest, Hit, HitKind, MEDIUM_BASE, MISS, MOVING_BASE, QUAD_BASE};
 pub use lights::{Emitters, LightQuad, LightSample, LightSphere, Lights};
-pub use media::{sample_media, transmittance, Boundary, Media, MEDIUM_BASE};
-pub use moving::{centre_at, MovingSpheres, MOVING_BASE};
-pub use quads::{quad_hit, quad_hit_axis, quad_hit_general, quad_hit_upright, quad_surface, QuadRec, Quads, QUAD_BASE};
-pub use spheres::{Shade, Spheres, MISS};
+pub use media::{sample_media, transmittance, Boundary, Media};
+pub use moving::{centre_at, LeafMoving, MovingSpheres};
+pub use primitive::{closest_brute, Leaf, Primitive};
+pub use quads::{quad_hit, quad_hit_axis, quad_hit_general, quad_hit_upright, quad_surface, LeafQuad, QuadRec, Quads};
+pub use shapes::{Shapes, TreeChoice, Trees};
+pub use spheres::{sphere_disc, sphere_t, surface, LeafSphere, Shade, Spheres};
+pub use surface::{spawn, Surface, OFFSET_ULPS};
+pub use work::{Counter, Work, WorkTally};

@@ -17,14 +17,15 @@
 //! [`super::MISS`]. Its bounds in the BVH cover the shutter interval (the
 //! union of its boxes at `t = 0` and `t = 1`), so traversal ignores time.
 
-use super::spheres::{Shade, Spheres};
+use super::hit::{Closest, MOVING_BASE};
+use super::primitive::{brute, Leaf, Primitive};
+use super::quads::{next_down, next_up};
+use super::slab::Aabb;
+use super::spheres::{test_sphere, Shade, Spheres};
+use super::work::Counter;
 use crate::material::Kind;
 use crate::real::Real;
 use crate::vec3::V3;
-
-/// The hit index of moving sphere `i` is `MOVING_BASE + i` (`3 * 2^29`):
-/// above every quad's (`QUAD_BASE + i`, quads are fewer than `2^20`), below `MISS`.
-pub const MOVING_BASE: u32 = 3 << 29;
 
 /// `c0 + t v`: the centre at time `t` of the sphere moving from `c0` by `v`.
 #[inline(always)]
@@ -89,10 +90,68 @@ impl MovingSpheres {
     /// boxes at `t = 0` and `t = 1`, computed in f64 (every centre the
     /// kernels compute lies within a few units of roundoff of the segment
     /// between; the BVH's padding covers that many times over).
-    pub fn bounds(&self, i: usize) -> ([f64; 3], [f64; 3]) {
+    pub fn swept(&self, i: usize) -> ([f64; 3], [f64; 3]) {
         let (c0, v, r) = (self.c0(i), self.v(i), self.s.r[i].abs() as f64);
         let lo = std::array::from_fn(|k| (c0[k] as f64).min(c0[k] as f64 + v[k] as f64) - r);
         let hi = std::array::from_fn(|k| (c0[k] as f64).max(c0[k] as f64 + v[k] as f64) + r);
         (lo, hi)
+    }
+}
+
+/// A leaf's moving sphere: its centre at time 0, motion, squared radius and
+/// hit index (`MOVING_BASE + i`).
+#[derive(Clone, Copy, Debug)]
+#[repr(C)]
+pub struct LeafMoving {
+    c0: [f32; 3],
+    v: [f32; 3],
+    r2: f32,
+    index: u32,
+}
+
+impl Leaf for LeafMoving {
+    /// The centre at each lane's time ([`centre_at`]), then the static sphere test.
+    #[inline(always)]
+    fn test<R: Real, C: Counter>(&self, o: V3<R>, d: V3<R>, time: R, best: &mut Closest<R>, counter: &mut C) {
+        let c = centre_at(V3::splat3(self.c0), V3::splat3(self.v), time);
+        test_sphere(best, o, d, c, R::splat(self.r2), self.index, counter);
+    }
+}
+
+impl Primitive for MovingSpheres {
+    type Leaf = LeafMoving;
+    const TIMED: bool = true;
+
+    fn count(&self) -> usize {
+        self.s.len
+    }
+
+    #[inline(always)]
+    fn leaf(&self, i: usize) -> LeafMoving {
+        LeafMoving { c0: self.c0(i), v: self.v(i), r2: self.s.r2[i], index: MOVING_BASE + i as u32 }
+    }
+
+    /// The union of its boxes at `t = 0` and `t = 1` ([`MovingSpheres::swept`]),
+    /// rounded outwards and padded as the static spheres' are: the centre a
+    /// kernel computes, `c0 + t v` in f32, lies within `2u (|c0| + |v|)` of
+    /// the exact segment, far inside the padding.
+    fn bounds(&self, i: usize, pad: f32) -> Aabb {
+        let (lo, hi) = self.swept(i);
+        Aabb { min: lo.map(|x| next_down(x) - pad), max: hi.map(|x| next_up(x) + pad) }
+    }
+
+    #[inline(always)]
+    fn brute<R: Real, C: Counter, const ANY: bool>(
+        &self,
+        o: V3<R>,
+        d: V3<R>,
+        time: R,
+        best: &mut Closest<R>,
+        counter: &mut C,
+    ) {
+        brute::<R, C, ANY>(self.s.len, best, counter, |i, best, tally| {
+            let c = centre_at(V3::splat3(self.c0(i)), V3::splat3(self.v(i)), time);
+            test_sphere(best, o, d, c, R::splat(self.s.r2[i]), MOVING_BASE + i as u32, tally);
+        });
     }
 }

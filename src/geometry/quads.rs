@@ -34,16 +34,15 @@
 //! * Self-hits are prevented the way they are for spheres, by where a new ray
 //!   starts ([`quad_surface`]), not by a `t_min`.
 
-use super::intersect::{Surface, OFFSET_ULPS};
+use super::hit::{Closest, QUAD_BASE};
+use super::primitive::{Leaf, Primitive};
+use super::slab::Aabb;
 use super::spheres::Shade;
+use super::surface::{Surface, OFFSET_ULPS};
+use super::work::{Counter, Work, WorkTally};
 use crate::material::Kind;
 use crate::real::Real;
 use crate::vec3::V3;
-
-/// The hit index of quad `i` is `QUAD_BASE + i`: every quad comes after every
-/// sphere in the one global order of the closest-hit tie rule (spheres are
-/// fewer than `2^20`), and below [`super::MISS`].
-pub const QUAD_BASE: u32 = 1 << 30;
 
 /// One quad: first everything the hit test reads (brute force reads the
 /// records in scene order, the BVH's leaves in leaf order), then its
@@ -258,11 +257,7 @@ impl Quads {
     /// by run as a tree's leaf does.
     pub fn pad(&mut self) {
         let rec = &self.rec;
-        let order = |i: &u32| match rec[*i as usize].axis {
-            3 => (7, *i),
-            a => (a, *i),
-        };
-        self.loose.sort_by_key(order);
+        self.loose.sort_by_key(|i| (form_order(rec[*i as usize].axis), *i));
         let target = self.rec.len().max(8).next_power_of_two();
         while self.rec.len() < target {
             self.rec.push(QuadRec {
@@ -435,4 +430,156 @@ pub fn quad_surface<R: Real>(o: V3<R>, d: V3<R>, t: R, nu: V3<R>, dn: R) -> Surf
     let n = V3::select(front, nu, -nu);
     let offset = (p.max_abs() + dn.abs()) * R::splat(2.0 * OFFSET_ULPS);
     Surface { p, n, front, offset }
+}
+
+/// A run of quads of one form (`form`, their [`QuadRec::axis`]), each given
+/// with its hit index, each tested with that form of the test, improving
+/// `best`: the leaf test of the quad tree and of brute force. (With the form
+/// chosen per quad, the compiler shares the forms' common end and moves the
+/// closest hit between registers on every test; with one loop per form,
+/// every form costs its loop's set-up.) The tie rule does not depend on the
+/// order of the tests.
+#[inline(always)]
+pub fn test_quad_run<'a, R: Real, C: Counter>(
+    best: &mut Closest<R>,
+    form: u32,
+    run: impl Iterator<Item = (&'a QuadRec, u32)>,
+    o: V3<R>,
+    d: V3<R>,
+    counter: &mut C,
+) {
+    let mut offer = |(hit, t): (R::Mask, R), index: u32| {
+        counter.work(Work::Quad, 1);
+        best.offer(hit, t, R::u_splat(index));
+    };
+    match form {
+        0 => run.for_each(|(q, i)| offer(quad_hit_axis::<R, 0>(o, d, q), i)),
+        1 => run.for_each(|(q, i)| offer(quad_hit_axis::<R, 1>(o, d, q), i)),
+        2 => run.for_each(|(q, i)| offer(quad_hit_axis::<R, 2>(o, d, q), i)),
+        4 => run.for_each(|(q, i)| offer(quad_hit_upright::<R, 0>(o, d, q), i)),
+        5 => run.for_each(|(q, i)| offer(quad_hit_upright::<R, 1>(o, d, q), i)),
+        6 => run.for_each(|(q, i)| offer(quad_hit_upright::<R, 2>(o, d, q), i)),
+        _ => run.for_each(|(q, i)| offer(quad_hit_general(o, d, q), i)),
+    }
+}
+
+/// A leaf's quad: its record and its hit index (`QUAD_BASE + i`). A leaf's
+/// quads are sorted by the form of their test ([`QuadRec::axis`]: those with
+/// a normal along x, y, z, then those upright about x, y, z, then the
+/// others), and the first record of each run of one form says how long the
+/// run is (`run`), so that the leaf is tested in one loop per run, each with
+/// its form of the test ([`Leaf::test_leaf`]).
+#[derive(Clone, Copy, Debug)]
+#[repr(C)]
+pub struct LeafQuad {
+    rec: QuadRec,
+    index: u32,
+    /// In the first record of a run of quads of one form: the run's length.
+    run: u32,
+}
+
+/// The order of the forms in a leaf and in brute force: the general form last.
+fn form_order(axis: u32) -> u32 {
+    if axis == 3 {
+        7
+    } else {
+        axis
+    }
+}
+
+impl Leaf for LeafQuad {
+    #[inline(always)]
+    fn test<R: Real, C: Counter>(&self, o: V3<R>, d: V3<R>, _time: R, best: &mut Closest<R>, counter: &mut C) {
+        counter.work(Work::Quad, 1);
+        let (hit, t) = quad_hit(o, d, &self.rec);
+        best.offer(hit, t, R::u_splat(self.index));
+    }
+
+    /// The leaf's quads run by run, one loop per run with its form of the
+    /// test ([`test_quad_run`]).
+    #[inline(always)]
+    fn test_leaf<R: Real, C: Counter>(
+        leaf: &[Self],
+        o: V3<R>,
+        d: V3<R>,
+        _time: R,
+        best: &mut Closest<R>,
+        counter: &mut C,
+    ) {
+        let mut rest = leaf;
+        while let Some(first) = rest.first() {
+            let (run, next) = rest.split_at((first.run as usize).clamp(1, rest.len()));
+            debug_assert!(run.iter().all(|q| q.rec.axis == first.rec.axis));
+            test_quad_run(best, first.rec.axis, run.iter().map(|q| (&q.rec, q.index)), o, d, counter);
+            rest = next;
+        }
+    }
+
+    /// Sorted by form (the general ones last), each run's length in its first record.
+    fn arrange(leaf: &mut [Self]) {
+        leaf.sort_by_key(|q| form_order(q.rec.axis));
+        let mut start = 0;
+        while start < leaf.len() {
+            let form = leaf[start].rec.axis;
+            let len = leaf[start..].iter().take_while(|q| q.rec.axis == form).count();
+            leaf[start].run = len as u32;
+            start += len;
+        }
+    }
+}
+
+/// The loose quads ([`Quads::loose`]): the cuboids' faces are in the
+/// cuboids' search.
+impl Primitive for Quads {
+    type Leaf = LeafQuad;
+
+    fn count(&self) -> usize {
+        self.loose.len()
+    }
+
+    #[inline(always)]
+    fn leaf(&self, k: usize) -> LeafQuad {
+        let i = self.loose[k];
+        LeafQuad { rec: self.rec[i as usize], index: QUAD_BASE + i, run: 0 }
+    }
+
+    /// The four corners widened by the edge tolerance ([`QuadRec::bounds`]),
+    /// then padded: an axis-aligned quad's box is flat, and the padding
+    /// gives it a thickness of `2^-17 extent`, well above what the quad
+    /// test's rounding needs (the computed hit point lies within about
+    /// `10u extent` of the plane, u = 2^-24) and the slab test's. So a flat
+    /// box is entered by every ray the quad test can accept, and brute force
+    /// and the tree agree bit for bit.
+    fn bounds(&self, k: usize, pad: f32) -> Aabb {
+        let (min, max) = self.rec[self.loose[k] as usize].bounds();
+        Aabb::padded(min, max, pad)
+    }
+
+    /// Run by run of one form (the loose quads are sorted by form), as a
+    /// tree's leaf is tested: a closure per quad, with the form chosen per
+    /// quad, was compiled out of line (a call per quad test).
+    #[inline(always)]
+    fn brute<R: Real, C: Counter, const ANY: bool>(
+        &self,
+        o: V3<R>,
+        d: V3<R>,
+        _time: R,
+        best: &mut Closest<R>,
+        counter: &mut C,
+    ) {
+        let recs = &self.rec[..self.len];
+        let mut tally = WorkTally::<C>::new();
+        let mut rest = &self.loose[..];
+        while let Some(&first) = rest.first() {
+            let form = recs[first as usize].axis;
+            let len = rest.iter().take_while(|&&i| recs[i as usize].axis == form).count();
+            let (run, next) = rest.split_at(len);
+            test_quad_run(best, form, run.iter().map(|&i| (&recs[i as usize], QUAD_BASE + i)), o, d, &mut tally);
+            if ANY && best.leave_found() {
+                break;
+            }
+            rest = next;
+        }
+        tally.flush(counter);
+    }
 }

@@ -35,7 +35,7 @@ pub const RENDER_LOOP: &str = "rtow::render::tile_work";
 /// its functions and their callees, less what they spend in another phase
 /// (scatter calls compaction). "rest" is the render loop less the phases.
 pub const PHASES: &[(&str, &[&str])] = &[
-    ("traversal", &["rtow::plan::Prepared::closest_hits"]),
+    ("traversal", &["rtow::geometry::shapes::Shapes::closest"]),
     ("scatter", &["rtow::kernel::wavefront::scatter"]),
     ("camera rays", &["rtow::kernel::wavefront::generate"]),
     ("film", &["rtow::film::TileFilm::add", "rtow::film::TileFilm::add_rounds"]),
@@ -349,7 +349,7 @@ mod tests {
     const PROFILE: &str = "version: 1\ncreator: callgrind-3.19.0\npositions: line\nevents: Ir\nsummary: 1000\n\n\
         fl=(1) a.rs\nfn=(1) main\n1 100\ncfn=(2) rtow::render::tile_work\ncalls=2 5\n2 900\n\n\
         fn=(2)\n5 40\ncfn=(3) rtow::kernel::wavefront::scatter::<wide::f32x8>\ncalls=10 7\n6 300\n\
-        cfn=(4) <rtow::plan::Prepared>::closest_hits\ncalls=10 8\n7 560\n\n\
+        cfn=(4) <rtow::geometry::shapes::Shapes>::closest::<wide::f32x8>\ncalls=10 8\n7 560\n\n\
         fn=(3)\n7 250\ncfn=(5) rtow::kernel::wavefront::Paths::append\ncalls=10 9\n8 50\n\n\
         fn=(5)\n9 50\n\nfn=(4)\n8 560\n\ntotals: 1000\n";
 
@@ -374,7 +374,7 @@ mod tests {
         let text = "version: 1\npositions: line\nevents: Ir Bc Bcm Bi Bim\nsummary: 1000 200 20 10 1\n\n\
             fn=(1) main\n1 100 10 1\ncfn=(2) rtow::render::tile_work\ncalls=2 5\n2 900 190 19 10 1\n\n\
             fn=(2)\n5 40 4 2 1 1\ncfn=(3) rtow::kernel::wavefront::scatter::<wide::f32x8>\ncalls=10 7\n6 300 60 7 9\n\
-            cfn=(4) <rtow::plan::Prepared>::closest_hits\ncalls=10 8\n7 560 126 10\n\n\
+            cfn=(4) <rtow::geometry::shapes::Shapes>::closest::<wide::f32x8>\ncalls=10 8\n7 560 126 10\n\n\
             fn=(3)\n7 300 60 7 9\n\nfn=(4)\n8 560 126 10\n\ntotals: 1000 200 20 10 1\n";
         let p = Profile::parse(text).unwrap();
         assert!(p.branch_sim);

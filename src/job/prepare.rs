@@ -9,8 +9,8 @@ use crate::choice::{AccelChoice, EstimatorChoice, Mode};
 use crate::estimator::Estimator;
 use crate::film::accum::Scale;
 use crate::geometry::{
-    Boundary, Bvh, CuboidBvh, Cuboids, Emitters, LightQuad, LightSphere, Lights, Media, MovingBvh, MovingSpheres,
-    QuadBvh, Quads, Spheres, Walk,
+    Boundary, Cuboids, Emitters, LightQuad, LightSphere, Lights, Media, MovingSpheres, Quads, Shapes, Spheres,
+    TreeChoice, Walk,
 };
 use crate::material::{Kind, MaterialTables};
 use crate::plan::{Accel, KindSet, Plan, Prepared, SkyColours};
@@ -263,6 +263,7 @@ pub(super) fn prepare(
         cuboids.push(c.center, c.axes, c.half, c.first as u32);
     }
     quads.set_cuboid_faces(flat.cuboids.iter().map(|c| c.first as u32));
+    cuboids.bound_faces(&quads);
     spheres.pad();
     quads.pad();
     moving.pad();
@@ -275,14 +276,6 @@ pub(super) fn prepare(
     }
     let camera =
         PreparedCamera { lens: plan.lens, ..PreparedCamera::new(&view, settings.width, settings.height, plan.jitter) };
-    let bvh = (plan.accel != Accel::Brute).then(|| {
-        // Ray origins lie within the camera's lens of the eye, or on a
-        // primitive (`extent`; for a scene of spheres only, the spheres'
-        // extent is the one the build computes itself).
-        // The tree is shaped for the walk that uses it (geometry::bvh::SahCost).
-        let walk = if plan.accel == Accel::BvhRays { Walk::Wide8 } else { Walk::OneByOne };
-        Bvh::build_for(&spheres, extent, walk)
-    });
     let mut lights = Lights::default();
     if plan.sample_toward > 0 {
         for shape in scene.sampled_shapes(&flat) {
@@ -294,14 +287,27 @@ pub(super) fn prepare(
     }
     let emitters = if plan.nee > 0 { emitters(&spheres, &quads, &materials) } else { Emitters::default() };
     debug_assert_eq!(emitters.len(), plan.nee);
-    let quad_bvh = (plan.quads.is_some_and(|a| a != Accel::Brute)).then(|| QuadBvh::build_quads(&quads, extent));
-    let cuboid_bvh =
-        (plan.cuboids.is_some_and(|a| a != Accel::Brute)).then(|| CuboidBvh::build_cuboids(&cuboids, &quads, extent));
-    let moving_bvh = (plan.moving.is_some_and(|a| a != Accel::Brute)).then(|| MovingBvh::build_moving(&moving, extent));
+    let mut shapes = Shapes::new(spheres, quads, cuboids, moving);
+    // Ray origins lie within the camera's lens of the eye, or on a primitive
+    // (`extent`; the spheres' tree pads by their own extent too). The
+    // spheres' tree is shaped for the walk that uses it
+    // (geometry::bvh::SahCost).
+    let tree = |a: Option<Accel>| a.is_some_and(|a| a != Accel::Brute);
+    let choice = TreeChoice {
+        spheres: match plan.accel {
+            Accel::Brute => None,
+            Accel::BvhPackets => Some(Walk::OneByOne),
+            Accel::BvhRays => Some(Walk::Wide8),
+        },
+        quads: tree(plan.quads),
+        cuboids: tree(plan.cuboids),
+        moving: tree(plan.moving),
+    };
+    shapes.build_trees(choice, extent);
     Prepared {
         plan,
         settings,
-        spheres,
+        shapes,
         materials,
         textures,
         camera,
@@ -313,14 +319,7 @@ pub(super) fn prepare(
                 Background::Constant(c) => Some(c),
             },
         },
-        quads,
         media,
-        bvh,
-        quad_bvh,
-        cuboids,
-        cuboid_bvh,
-        moving,
-        moving_bvh,
         estimator,
         bounces: if lights.is_empty() && emitters.is_empty() { Bounces::BSDF } else { Bounces::BOOK },
         lights,
@@ -419,8 +418,8 @@ mod tests {
         let fin = preset("final").unwrap();
         let o = Overrides::from(settings(2));
         let auto = Job::new(&fin, &o, &RenderOptions::default()).unwrap();
-        assert!(auto.prepared().bvh.is_some());
+        assert!(auto.prepared().shapes.trees.spheres.is_some());
         let brute = RenderOptions { accel: AccelChoice::Brute, ..Default::default() };
-        assert!(Job::new(&fin, &o, &brute).unwrap().prepared().bvh.is_none());
+        assert!(Job::new(&fin, &o, &brute).unwrap().prepared().shapes.trees.spheres.is_none());
     }
 }

@@ -7,7 +7,7 @@ pub mod scalar;
 pub mod wavefront;
 
 use crate::choice::KernelChoice;
-use crate::geometry::{QuadRec, MOVING_BASE, QUAD_BASE};
+use crate::geometry::{Hit, HitKind, QuadRec};
 use crate::plan::{Prepared, SkyColours};
 use crate::real::Real;
 use crate::texture::{checker, image_texel, marble, quad_uv, sphere_uv, TexKind};
@@ -113,8 +113,8 @@ pub fn gradient(x: u32, y: u32, width: u32, height: u32) -> [f32; 3] {
 }
 
 /// The albedo of texture kind `kind` (not `Solid`) at the hit points `p`;
-/// lane k hit primitive `hit(k)` (a sphere index, or `QUAD_BASE` plus a
-/// quad's) and reads row `row(k)` of the kind's table. One function for the
+/// lane k hit primitive `hit(k)` (a hit index: a static sphere's or a
+/// quad's, [`Hit`]) and reads row `row(k)` of the kind's table. One function for the
 /// scalar kernel and the wavefront's texture passes.
 #[inline(always)]
 pub(crate) fn texture_albedo<R: Real>(
@@ -145,11 +145,12 @@ pub(crate) fn texture_albedo<R: Real>(
 /// primitive where it is of that kind, and one is chosen per lane.
 #[inline(always)]
 fn surface_uv<R: Real>(prep: &Prepared, p: V3<R>, hit: impl Fn(usize) -> u32) -> (R, R) {
-    let (sp, qs) = (&prep.spheres, &prep.quads);
-    let sphere = |k: usize| (hit(k) < QUAD_BASE).then(|| hit(k) as usize);
+    let (sp, qs) = (&prep.shapes.spheres, &prep.shapes.quads);
+    let of_kind = |k: usize, kind: HitKind| Some(Hit::of(hit(k))).filter(|h| h.kind == kind).map(|h| h.index);
+    let sphere = |k: usize| of_kind(k, HitKind::Sphere);
     // Image textures are on static spheres and quads only (`Scene::validate`
     // refuses them on moving spheres): any other lane reads zeros.
-    let quad = |k: usize| (hit(k) >= QUAD_BASE && hit(k) < MOVING_BASE).then(|| &qs.rec[(hit(k) - QUAD_BASE) as usize]);
+    let quad = |k: usize| of_kind(k, HitKind::Quad).map(|i| &qs.rec[i]);
     let is_sphere = R::from_fn(|k| if sphere(k).is_some() { 1.0 } else { 0.0 }).gt(R::splat(0.5));
     let (su, sv) = if sp.len > 0 {
         let at = |a: &[f32], dflt: f32| R::from_fn(|k| sphere(k).map_or(dflt, |i| a[i]));

@@ -8,7 +8,7 @@ use crate::estimator::{
 };
 use crate::film::TileFilm;
 use crate::geometry::{
-    quad_surface, sample_media, spawn, surface, transmittance, Surface, MEDIUM_BASE, MISS, MOVING_BASE, QUAD_BASE,
+    quad_surface, sample_media, spawn, surface, transmittance, Hit, HitKind, Surface, MEDIUM_BASE, MISS,
 };
 use crate::material::{dielectric, emission, lambertian, metal, Kind};
 use crate::plan::Prepared;
@@ -31,7 +31,7 @@ pub fn render_tile<S: PathSampler, P: Probe>(
     samples: Range<u32>,
     probe: &mut P,
 ) -> u64 {
-    if prep.moving.is_empty() {
+    if prep.shapes.moving.is_empty() {
         render_tile_in::<S, P, false>(prep, sampler, tile, samples, probe)
     } else {
         render_tile_in::<S, P, true>(prep, sampler, tile, samples, probe)
@@ -89,7 +89,8 @@ fn closest_hit<P: Probe, const M: bool>(
     time: f32,
     probe: &mut P,
 ) -> (u32, f32) {
-    prep.closest_hit::<P, M>(o, d, time, probe)
+    let best = prep.shapes.closest::<f32, P, M>(o, d, true, || time, probe);
+    (best.index, best.t)
 }
 
 /// A scattered direction, its attenuation, its density (0: specular) and
@@ -194,7 +195,7 @@ pub fn trace<P: Probe>(
     rng: &mut impl Stream<f32>,
     probe: &mut P,
 ) -> ([f32; 3], u32) {
-    let (c, rays, _) = if prep.moving.is_empty() {
+    let (c, rays, _) = if prep.shapes.moving.is_empty() {
         trace_in::<P, false>(prep, x, y, id, rng, probe)
     } else {
         trace_in::<P, true>(prep, x, y, id, rng, probe)
@@ -295,7 +296,7 @@ fn trace_in<P: Probe, const M: bool>(
             let c = thr.mul_elem(sh.c);
             if c.x > 0.0 || c.y > 0.0 || c.z > 0.0 {
                 shadow_rays += 1;
-                if !prep.occluded_one::<P, M>(sh.o, sh.d, sh.tmax, time, probe) {
+                if !prep.shapes.occluded::<f32, P, M>(sh.o, sh.d, sh.tmax, true, || time, probe) {
                     let c = if prep.media.is_empty() { c } else { c * transmittance(&prep.media, sh.o, sh.d, sh.tmax) };
                     if P::PATHS && probe.paths() {
                         probe.contributed(id, rays + 1, Strategy::LightSample, c);
@@ -348,31 +349,34 @@ fn shade<P: Probe, const M: bool>(
     rng: &mut impl Stream<f32>,
     probe: &mut P,
 ) -> Result<Scattered, V3<f32>> {
-    let sp = &prep.spheres;
-    let (srf, kind, row) = if hit < QUAD_BASE {
-        let i = hit as usize;
-        let srf = surface(o, d, t, V3::new(sp.cx[i], sp.cy[i], sp.cz[i]), sp.r[i]);
-        if P::PATHS && probe.paths() {
-            probe.shaded(id, hit, sp.r[i], srf.n, srf.front, 1);
+    let sp = &prep.shapes.spheres;
+    let Hit { kind: hit_kind, index: i } = Hit::of(hit);
+    let (srf, kind, row) = match hit_kind {
+        HitKind::Sphere => {
+            let srf = surface(o, d, t, V3::new(sp.cx[i], sp.cy[i], sp.cz[i]), sp.r[i]);
+            if P::PATHS && probe.paths() {
+                probe.shaded(id, hit, sp.r[i], srf.n, srf.front, 1);
+            }
+            (srf, sp.kind[i], sp.row[i] as usize)
         }
-        (srf, sp.kind[i], sp.row[i] as usize)
-    } else if M && hit >= MOVING_BASE {
-        let (m, i) = (&prep.moving, (hit - MOVING_BASE) as usize);
-        let r = m.s.r[i];
-        let srf = surface(o, d, t, m.centre(i, time), r);
-        if P::PATHS && probe.paths() {
-            probe.shaded(id, hit, r, srf.n, srf.front, 1);
+        HitKind::Moving if M => {
+            let m = &prep.shapes.moving;
+            let r = m.s.r[i];
+            let srf = surface(o, d, t, m.centre(i, time), r);
+            if P::PATHS && probe.paths() {
+                probe.shaded(id, hit, r, srf.n, srf.front, 1);
+            }
+            (srf, m.s.kind[i], m.s.row[i] as usize)
         }
-        (srf, m.s.kind[i], m.s.row[i] as usize)
-    } else {
-        let qs = &prep.quads;
-        let i = (hit - QUAD_BASE) as usize;
-        let [nx, ny, nz, dn, ..] = qs.shade[i].0;
-        let srf = quad_surface(o, d, t, V3::new(nx, ny, nz), dn);
-        if P::PATHS && probe.paths() {
-            probe.shaded(id, hit, 0.0, srf.n, srf.front, 1);
+        _ => {
+            let qs = &prep.shapes.quads;
+            let [nx, ny, nz, dn, ..] = qs.shade[i].0;
+            let srf = quad_surface(o, d, t, V3::new(nx, ny, nz), dn);
+            if P::PATHS && probe.paths() {
+                probe.shaded(id, hit, 0.0, srf.n, srf.front, 1);
+            }
+            (srf, qs.kind[i], qs.row[i] as usize)
         }
-        (srf, qs.kind[i], qs.row[i] as usize)
     };
     let m = &prep.materials;
     let dir_atten = match prep.plan.mode {

@@ -5,7 +5,7 @@
 
 use proptest::prelude::*;
 use rtow::internals::geometry::{
-    closest_cuboid_hit, closest_hit, closest_quad_hit, Bvh, Closest, CuboidBvh, Cuboids, QuadBvh, Quads, Spheres, Walk,
+    closest_brute, Bvh, Closest, Cuboids, LeafCuboid, LeafQuad, LeafSphere, Primitive, Quads, Spheres, Walk, Walker,
 };
 use rtow::internals::material::Kind;
 use rtow::internals::real::Wide;
@@ -35,21 +35,33 @@ fn unit(v: [f32; 3]) -> V3<f32> {
 /// the trees built for each walk.
 fn check(s: &Spheres, extent: f32, rays: &[(V3<f32>, V3<f32>)]) -> Result<(), TestCaseError> {
     for walk in [Walk::OneByOne, Walk::Wide8] {
-        check_tree(s, &Bvh::build_for(s, extent, walk), rays)?;
+        check_tree(s, &Bvh::build_spheres(s, extent, walk), rays)?;
     }
     Ok(())
 }
 
-fn check_tree(s: &Spheres, bvh: &Bvh, rays: &[(V3<f32>, V3<f32>)]) -> Result<(), TestCaseError> {
+fn check_tree(s: &Spheres, bvh: &Bvh<LeafSphere>, rays: &[(V3<f32>, V3<f32>)]) -> Result<(), TestCaseError> {
     for &(o, d) in rays {
-        let (bi, bt) = closest_hit(s, o, d, &mut ());
-        let (si, st) = bvh.closest_hit_scalar(o, d, &mut ());
+        let (bi, bt) = closest_brute(s, o, d, 0.0, &mut ());
+        let tree = walk(bvh, o, d, Closest::none());
+        let (si, st) = (tree.index, tree.t);
         let (wi, wt) = bvh.closest_hit_wide(o, d, &mut ());
         prop_assert_eq!((bi, bt.to_bits()), (si, st.to_bits()), "scalar BVH");
         prop_assert_eq!((bi, bt.to_bits()), (wi, wt.to_bits()), "one ray, 8-wide nodes");
     }
     packets::<f32x8>(s, bvh, rays)?;
     packets::<f32x16>(s, bvh, rays)
+}
+
+/// The tree's one walk (closest hit) for the rays `o + t d` from `best`.
+fn walk<L: rtow::internals::geometry::Leaf, R: Walker>(
+    bvh: &Bvh<L>,
+    o: V3<R>,
+    d: V3<R>,
+    mut best: Closest<R>,
+) -> Closest<R> {
+    bvh.walk::<R, (), false>(o, d, R::splat(0.0), &mut best, &mut ());
+    best
 }
 
 /// Up to `W::LANES` rays as a packet (the last one repeated in the lanes beyond).
@@ -61,15 +73,16 @@ fn packet<W: Wide>(chunk: &[(V3<f32>, V3<f32>)]) -> (V3<W>, V3<W>) {
     (o, d)
 }
 
-fn packets<W: Wide>(s: &Spheres, bvh: &Bvh, rays: &[(V3<f32>, V3<f32>)]) -> Result<(), TestCaseError> {
+fn packets<W: Wide>(s: &Spheres, bvh: &Bvh<LeafSphere>, rays: &[(V3<f32>, V3<f32>)]) -> Result<(), TestCaseError> {
     for chunk in rays.chunks(W::LANES) {
         let n = chunk.len();
         let (o, d) = packet::<W>(chunk);
         let live = if n == 32 { u32::MAX } else { (1u32 << n) - 1 };
-        let (pi, pt) = bvh.closest_hit_packet(o, d, live, &mut ());
+        let tree = walk(bvh, o, d, Closest::<W>::live(W::mask_from_bits(live)));
+        let (pi, pt) = (tree.index, tree.t);
         let (ri, rt) = bvh.closest_hits_one_by_one(o, d, live, &mut ());
         for (k, &(o, d)) in chunk.iter().enumerate() {
-            let (bi, bt) = closest_hit(s, o, d, &mut ());
+            let (bi, bt) = closest_brute(s, o, d, 0.0, &mut ());
             prop_assert_eq!((bi, bt.to_bits()), (W::lane_u(pi, k), pt.lane(k).to_bits()), "packet of {}", W::LANES);
             prop_assert_eq!((bi, bt.to_bits()), (W::lane_u(ri, k), rt.lane(k).to_bits()), "one by one");
         }
@@ -148,11 +161,11 @@ fn box_faces(min: [f32; 3], max: [f32; 3]) -> Vec<([f32; 3], [f32; 3], [f32; 3])
 /// sphere hit or none, against brute force: the same quad (or sphere), the
 /// same `t` bits.
 fn check_quads(q: &Quads, extent: f32, start: (u32, f32), rays: &[(V3<f32>, V3<f32>)]) -> Result<(), TestCaseError> {
-    let bvh = QuadBvh::build_quads(q, extent);
+    let bvh = Bvh::build(q, extent, Walk::OneByOne);
     for &(o, d) in rays {
         let mut brute = Closest::<f32> { index: start.0, t: start.1 };
-        closest_quad_hit(q, o, d, &mut brute, &mut ());
-        let tree = bvh.walk_scalar(o, d, Closest::<f32> { index: start.0, t: start.1 }, &mut ());
+        q.brute::<_, _, false>(o, d, 0.0, &mut brute, &mut ());
+        let tree = walk(&bvh, o, d, Closest::<f32> { index: start.0, t: start.1 });
         prop_assert_eq!((brute.index, brute.t.to_bits()), (tree.index, tree.t.to_bits()), "scalar quad walk");
     }
     quad_packets::<f32x8>(q, &bvh, start, rays)?;
@@ -161,16 +174,16 @@ fn check_quads(q: &Quads, extent: f32, start: (u32, f32), rays: &[(V3<f32>, V3<f
 
 fn quad_packets<W: Wide>(
     q: &Quads,
-    bvh: &QuadBvh,
+    bvh: &Bvh<LeafQuad>,
     start: (u32, f32),
     rays: &[(V3<f32>, V3<f32>)],
 ) -> Result<(), TestCaseError> {
     for chunk in rays.chunks(W::LANES) {
         let (o, d) = packet::<W>(chunk);
-        let best = bvh.walk_packet(o, d, Closest::<W> { index: W::u_splat(start.0), t: W::splat(start.1) }, &mut ());
+        let best = walk(bvh, o, d, Closest::<W> { index: W::u_splat(start.0), t: W::splat(start.1) });
         for (k, &(o, d)) in chunk.iter().enumerate() {
             let mut brute = Closest::<f32> { index: start.0, t: start.1 };
-            closest_quad_hit(q, o, d, &mut brute, &mut ());
+            q.brute::<_, _, false>(o, d, 0.0, &mut brute, &mut ());
             prop_assert_eq!(
                 (brute.index, brute.t.to_bits()),
                 (W::lane_u(best.index, k), best.t.lane(k).to_bits()),
@@ -192,26 +205,27 @@ fn check_cuboids(
     start: (u32, f32),
     rays: &[(V3<f32>, V3<f32>)],
 ) -> Result<(), TestCaseError> {
-    let bvh = CuboidBvh::build_cuboids(c, q, extent);
+    let mut c = c.clone();
+    c.bound_faces(q);
+    let bvh = Bvh::build(&c, extent, Walk::OneByOne);
     let brute = |o, d| {
         let mut b = Closest::<f32> { index: start.0, t: start.1 };
-        closest_cuboid_hit(c, o, d, &mut b, &mut ());
+        c.brute::<_, _, false>(o, d, 0.0, &mut b, &mut ());
         (b.index, b.t.to_bits())
     };
     for &(o, d) in rays {
-        let tree = bvh.walk_scalar(o, d, Closest::<f32> { index: start.0, t: start.1 }, &mut ());
+        let tree = walk(&bvh, o, d, Closest::<f32> { index: start.0, t: start.1 });
         prop_assert_eq!(brute(o, d), (tree.index, tree.t.to_bits()), "scalar cuboid walk");
     }
     fn packets<W: Wide>(
-        bvh: &CuboidBvh,
+        bvh: &Bvh<LeafCuboid>,
         start: (u32, f32),
         rays: &[(V3<f32>, V3<f32>)],
         brute: &dyn Fn(V3<f32>, V3<f32>) -> (u32, u32),
     ) -> Result<(), TestCaseError> {
         for chunk in rays.chunks(W::LANES) {
             let (o, d) = packet::<W>(chunk);
-            let best =
-                bvh.walk_packet(o, d, Closest::<W> { index: W::u_splat(start.0), t: W::splat(start.1) }, &mut ());
+            let best = walk(bvh, o, d, Closest::<W> { index: W::u_splat(start.0), t: W::splat(start.1) });
             for (k, &(o, d)) in chunk.iter().enumerate() {
                 prop_assert_eq!(
                     brute(o, d),

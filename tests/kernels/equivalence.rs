@@ -270,23 +270,23 @@ proptest! {
             let opts = rtow::RenderOptions { accel, ..Default::default() };
             let j = job(&sc, settings(8, 8, 1, 4, 1), opts);
             let prep = j.prepared();
-            let moving = !prep.moving.is_empty();
+            let moving = !prep.shapes.moving.is_empty();
             let want: Vec<bool> = rays
                 .iter()
                 .map(|&(o, d, tmax)| {
                     let (_, t) = if moving {
-                        prep.closest_hit::<(), true>(o, d, 0.25, &mut ())
+                        { let b = prep.shapes.closest::<f32, (), true>(o, d, true, || 0.25, &mut ()); (b.index, b.t) }
                     } else {
-                        prep.closest_hit::<(), false>(o, d, 0.25, &mut ())
+                        { let b = prep.shapes.closest::<f32, (), false>(o, d, true, || 0.25, &mut ()); (b.index, b.t) }
                     };
                     t < tmax
                 })
                 .collect();
             for (k, &(o, d, tmax)) in rays.iter().enumerate() {
                 let got = if moving {
-                    prep.occluded_one::<(), true>(o, d, tmax, 0.25, &mut ())
+                    prep.shapes.occluded::<f32, (), true>(o, d, tmax, true, || 0.25, &mut ())
                 } else {
-                    prep.occluded_one::<(), false>(o, d, tmax, 0.25, &mut ())
+                    prep.shapes.occluded::<f32, (), false>(o, d, tmax, true, || 0.25, &mut ())
                 };
                 prop_assert_eq!(got, want[k], "one ray, {:?}", accel);
             }
@@ -297,9 +297,9 @@ proptest! {
             let live = (1u32 << rays.len()) - 1;
             let time = || f32x8::splat(0.25);
             let got = if moving {
-                prep.occluded::<f32x8, (), true>(o, d, tmax, live, time, &mut ())
+                prep.shapes.occluded::<f32x8, (), true>(o, d, tmax, <f32x8 as rtow::internals::real::Wide>::mask_from_bits(live), time, &mut ())
             } else {
-                prep.occluded::<f32x8, (), false>(o, d, tmax, live, time, &mut ())
+                prep.shapes.occluded::<f32x8, (), false>(o, d, tmax, <f32x8 as rtow::internals::real::Wide>::mask_from_bits(live), time, &mut ())
             };
             let bits = f32x8::mask_bits(got);
             for (k, &w) in want.iter().enumerate() {

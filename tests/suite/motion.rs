@@ -9,7 +9,7 @@ use common::*;
 use glam::DVec3;
 use proptest::prelude::*;
 use rtow::internals::geometry::{
-    centre_at, closest_hit, closest_moving_hit, Closest, MovingBvh, MovingSpheres, Spheres, MISS, MOVING_BASE,
+    centre_at, closest_brute, Bvh, Closest, LeafMoving, MovingSpheres, Primitive, Spheres, Walk, MISS, MOVING_BASE,
 };
 use rtow::internals::material::Kind;
 use rtow::internals::real::{Real, Wide};
@@ -77,7 +77,7 @@ proptest! {
     /// (returned as `c' / q` from outside) by `E / |q| + 3u t`, where
     /// `E <= (17.75u + 6 eta)|f|^2` for these rays (`|f| >= 2r`, `h <= r/2`,
     /// so `|q| >= 0.968 |f|`, `E / |q| <= (18.4u + 6.2 eta)|f|`): the module
-    /// bounds of `geometry/intersect.rs`, first order. A distance `e` off the
+    /// bounds of `geometry/spheres.rs`, first order. A distance `e` off the
     /// sphere moves the hit along the ray by at most `e / cos`, `cos >= sqrt(3)/2`.
     /// The first-order bound is doubled for the second-order terms (of
     /// relative size `u`).
@@ -101,8 +101,8 @@ proptest! {
         let exact_c = d3(c0) + d3(vel) * t as f64;
         let (o, d) = ray_at(exact_c, r as f64, dist * r as f64, d3(dir), d3(aim));
         let mut best = Closest::<f32>::none();
-        closest_moving_hit(&m, o, d, t, &mut best, &mut ());
-        let (si, st) = closest_hit(&Spheres::one(c.to_array(), r), o, d, &mut ());
+        m.brute::<_, _, false>(o, d, t, &mut best, &mut ());
+        let (si, st) = closest_brute(&Spheres::one(c.to_array(), r), o, d, 0.0, &mut ());
         prop_assert_eq!(si, 0);
         prop_assert_eq!(best.index, MOVING_BASE);
         prop_assert_eq!(best.t.to_bits(), st.to_bits(), "the static sphere at c(t)");
@@ -129,7 +129,7 @@ proptest! {
         let list: Vec<_> =
             list.iter().map(|&(c0, v, r)| (c0, std::array::from_fn(|k| c0[k] + v[k]), r)).collect();
         let m = moving(&list);
-        let bvh = MovingBvh::build_moving(&m, 60.0);
+        let bvh = Bvh::build(&m, 60.0, Walk::OneByOne);
         let rays: Vec<_> = rays
             .iter()
             .map(|&(o, d, bits)| {
@@ -140,11 +140,12 @@ proptest! {
             .collect();
         let brute = |o, d, t| {
             let mut best = Closest::<f32>::none();
-            closest_moving_hit(&m, o, d, t, &mut best, &mut ());
+            m.brute::<_, _, false>(o, d, t, &mut best, &mut ());
             (best.index, best.t.to_bits())
         };
         for &(o, d, t) in &rays {
-            let tree = bvh.walk_scalar_at(o, d, t, Closest::<f32>::none(), &mut ());
+            let mut tree = Closest::<f32>::none();
+            bvh.walk::<f32, (), false>(o, d, t, &mut tree, &mut ());
             prop_assert_eq!(brute(o, d, t), (tree.index, tree.t.to_bits()));
         }
         packets::<f32x8>(&bvh, &rays, &brute)?;
@@ -153,7 +154,7 @@ proptest! {
 }
 
 fn packets<W: Wide>(
-    bvh: &MovingBvh,
+    bvh: &Bvh<LeafMoving>,
     rays: &[(V3<f32>, V3<f32>, f32)],
     brute: &dyn Fn(V3<f32>, V3<f32>, f32) -> (u32, u32),
 ) -> Result<(), TestCaseError> {
@@ -163,7 +164,8 @@ fn packets<W: Wide>(
         let o = V3::new(lanes(&|k| at(k).0.x), lanes(&|k| at(k).0.y), lanes(&|k| at(k).0.z));
         let d = V3::new(lanes(&|k| at(k).1.x), lanes(&|k| at(k).1.y), lanes(&|k| at(k).1.z));
         let t = lanes(&|k| at(k).2);
-        let best = bvh.walk_packet_at(o, d, t, Closest::<W>::none(), &mut ());
+        let mut best = Closest::<W>::none();
+        bvh.walk::<W, (), false>(o, d, t, &mut best, &mut ());
         for (k, &(o, d, t)) in chunk.iter().enumerate() {
             prop_assert_eq!(brute(o, d, t), (W::lane_u(best.index, k), best.t.lane(k).to_bits()), "lane {}", k);
         }
@@ -182,11 +184,11 @@ fn time_zero_and_zero_motion_are_the_static_sphere() {
     let s = Spheres::one(c0, 1.25);
     let (o, d) = (V3::new(0.0f32, 0.0, -20.0), V3::new(0.0f32, 0.0, 1.0));
     let mut a = Closest::<f32>::none();
-    closest_moving_hit(&moving(&[(c0, c0, 1.25)]), o, V3::new(0.05, -0.1, 1.0).normalize(), 0.3, &mut a, &mut ());
-    let (_, st) = closest_hit(&s, o, V3::new(0.05, -0.1, 1.0).normalize(), &mut ());
+    moving(&[(c0, c0, 1.25)]).brute::<_, _, false>(o, V3::new(0.05, -0.1, 1.0).normalize(), 0.3, &mut a, &mut ());
+    let (_, st) = closest_brute(&s, o, V3::new(0.05, -0.1, 1.0).normalize(), 0.0, &mut ());
     assert_eq!(a.t.to_bits(), st.to_bits());
     let mut miss = Closest::<f32>::none();
-    closest_moving_hit(&m, o, d, 0.0, &mut miss, &mut ());
+    m.brute::<_, _, false>(o, d, 0.0, &mut miss, &mut ());
     assert_eq!(miss.index, MISS);
 }
 

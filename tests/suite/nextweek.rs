@@ -8,8 +8,8 @@ use common::*;
 use glam::DVec3;
 use proptest::prelude::*;
 use rtow::internals::geometry::{
-    closest_cuboid_hit, closest_quad_hit, cuboid_hit, quad_hit, quad_hit_general, quad_surface, spawn, Closest,
-    CuboidRec, Cuboids, QuadRec, Quads, MISS, QUAD_BASE,
+    cuboid_hit, quad_hit, quad_hit_general, quad_surface, spawn, Closest, CuboidRec, Cuboids, Primitive, QuadRec,
+    Quads, MISS, QUAD_BASE,
 };
 use rtow::internals::material::Kind;
 use rtow::internals::vec3::V3;
@@ -458,8 +458,8 @@ proptest! {
         quads.pad();
         let search = |o, d| {
             let mut best = Closest::<f32>::none();
-            closest_quad_hit(&quads, o, d, &mut best, &mut ());
-            closest_cuboid_hit(&cuboids, o, d, &mut best, &mut ());
+            quads.brute::<_, _, false>(o, d, 0.0, &mut best, &mut ());
+            cuboids.brute::<_, _, false>(o, d, 0.0, &mut best, &mut ());
             best
         };
         let (s, c) = (angle as f64).to_radians().sin_cos();

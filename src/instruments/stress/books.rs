@@ -26,7 +26,7 @@ use super::{Gen, Parts, StressConfig};
 use crate::choice::{EstimatorChoice, KernelChoice};
 use crate::error::Result;
 use crate::film::Image;
-use crate::geometry::{closest_cuboid_hit, closest_quad_hit, Closest, Cuboids, Quads, MISS, QUAD_BASE};
+use crate::geometry::{Closest, Cuboids, Primitive, Quads, MISS, QUAD_BASE};
 use crate::job::{Job, Overrides, RenderOptions};
 use crate::material::Kind;
 use crate::scene::{Background, Camera, Material, Medium, MediumBoundary, Mode, Quad, Scene, Shape, Sky, Sphere};
@@ -316,7 +316,7 @@ pub(super) fn quad_scale(cfg: &StressConfig, out: &mut Parts, progress: &mut dyn
             let dir = d3(f3((target - o).normalize())).normalize();
             let (of, df) = (V3::from_array(f3(o)), V3::from_array(f3(dir)));
             let mut best = Closest::<f32>::none();
-            closest_quad_hit(&quads, of, df, &mut best, &mut ());
+            quads.brute::<_, _, false>(of, df, 0.0, &mut best, &mut ());
             let hit = best.index != MISS;
             let Some((te, ae, be)) = quad_oracle(d3(f3(o)), d3(f3(dir)), q, u, v) else { continue };
             let cos = u.cross(v).normalize().dot(dir).abs();
@@ -366,7 +366,7 @@ pub(super) fn quad_scale(cfg: &StressConfig, out: &mut Parts, progress: &mut dyn
             let corner = cc + ax[0] * (hh.x * signs[0]) + ax[1] * (hh.y * signs[1]) + ax[2] * (hh.z * signs[2]);
             let (o, dir) = (d3(f3(inner)), d3(f3((corner - inner).normalize())).normalize());
             let mut best = Closest::<f32>::none();
-            closest_cuboid_hit(&c, V3::from_array(f3(o)), V3::from_array(f3(dir)), &mut best, &mut ());
+            c.brute::<_, _, false>(V3::from_array(f3(o)), V3::from_array(f3(dir)), 0.0, &mut best, &mut ());
             tested += 1;
             if best.index == MISS || best.index < QUAD_BASE {
                 leaks += 1;
@@ -385,7 +385,7 @@ pub(super) fn quad_scale(cfg: &StressConfig, out: &mut Parts, progress: &mut dyn
             let from = target + (normal * 2.0 + ax[j] * g.range(-0.5, 0.5)) * hh.max_element();
             let (o, dir) = (d3(f3(from)), d3(f3((target - from).normalize())).normalize());
             let mut best = Closest::<f32>::none();
-            closest_cuboid_hit(&c, V3::from_array(f3(o)), V3::from_array(f3(dir)), &mut best, &mut ());
+            c.brute::<_, _, false>(V3::from_array(f3(o)), V3::from_array(f3(dir)), 0.0, &mut best, &mut ());
             let te = (target - o).dot(dir);
             tested += 2;
             if best.index != rec.faces[k][side] {
@@ -396,7 +396,7 @@ pub(super) fn quad_scale(cfg: &StressConfig, out: &mut Parts, progress: &mut dyn
             let past = face_point(1.5 * g.range(-1.0, 1.0).signum(), g.range(-0.8, 0.8));
             let o = d3(f3(past + normal * (2.0 * hh.max_element())));
             let mut best = Closest::<f32>::none();
-            closest_cuboid_hit(&c, V3::from_array(f3(o)), V3::from_array(f3(-normal)), &mut best, &mut ());
+            c.brute::<_, _, false>(V3::from_array(f3(o)), V3::from_array(f3(-normal)), 0.0, &mut best, &mut ());
             if best.index != MISS {
                 wrong += 1;
             }

@@ -7,7 +7,7 @@
 //!    1e-4 .. 1e6 (ratio 1e-6 .. 1), grazing rays, origins on the surface,
 //!    inside and at the centre, negative radii. Every answer is judged by
 //!    [`Truth`], the same test in f64 on the same f32 inputs, with the error
-//!    bounds of the f32 kernel (see `geometry/intersect.rs` for their derivation):
+//!    bounds of the f32 kernel (see `geometry/spheres.rs` for their derivation):
 //!    a decision inside the rounding band of a bound is not an error.
 //! 2. **Self-intersection sweeps.** Hit points on spheres of radius 10^U(-4,4)
 //!    whose centre (or, for half of them, the hit point) lies 10^U(-4,6) from the
@@ -370,7 +370,7 @@ fn scenes(
             return Err(Error::Input(format!("{name}: stress scenes must be path traced")));
         }
         let prep = brute.prepared();
-        let oracle = SceneOracle::new(&prep.spheres);
+        let oracle = SceneOracle::new(&prep.shapes.spheres);
         let mut first: [Option<(&str, u64, u64)>; 2] = [None, None];
         let mut scalar_image = None;
         for &(label, opts, group) in &configs {

@@ -64,7 +64,7 @@ pub enum HitVerdict {
 /// What exact (f64) arithmetic says about one ray (given as f32) and one sphere,
 /// with the error bounds of the f32 kernel on that ray.
 ///
-/// Notation (as in `geometry/intersect.rs`): `f = o - c`, `b = f . d^`,
+/// Notation (as in `geometry/spheres.rs`): `f = o - c`, `b = f . d^`,
 /// `h = |f - b d^|` (distance of the centre from the ray's line),
 /// `disc = r^2 - h^2`, `cc = |f|^2 - r^2`, `eta = | |d| - 1 |`.
 #[derive(Clone, Copy, Debug)]
@@ -168,7 +168,7 @@ impl Truth {
     }
 
     /// Bound on the distance from the sphere of the point `o + t d` where the
-    /// kernel reports a hit at `t` (see `geometry/intersect.rs`, "Error bounds").
+    /// kernel reports a hit at `t` (see `geometry/spheres.rs`, "Error bounds").
     pub fn dist_bound(&self, t: f64) -> f64 {
         let (fl, r, h, eta) = (self.f_len, self.r, self.h, self.eta);
         let s = self.disc.max(0.0).sqrt();

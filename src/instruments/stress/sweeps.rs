@@ -11,7 +11,7 @@
 use super::oracle::*;
 use super::report::{Decade, Tally};
 use super::{dir32, finite3, v32, v64, Fnv, Gen, Sizes, StressConfig};
-use crate::geometry::{closest_hit, spawn, sphere_disc, surface, Spheres, Surface, MISS};
+use crate::geometry::{closest_brute, spawn, sphere_disc, surface, Spheres, Surface, MISS};
 use crate::material::{dielectric, lambertian, metal};
 use crate::real::Real;
 use crate::sampling::{mix64, path_state, ScalarStream, Stream, XoshiroLanes};
@@ -193,14 +193,14 @@ pub fn check_group(grp: &Group, spheres: &mut Spheres) -> GroupResult {
     let r2 = grp.r * grp.r;
     let (o8, d8) = (pack8(&grp.o), pack8(&grp.d));
     let c8 = splat8(grp.c);
-    let (hit8, t8): (u32x8, f32x8) = closest_hit(spheres, o8, d8, &mut ());
+    let (hit8, t8): (u32x8, f32x8) = closest_brute(spheres, o8, d8, f32x8::splat(0.0), &mut ());
     let (disc8, _, _) = sphere_disc(o8, d8, c8, f32x8::splat(r2));
     let front8 = surface(o8, d8, t8, c8, f32x8::splat(grp.r)).front.to_bitmask();
     let (hit8, t8, disc8) = (hit8.to_array(), t8.to_array(), disc8.to_array());
     let c64 = v64(grp.c);
     for k in 0..8 {
         let (o, d) = (grp.o[k], grp.d[k]);
-        let (hs, ts) = closest_hit(spheres, o, d, &mut ());
+        let (hs, ts) = closest_brute(spheres, o, d, 0.0, &mut ());
         let (disc, _, _) = sphere_disc(o, d, grp.c, r2);
         if hs != hit8[k] || ts.to_bits() != t8[k].to_bits() || disc.to_bits() != disc8[k].to_bits() {
             res.mismatches += 1;
@@ -510,7 +510,7 @@ fn kernel_sweep<R: SweepLanes>(scatter: Scatter, sizes: &Sizes, seed: u64, rule:
         sph.set(0, hs.c.to_array(), hs.r);
         let c64 = v64(hs.c);
         let r_abs = hs.r.abs() as f64;
-        let (hit, th) = closest_hit(&sph, v(hs.o), v(hs.d), &mut ());
+        let (hit, th) = closest_brute(&sph, v(hs.o), v(hs.d), R::splat(0.0), &mut ());
         let (hit, th) = (R::lane_u(hit, 0), th.lane(0));
         if hit == MISS {
             // No hit point to start from; a miss the oracle calls wrong is counted.
@@ -546,7 +546,7 @@ fn kernel_sweep<R: SweepLanes>(scatter: Scatter, sizes: &Sizes, seed: u64, rule:
                 (d, R::mask_bits(a))
             };
             let o2 = spawn(&srf, dir);
-            let (i2, t2) = closest_hit(&sph, o2, dir, &mut ());
+            let (i2, t2) = closest_brute(&sph, o2, dir, R::splat(0.0), &mut ());
             for l in (0..n).filter(|l| alive & (1 << l) != 0) {
                 let dl = lane3(dir, l);
                 if !finite3(dl) {

@@ -37,14 +37,14 @@ pub(super) fn classify_packets<W: Wide, P: Probe, S: PathSampler, const M: bool,
     // is a whole packet's whatever their number, so an emptier one costs
     // more than the queue it saves (measured: docs/history.md, the fifth round).
     let full_enough = W::LANES * 3 / 4;
-    let kind_of = &prep.spheres.kind[..];
+    let kind_of = &prep.shapes.spheres.kind[..];
     let kind_mask = kind_of.len().wrapping_sub(1);
     // `Q`: the scene has quads (a sphere-only scene reads one table; the
     // quads' may be empty).
-    debug_assert_eq!(Q, !prep.quads.is_empty());
-    let quad_kind = &prep.quads.kind[..];
+    debug_assert_eq!(Q, !prep.shapes.quads.is_empty());
+    let quad_kind = &prep.shapes.quads.kind[..];
     let quad_mask = quad_kind.len().wrapping_sub(1);
-    let only_quads = prep.spheres.is_empty();
+    let only_quads = prep.shapes.spheres.is_empty();
     debug_assert!(quad_kind.len() as u32 <= QUAD_BASE);
     let want: [bool; SURF] = Kind::SURFACES.map(|k| kinds.contains(k));
     let mut lens: [usize; SURF] = Kind::SURFACES.map(|k| len[k as usize]);

@@ -25,12 +25,14 @@ pub(super) fn surfaces<W: Wide, P: Probe, const M: bool>(
     probe: &mut P,
 ) -> Hits<W> {
     let sph = at.u(&ws.hit);
-    if !M && prep.quads.is_empty() {
+    if !M && prep.shapes.quads.is_empty() {
         // Book one's surfaces, as they were. The index is masked into the
         // records' range: a no-op on a hit index, and a lane of a run that is
         // not live (a miss's index, or a stale one) reads some record.
-        let rec =
-            W::gather_rows8(&prep.spheres.shade, &W::idx_of(sph & W::u_splat(prep.spheres.shade.len() as u32 - 1)));
+        let rec = W::gather_rows8(
+            &prep.shapes.spheres.shade,
+            &W::idx_of(sph & W::u_splat(prep.shapes.spheres.shade.len() as u32 - 1)),
+        );
         let c = V3::new(rec[Shade::CX], rec[Shade::CY], rec[Shade::CZ]);
         let r = rec[Shade::R];
         let d = at.v3(&ws.cur.d);
@@ -44,12 +46,12 @@ pub(super) fn surfaces<W: Wide, P: Probe, const M: bool>(
     let d = at.v3(&ws.cur.d);
     let o = at.v3(&ws.cur.o);
     let t = at.f(&ws.t);
-    let q_mask = W::u_splat(prep.quads.shade.len() as u32 - 1);
-    if !M && prep.spheres.is_empty() {
+    let q_mask = W::u_splat(prep.shapes.quads.shade.len() as u32 - 1);
+    if !M && prep.shapes.spheres.is_empty() {
         // A scene of quads alone (the Cornell boxes): every hit is a quad's,
         // so the sphere records and surfaces the mixed case computes and
         // then selects away are not computed (the same lanes, bit for bit).
-        let rec = W::gather_rows8(&prep.quads.shade, &W::idx_of(sph & q_mask));
+        let rec = W::gather_rows8(&prep.shapes.quads.shade, &W::idx_of(sph & q_mask));
         let srf = quad_surface(o, d, t, V3::new(rec[0], rec[1], rec[2]), rec[3]);
         if P::PATHS && probe.paths() {
             probe.shaded(ws.ids::<W>(&at.idx()), sph, W::splat(0.0), srf.n, srf.front, at.live());
@@ -59,9 +61,9 @@ pub(super) fn surfaces<W: Wide, P: Probe, const M: bool>(
     }
     let (srf, rec): (Surface<W>, [W; 8]) = {
         let is_sphere = W::u_lt(sph, W::u_splat(QUAD_BASE));
-        let s_mask = W::u_splat(prep.spheres.shade.len() as u32 - 1);
-        let srec = W::gather_rows8(&prep.spheres.shade, &W::idx_of(sph & s_mask));
-        let qrec = W::gather_rows8(&prep.quads.shade, &W::idx_of(sph & q_mask));
+        let s_mask = W::u_splat(prep.shapes.spheres.shade.len() as u32 - 1);
+        let srec = W::gather_rows8(&prep.shapes.spheres.shade, &W::idx_of(sph & s_mask));
+        let qrec = W::gather_rows8(&prep.shapes.quads.shade, &W::idx_of(sph & q_mask));
         let (is_sphere, srec) =
             if !M { (is_sphere, srec) } else { moving_records::<W>(prep, at.f(&ws.cur.time), sph, is_sphere, srec) };
         let c = V3::new(srec[Shade::CX], srec[Shade::CY], srec[Shade::CZ]);
@@ -95,7 +97,7 @@ pub(super) fn moving_records<W: Wide>(
     is_sphere: W,
     srec: [W; 8],
 ) -> (W, [W; 8]) {
-    let m = &prep.moving;
+    let m = &prep.shapes.moving;
     let is_moving = !W::u_lt(hit, W::u_splat(MOVING_BASE));
     let m_mask = W::u_splat(m.s.shade.len() as u32 - 1);
     let midx = W::idx_of(hit & m_mask);

@@ -96,7 +96,7 @@ pub fn render_tile<W: Wide, P: Probe, S: PathSampler>(
     samples: Range<u32>,
     probe: &mut P,
 ) -> u64 {
-    if prep.moving.is_empty() {
+    if prep.shapes.moving.is_empty() {
         render_tile_in::<W, P, S, false>(prep, sampler, ws, tile, samples, probe)
     } else {
         render_tile_in::<W, P, S, true>(prep, sampler, ws, tile, samples, probe)
@@ -276,10 +276,10 @@ pub(super) fn bounce<W: Wide, P: Probe, S: PathSampler, const M: bool>(
     // The sphere and quad arrays have a power-of-two length above every hit
     // index (`Spheres::pad`, `Quads::pad`). Quads' hit indices are
     // `QUAD_BASE + i`, above every sphere's and below `MISS`.
-    let kind_mask = prep.spheres.kind.len().wrapping_sub(1);
-    let quad_mask = prep.quads.kind.len().wrapping_sub(1);
-    let moving_mask = prep.moving.s.kind.len().wrapping_sub(1);
-    debug_assert!(prep.spheres.kind.len().is_power_of_two() && prep.quads.kind.len().is_power_of_two());
+    let kind_mask = prep.shapes.spheres.kind.len().wrapping_sub(1);
+    let quad_mask = prep.shapes.quads.kind.len().wrapping_sub(1);
+    let moving_mask = prep.shapes.moving.s.kind.len().wrapping_sub(1);
+    debug_assert!(prep.shapes.spheres.kind.len().is_power_of_two() && prep.shapes.quads.kind.len().is_power_of_two());
     // A scene without moving spheres or media classifies W paths at a time:
     // the packet's material kinds (one lookup per lane, in the spheres' or
     // the quads' table); a packet whose hits share a kind
@@ -320,7 +320,7 @@ pub(super) fn bounce<W: Wide, P: Probe, S: PathSampler, const M: bool>(
                 )
             };
         }
-        let placed = if prep.quads.is_empty() { classify!(false) } else { classify!(true) };
+        let placed = if prep.shapes.quads.is_empty() { classify!(false) } else { classify!(true) };
         debug_assert!(
             ws.hit[..n].iter().filter(|&&h| h != MISS).count() == len.iter().sum::<usize>() + placed,
             "the plan left out a kind that was hit"
@@ -331,12 +331,12 @@ pub(super) fn bounce<W: Wide, P: Probe, S: PathSampler, const M: bool>(
             // MISS (two tests for a sphere or a quad, as before media existed;
             // moving spheres only in a scene that has them).
             let q = if h < QUAD_BASE {
-                prep.spheres.kind[h as usize & kind_mask] as usize
+                prep.shapes.spheres.kind[h as usize & kind_mask] as usize
             } else if h < MEDIUM_BASE {
                 if !M || h < MOVING_BASE {
-                    prep.quads.kind[(h - QUAD_BASE) as usize & quad_mask] as usize
+                    prep.shapes.quads.kind[(h - QUAD_BASE) as usize & quad_mask] as usize
                 } else {
-                    prep.moving.s.kind[(h - MOVING_BASE) as usize & moving_mask] as usize
+                    prep.shapes.moving.s.kind[(h - MOVING_BASE) as usize & moving_mask] as usize
                 }
             } else if h == MISS {
                 MISS_QUEUE

@@ -15,7 +15,8 @@ pub(super) fn shadow_pass<W: Wide, P: Probe, const M: bool>(prep: &Prepared, ws:
         let live = low_bits((n - i).min(W::LANES));
         let (o, d) = (Paths::v3::<W>(&sh.o, i), Paths::v3::<W>(&sh.d, i));
         let tmax = W::load_pow2(&sh.tmax, i);
-        let blocked = prep.occluded::<W, P, M>(o, d, tmax, live, || W::load_pow2(&sh.time, i), probe);
+        let blocked =
+            prep.shapes.occluded::<W, P, M>(o, d, tmax, W::mask_from_bits(live), || W::load_pow2(&sh.time, i), probe);
         probe.lanes(Stage::Intersect, live.count_ones(), W::LANES as u32);
         let c = Paths::v3::<W>(&sh.c, i);
         let c = if prep.media.is_empty() { c } else { c * transmittance(&prep.media, o, d, tmax) };
@@ -40,7 +41,9 @@ pub(super) fn intersect<W: Wide, P: Probe, const M: bool>(
         let live = (n - i).min(W::LANES);
         let (o, d) = (Paths::v3::<W>(&ws.cur.o, i), Paths::v3::<W>(&ws.cur.d, i));
         let time = &ws.cur.time;
-        let (hit, t) = prep.closest_hits::<W, P, M>(o, d, low_bits(live), || W::load_pow2(time, i), probe);
+        let live_mask = W::mask_from_bits(low_bits(live));
+        let best = prep.shapes.closest::<W, P, M>(o, d, live_mask, || W::load_pow2(time, i), probe);
+        let (hit, t) = (best.index, best.t);
         W::store_u_pow2(hit, &mut ws.hit, i);
         t.store_pow2(&mut ws.t, i);
         probe.lanes(Stage::Intersect, live as u32, W::LANES as u32);
@@ -202,11 +205,11 @@ pub(super) fn textured_lambertian_pass<W: Wide, P: Probe, S: PathSampler, const 
 #[inline(always)]
 pub(super) fn material_row<const M: bool>(prep: &Prepared, h: u32) -> usize {
     if h < QUAD_BASE {
-        prep.spheres.row[h as usize] as usize
+        prep.shapes.spheres.row[h as usize] as usize
     } else if !M || h < MOVING_BASE {
-        prep.quads.row[(h - QUAD_BASE) as usize] as usize
+        prep.shapes.quads.row[(h - QUAD_BASE) as usize] as usize
     } else {
-        prep.moving.s.row[(h - MOVING_BASE) as usize] as usize
+        prep.shapes.moving.s.row[(h - MOVING_BASE) as usize] as usize
     }
 }
 

@@ -1,0 +1,182 @@
+//! The one aggregate: every kind's primitives and, where the plan chose one,
+//! its tree, with the closest-hit and any-hit searches over all of them,
+//! written once for one ray and for packets ([`Walker`]).
+//!
+//! The kinds are searched in a fixed order, each improving the closest hit
+//! of the ones before; the tie rule ([`Closest::offer`]) makes the answer
+//! independent of that order. The spheres come first (the one kind with a
+//! second walk, `--accel bvh-ray`); the others are registered in
+//! [`for_each_kind_after_spheres`], each searched only when it has
+//! primitives, and a scene of spheres alone stops after them. Adding a kind
+//! is its own file (its [`Primitive`] and [`super::Leaf`]), a field here and in
+//! [`Trees`], and a line in that list.
+
+use super::bvh::{Bvh, Walk, Walker};
+use super::cuboids::{Cuboids, LeafCuboid};
+use super::hit::Closest;
+use super::moving::{LeafMoving, MovingSpheres};
+use super::primitive::Primitive;
+use super::quads::{LeafQuad, Quads};
+use super::spheres::{LeafSphere, Spheres};
+use super::work::Counter;
+use crate::vec3::V3;
+
+/// Every kind's primitives, and their trees.
+#[derive(Clone, Debug, Default)]
+pub struct Shapes {
+    pub spheres: Spheres,
+    /// The quads (a cuboid's faces among them; searched: the loose ones).
+    pub quads: Quads,
+    /// The boxes, each tested whole.
+    pub cuboids: Cuboids,
+    /// Spheres whose centre moves over the shutter interval.
+    pub moving: MovingSpheres,
+    /// Each kind's tree, where the plan chose one (else brute force).
+    pub trees: Trees,
+    /// Some kind beyond the spheres has primitives to search.
+    others: bool,
+}
+
+/// A tree per kind, or none (brute force).
+#[derive(Clone, Debug, Default)]
+pub struct Trees {
+    pub spheres: Option<Bvh<LeafSphere>>,
+    pub quads: Option<Bvh<LeafQuad>>,
+    pub cuboids: Option<Bvh<LeafCuboid>>,
+    pub moving: Option<Bvh<LeafMoving>>,
+}
+
+/// The kinds after the spheres, in their search order: `$body` once per
+/// kind with `$prims` its primitives and `$tree` its tree (an `Option`).
+macro_rules! for_each_kind_after_spheres {
+    ($shapes:expr, |$prims:ident, $tree:ident| $body:expr) => {{
+        {
+            let ($prims, $tree) = (&$shapes.quads, $shapes.trees.quads.as_ref());
+            $body;
+        }
+        {
+            let ($prims, $tree) = (&$shapes.cuboids, $shapes.trees.cuboids.as_ref());
+            $body;
+        }
+        {
+            let ($prims, $tree) = (&$shapes.moving, $shapes.trees.moving.as_ref());
+            $body;
+        }
+    }};
+}
+
+/// Which kinds get a tree, and the walk the spheres' is built for.
+#[derive(Clone, Copy, Debug, PartialEq, Eq)]
+pub struct TreeChoice {
+    /// `None`: brute force over the spheres.
+    pub spheres: Option<Walk>,
+    pub quads: bool,
+    pub cuboids: bool,
+    pub moving: bool,
+}
+
+impl Shapes {
+    /// The aggregate over the primitives (padded, as the kernels read
+    /// them), without trees; `cuboids` must have their faces' boxes
+    /// ([`Cuboids::bound_faces`]) before a tree is built over them.
+    pub fn new(spheres: Spheres, quads: Quads, cuboids: Cuboids, moving: MovingSpheres) -> Shapes {
+        let others = quads.count() > 0 || cuboids.count() > 0 || moving.count() > 0;
+        Shapes { spheres, quads, cuboids, moving, trees: Trees::default(), others }
+    }
+
+    /// Builds the trees `choice` asks for; `extent` bounds every ray origin
+    /// (see [`Bvh::build`]).
+    pub fn build_trees(&mut self, choice: TreeChoice, extent: f32) {
+        let one = Walk::OneByOne;
+        self.trees = Trees {
+            spheres: choice.spheres.map(|walk| Bvh::build_spheres(&self.spheres, extent, walk)),
+            quads: choice.quads.then(|| Bvh::build(&self.quads, extent, one)),
+            cuboids: choice.cuboids.then(|| Bvh::build(&self.cuboids, extent, one)),
+            moving: choice.moving.then(|| Bvh::build(&self.moving, extent, one)),
+        };
+    }
+
+    /// The closest hits of the rays `o + t d` (one ray, or a packet; the
+    /// lanes of `live` are searched, the others return `MISS` at
+    /// `t = -inf`). `M`: the scene has moving spheres (`false` compiles to
+    /// the search of a scene without); `time` gives the rays' times, called
+    /// only when `M`.
+    #[cfg_attr(not(feature = "phases"), inline(always))]
+    #[cfg_attr(feature = "phases", inline(never))]
+    pub fn closest<R: Walker, C: Counter, const M: bool>(
+        &self,
+        o: V3<R>,
+        d: V3<R>,
+        live: R::Mask,
+        time: impl FnOnce() -> R,
+        counter: &mut C,
+    ) -> Closest<R> {
+        let mut best = Closest::live(live);
+        match &self.trees.spheres {
+            Some(b) if R::LANES > 1 && b.built_for() == Walk::Wide8 => R::closest_wide8(b, o, d, &mut best, counter),
+            Some(b) => b.walk::<R, C, false>(o, d, R::splat(0.0), &mut best, counter),
+            None => self.spheres.brute::<R, C, false>(o, d, R::splat(0.0), &mut best, counter),
+        }
+        if !M && !self.others {
+            return best;
+        }
+        let time = if M { time() } else { R::splat(0.0) };
+        for_each_kind_after_spheres!(self, |prims, tree| search::<_, R, C, M, false>(
+            prims, tree, o, d, time, &mut best, counter
+        ));
+        best
+    }
+
+    /// Whether something lies on the segment `o + t d`, `0 < t < tmax`, of
+    /// each ray of `live` (shadow rays; the other lanes are not occluded):
+    /// any hit, each lane leaving the search at its first and each kind's
+    /// search stopping once no lane is left. The same answer as one ray at a
+    /// time, whatever the order: a hit below `tmax` is one whatever else was
+    /// found. Media do not block (their transmittance is
+    /// [`super::transmittance`]). `M` and `time` as for [`Shapes::closest`].
+    #[inline(always)]
+    pub fn occluded<R: Walker, C: Counter, const M: bool>(
+        &self,
+        o: V3<R>,
+        d: V3<R>,
+        tmax: R,
+        live: R::Mask,
+        time: impl FnOnce() -> R,
+        counter: &mut C,
+    ) -> R::Mask {
+        let mut best = Closest::below(tmax, live);
+        search::<_, R, C, M, true>(&self.spheres, self.trees.spheres.as_ref(), o, d, R::splat(0.0), &mut best, counter);
+        if (!M && !self.others) || best.leave_found() {
+            return best.found();
+        }
+        let time = if M { time() } else { R::splat(0.0) };
+        for_each_kind_after_spheres!(self, |prims, tree| {
+            search::<_, R, C, M, true>(prims, tree, o, d, time, &mut best, counter);
+            if best.leave_found() {
+                return best.found();
+            }
+        });
+        best.found()
+    }
+}
+
+/// One kind's search: its tree's walk, or brute force; nothing for a kind
+/// without primitives, or a moving kind in a scene without motion (`M`).
+#[inline(always)]
+fn search<K: Primitive, R: Walker, C: Counter, const M: bool, const ANY: bool>(
+    prims: &K,
+    tree: Option<&Bvh<K::Leaf>>,
+    o: V3<R>,
+    d: V3<R>,
+    time: R,
+    best: &mut Closest<R>,
+    counter: &mut C,
+) {
+    if (K::TIMED && !M) || prims.count() == 0 {
+        return;
+    }
+    match tree {
+        Some(b) => b.walk::<R, C, ANY>(o, d, time, best, counter),
+        None => prims.brute::<R, C, ANY>(o, d, time, best, counter),
+    }
+}
