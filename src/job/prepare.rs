@@ -178,102 +178,15 @@ pub(super) fn prepare(
     plan: Plan,
     estimator: Estimator,
 ) -> Prepared {
-    let mut materials = MaterialTables::default();
-    let mut textures = TextureTables::default();
-    let mut spheres = Spheres::default();
-    let mut moving = MovingSpheres::default();
     let flat = scene.flatten();
-    let mut row_of = |m: &Material| match *m {
-        Material::Lambertian { ref albedo } => {
-            let (flat, tex) = match *albedo {
-                Texture::Solid(c) => (c, TexRef::default()),
-                Texture::Checker { scale, even, odd } => {
-                    let c = Checker { inv_scale: (1.0 / scale as f64) as f32, even, odd };
-                    (even, TexRef { kind: TexKind::Checker, row: push(&mut textures.checker, c) })
-                }
-                Texture::Noise { scale } => {
-                    if textures.perlin.is_none() {
-                        textures.perlin = Some(Perlin::new(PERLIN_SEED));
-                    }
-                    ([0.5; 3], TexRef { kind: TexKind::Noise, row: push(&mut textures.noise, Noise { scale }) })
-                }
-                Texture::Image { ref file } => {
-                    let img = images.get(file).expect("a job reads every image its scene names").clone();
-                    // The flat colour (debug modes): the image's first texel.
-                    (img.texels[0], TexRef { kind: TexKind::Image, row: push(&mut textures.image, img) })
-                }
-            };
-            materials.lambertian_tex.push(tex);
-            push(&mut materials.lambertian, flat)
-        }
-        Material::Metal { albedo, fuzz } => push(&mut materials.metal, (albedo, fuzz)),
-        Material::Dielectric { ior } => push(&mut materials.dielectric, ior),
-        Material::DiffuseLight { emit, one_sided } => push(&mut materials.light, (emit, one_sided)),
-    };
-    for s in &flat.spheres {
-        match s.center1 {
-            None => spheres.push(s.center, s.radius, kind(&s.material), row_of(&s.material)),
-            Some(c1) => moving.push(s.center, c1, s.radius, kind(&s.material), row_of(&s.material)),
-        }
-    }
     let view = view(&scene.camera);
-    // Every ray origin and every primitive lies within `extent` of the origin
-    // on each axis (the quads' edge tolerance and boxes are scaled by it).
-    let mut extent = scene.camera.look_from.iter().fold(0.0f32, |m, x| m.max(x.abs())) + view.lens_radius as f32;
-    for s in &flat.spheres {
-        // A moving sphere's centres at times 0 and 1 (every centre between lies within both's range).
-        for c in [Some(s.center), s.center1].into_iter().flatten() {
-            extent = extent.max(c.iter().fold(0.0f32, |m, x| m.max(x.abs())) + s.radius.abs());
-        }
-    }
-    // Media only where paths are traced (the debug modes shade surfaces):
-    // their scattering points are ray origins anywhere inside them (none for
-    // a density of 0, which then changes nothing, not even the extent).
-    let mut media = Media::default();
-    if plan.kinds.contains(Kind::Isotropic) {
-        let f = |v: [f64; 3]| v.map(|x| x as f32);
-        for m in &flat.media {
-            if m.density > 0.0 {
-                extent = extent.max(m.boundary.reach() as f32);
-            }
-            let boundary = match m.boundary {
-                FlatBoundary::Sphere { center, radius } => {
-                    Boundary::Sphere { c: f(center), r2: (radius as f32) * (radius as f32) }
-                }
-                FlatBoundary::Box { center, axes, half } => {
-                    Boundary::Box { c: f(center), axes: axes.map(f), half: f(half) }
-                }
-            };
-            media.push(boundary, m.density as f64, m.albedo);
-        }
-    }
-    for q in &flat.quads {
-        for (a, b) in [(0.0, 0.0), (1.0, 0.0), (0.0, 1.0), (1.0, 1.0)] {
-            for k in 0..3 {
-                extent = extent.max((q.q[k] + a * q.u[k] + b * q.v[k]).abs());
-            }
-        }
-    }
-    let mut quads = Quads::default();
-    for q in &flat.quads {
-        quads.push(q.q, q.u, q.v, extent, kind(&q.material), row_of(&q.material));
-    }
-    let mut cuboids = Cuboids::default();
-    for c in &flat.cuboids {
-        cuboids.push(c.center, c.axes, c.half, c.first as u32);
-    }
-    quads.set_cuboid_faces(flat.cuboids.iter().map(|c| c.first as u32));
-    cuboids.bound_faces(&quads);
-    spheres.pad();
-    quads.pad();
-    moving.pad();
-    // The wavefront's per-primitive shading records (geometry::Shade).
-    spheres.shade_with(&materials);
-    moving.s.shade_with(&materials);
-    for i in 0..quads.len {
-        let (albedo, param) = materials.record(quads.kind[i], quads.row[i]);
-        quads.shade[i].0[4..].copy_from_slice(&[albedo[0], albedo[1], albedo[2], param]);
-    }
+    let extent = extent(scene, &flat, &view, &plan);
+    let mut tables = Tables { images, materials: MaterialTables::default(), textures: TextureTables::default() };
+    let (spheres, moving) = spheres(&flat, &mut tables);
+    let (quads, cuboids) = quads(&flat, extent, &mut tables);
+    let Tables { materials, textures, .. } = tables;
+    let media = if plan.kinds.contains(Kind::Isotropic) { media(&flat) } else { Media::default() };
+    let shapes = shapes(spheres, quads, cuboids, moving, &materials, &plan, extent);
     let camera =
         PreparedCamera { lens: plan.lens, ..PreparedCamera::new(&view, settings.width, settings.height, plan.jitter) };
     let mut lights = Lights::default();
@@ -285,25 +198,9 @@ pub(super) fn prepare(
             }
         }
     }
-    let emitters = if plan.nee > 0 { emitters(&spheres, &quads, &materials) } else { Emitters::default() };
+    let emitters =
+        if plan.nee > 0 { emitters(&shapes.spheres, &shapes.quads, &materials) } else { Emitters::default() };
     debug_assert_eq!(emitters.len(), plan.nee);
-    let mut shapes = Shapes::new(spheres, quads, cuboids, moving);
-    // Ray origins lie within the camera's lens of the eye, or on a primitive
-    // (`extent`; the spheres' tree pads by their own extent too). The
-    // spheres' tree is shaped for the walk that uses it
-    // (geometry::bvh::SahCost).
-    let tree = |a: Option<Accel>| a.is_some_and(|a| a != Accel::Brute);
-    let choice = TreeChoice {
-        spheres: match plan.accel {
-            Accel::Brute => None,
-            Accel::BvhPackets => Some(Walk::OneByOne),
-            Accel::BvhRays => Some(Walk::Wide8),
-        },
-        quads: tree(plan.quads),
-        cuboids: tree(plan.cuboids),
-        moving: tree(plan.moving),
-    };
-    shapes.build_trees(choice, extent);
     Prepared {
         plan,
         settings,
@@ -325,6 +222,164 @@ pub(super) fn prepare(
         lights,
         emitters,
     }
+}
+
+/// The material and texture tables, filled as the primitives are laid out
+/// (a material's row is its place in its kind's table, in scene order).
+struct Tables<'a> {
+    images: &'a Images,
+    materials: MaterialTables,
+    textures: TextureTables,
+}
+
+impl Tables<'_> {
+    /// Appends material `m` to its kind's table (a lambertian's texture to
+    /// its kind's); returns its row.
+    fn row_of(&mut self, m: &Material) -> u32 {
+        let (materials, textures) = (&mut self.materials, &mut self.textures);
+        match *m {
+            Material::Lambertian { ref albedo } => {
+                let (flat, tex) = match *albedo {
+                    Texture::Solid(c) => (c, TexRef::default()),
+                    Texture::Checker { scale, even, odd } => {
+                        let c = Checker { inv_scale: (1.0 / scale as f64) as f32, even, odd };
+                        (even, TexRef { kind: TexKind::Checker, row: push(&mut textures.checker, c) })
+                    }
+                    Texture::Noise { scale } => {
+                        if textures.perlin.is_none() {
+                            textures.perlin = Some(Perlin::new(PERLIN_SEED));
+                        }
+                        ([0.5; 3], TexRef { kind: TexKind::Noise, row: push(&mut textures.noise, Noise { scale }) })
+                    }
+                    Texture::Image { ref file } => {
+                        let img = self.images.get(file).expect("a job reads every image its scene names").clone();
+                        // The flat colour (debug modes): the image's first texel.
+                        (img.texels[0], TexRef { kind: TexKind::Image, row: push(&mut textures.image, img) })
+                    }
+                };
+                materials.lambertian_tex.push(tex);
+                push(&mut materials.lambertian, flat)
+            }
+            Material::Metal { albedo, fuzz } => push(&mut materials.metal, (albedo, fuzz)),
+            Material::Dielectric { ior } => push(&mut materials.dielectric, ior),
+            Material::DiffuseLight { emit, one_sided } => push(&mut materials.light, (emit, one_sided)),
+        }
+    }
+}
+
+/// A bound on every coordinate of every ray origin and every primitive:
+/// the camera's eye and lens, the spheres (a moving one's centres at times
+/// 0 and 1: every centre between lies within both's range), the media
+/// where paths are traced (their scattering points are ray origins anywhere
+/// inside them; none for a density of 0, which then changes nothing) and
+/// the quads' corners. The quads' edge tolerance and every tree's boxes are
+/// scaled by it.
+fn extent(scene: &Scene, flat: &Flat, view: &View, plan: &Plan) -> f32 {
+    let inf = |c: &[f32; 3]| c.iter().fold(0.0f32, |m, x| m.max(x.abs()));
+    let mut extent = inf(&scene.camera.look_from) + view.lens_radius as f32;
+    for s in &flat.spheres {
+        for c in [Some(s.center), s.center1].into_iter().flatten() {
+            extent = extent.max(inf(&c) + s.radius.abs());
+        }
+    }
+    if plan.kinds.contains(Kind::Isotropic) {
+        for m in flat.media.iter().filter(|m| m.density > 0.0) {
+            extent = extent.max(m.boundary.reach() as f32);
+        }
+    }
+    for q in &flat.quads {
+        for (a, b) in [(0.0, 0.0), (1.0, 0.0), (0.0, 1.0), (1.0, 1.0)] {
+            for k in 0..3 {
+                extent = extent.max((q.q[k] + a * q.u[k] + b * q.v[k]).abs());
+            }
+        }
+    }
+    extent
+}
+
+/// The static and the moving spheres, in scene order, with their materials' rows.
+fn spheres(flat: &Flat, tables: &mut Tables) -> (Spheres, MovingSpheres) {
+    let (mut spheres, mut moving) = (Spheres::default(), MovingSpheres::default());
+    for s in &flat.spheres {
+        match s.center1 {
+            None => spheres.push(s.center, s.radius, kind(&s.material), tables.row_of(&s.material)),
+            Some(c1) => moving.push(s.center, c1, s.radius, kind(&s.material), tables.row_of(&s.material)),
+        }
+    }
+    (spheres, moving)
+}
+
+/// The quads, with their materials' rows, and the boxes among them as cuboids.
+fn quads(flat: &Flat, extent: f32, tables: &mut Tables) -> (Quads, Cuboids) {
+    let mut quads = Quads::default();
+    for q in &flat.quads {
+        quads.push(q.q, q.u, q.v, extent, kind(&q.material), tables.row_of(&q.material));
+    }
+    let mut cuboids = Cuboids::default();
+    for c in &flat.cuboids {
+        cuboids.push(c.center, c.axes, c.half, c.first as u32);
+    }
+    quads.set_cuboid_faces(flat.cuboids.iter().map(|c| c.first as u32));
+    cuboids.bound_faces(&quads);
+    (quads, cuboids)
+}
+
+/// The constant media (where paths are traced).
+fn media(flat: &Flat) -> Media {
+    let mut media = Media::default();
+    let f = |v: [f64; 3]| v.map(|x| x as f32);
+    for m in &flat.media {
+        let boundary = match m.boundary {
+            FlatBoundary::Sphere { center, radius } => {
+                Boundary::Sphere { c: f(center), r2: (radius as f32) * (radius as f32) }
+            }
+            FlatBoundary::Box { center, axes, half } => {
+                Boundary::Box { c: f(center), axes: axes.map(f), half: f(half) }
+            }
+        };
+        media.push(boundary, m.density as f64, m.albedo);
+    }
+    media
+}
+
+/// The primitives padded, with their shading records and the trees the
+/// plan chose, as the one aggregate the kernels search. Ray origins lie
+/// within the camera's lens of the eye, or on a primitive (`extent`; the
+/// spheres' tree pads by their own extent too); the spheres' tree is shaped
+/// for the walk that uses it (`geometry::bvh::SahCost`).
+fn shapes(
+    mut spheres: Spheres,
+    mut quads: Quads,
+    cuboids: Cuboids,
+    mut moving: MovingSpheres,
+    materials: &MaterialTables,
+    plan: &Plan,
+    extent: f32,
+) -> Shapes {
+    spheres.pad();
+    quads.pad();
+    moving.pad();
+    // The wavefront's per-primitive shading records (geometry::Shade).
+    spheres.shade_with(materials);
+    moving.s.shade_with(materials);
+    for i in 0..quads.len {
+        let (albedo, param) = materials.record(quads.kind[i], quads.row[i]);
+        quads.shade[i].0[4..].copy_from_slice(&[albedo[0], albedo[1], albedo[2], param]);
+    }
+    let mut shapes = Shapes::new(spheres, quads, cuboids, moving);
+    let tree = |a: Option<Accel>| a.is_some_and(|a| a != Accel::Brute);
+    let choice = TreeChoice {
+        spheres: match plan.accel {
+            Accel::Brute => None,
+            Accel::BvhPackets => Some(Walk::OneByOne),
+            Accel::BvhRays => Some(Walk::Wide8),
+        },
+        quads: tree(plan.quads),
+        cuboids: tree(plan.cuboids),
+        moving: tree(plan.moving),
+    };
+    shapes.build_trees(choice, extent);
+    shapes
 }
 
 /// Appends to a material table; returns the row.

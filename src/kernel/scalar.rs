@@ -107,26 +107,40 @@ struct Shadow {
     c: V3<f32>,
 }
 
+/// What every step at one vertex reads: the prepared scene, the bounce's
+/// depth (the rays the path traced before it) and whether the vertex sends
+/// a light sample (`nee-mis`, while a ray is left for it).
+#[derive(Clone, Copy)]
+struct Vertex<'a> {
+    prep: &'a Prepared,
+    depth: u32,
+    nee: bool,
+}
+
+/// A material as the kernels read it: its kind and its row in the kind's table.
+#[derive(Clone, Copy)]
+struct Material {
+    kind: Kind,
+    row: usize,
+}
+
 /// What a diffuse vertex sends toward a light under `nee-mis` (`None`
 /// when the estimator does not run at this bounce): the shadow ray from
 /// `o` (`x` moved off its surface along the ray by `offset`), carrying
 /// `albedo` times the light's weighted radiance.
 #[inline(always)]
-#[allow(clippy::too_many_arguments)]
 fn light_sample(
-    prep: &Prepared,
-    nee: bool,
+    v: Vertex,
     x: V3<f32>,
     srf: Option<&Surface<f32>>,
     own_pdf: impl Fn(V3<f32>) -> f32,
     albedo: [f32; 3],
-    depth: u32,
     rng: &mut impl Stream<f32>,
 ) -> Option<Shadow> {
-    if !nee {
+    if !v.nee {
         return None;
     }
-    let (d, t, carry) = next_event(&prep.emitters, x, own_pdf, prep.bounces.light(depth), rng);
+    let (d, t, carry) = next_event(&v.prep.emitters, x, own_pdf, v.prep.bounces.light(v.depth), rng);
     let (o, offset) = match srf {
         Some(srf) => (spawn(srf, d), srf.offset),
         None => (x, 0.0),
@@ -134,27 +148,24 @@ fn light_sample(
     Some(Shadow { o, d, tmax: shadow_tmax(t, offset), c: V3::from_array(albedo).mul_elem(carry) })
 }
 
-/// The scattered direction and attenuation of a path that hit material
-/// (`kind`, `row`) at `srf`, the direction's density (0 for a specular
-/// one) and, under `nee-mis`, the light sample; or `None` when the path is
-/// absorbed (out of line in `phases` builds).
+/// The scattered direction and attenuation of a path along `d` that hit
+/// (`hit`, of material `mat`) at `srf`, the direction's density (0 for a
+/// specular one) and, under `nee-mis`, the light sample; or `None` when the
+/// path is absorbed (out of line in `phases` builds).
 #[cfg_attr(not(feature = "phases"), inline(always))]
 #[cfg_attr(feature = "phases", inline(never))]
-#[allow(clippy::too_many_arguments)]
 fn scatter(
-    prep: &Prepared,
+    v: Vertex,
     hit: u32,
-    kind: Kind,
-    row: usize,
+    mat: Material,
     d: V3<f32>,
     srf: &Surface<f32>,
-    depth: u32,
-    nee: bool,
     rng: &mut impl Stream<f32>,
 ) -> Option<Scatter> {
+    let (prep, row) = (v.prep, mat.row);
     let m = &prep.materials;
-    rng.seek(prep.bounces.scatter(depth));
-    Some(match kind {
+    rng.seek(prep.bounces.scatter(v.depth));
+    Some(match mat.kind {
         Kind::Lambertian => {
             let tex = m.lambertian_tex[row];
             let albedo = match tex.kind {
@@ -163,11 +174,11 @@ fn scatter(
             };
             let dir = lambertian(srf.n, rng);
             if prep.plan.sample_toward == 0 {
-                let shadow = light_sample(prep, nee, srf.p, Some(srf), |d| cosine_pdf(srf.n, d), albedo, depth, rng);
+                let shadow = light_sample(v, srf.p, Some(srf), |d| cosine_pdf(srf.n, d), albedo, rng);
                 (dir, albedo, cosine_pdf(srf.n, dir), shadow)
             } else {
                 let (dir, w) =
-                    book_mixture(&prep.lights, srf.p, dir, |d| cosine_pdf(srf.n, d), prep.bounces.light(depth), rng);
+                    book_mixture(&prep.lights, srf.p, dir, |d| cosine_pdf(srf.n, d), prep.bounces.light(v.depth), rng);
                 (dir, albedo.map(|a| a * w), 0.0, None)
             }
         }
@@ -203,6 +214,57 @@ pub fn trace<P: Probe>(
     (c, rays)
 }
 
+/// A path's radiance, the rays it traced and the shadow rays it traced.
+type Traced = ([f32; 3], u32, u32);
+
+/// One path in flight: its current ray, its time (scenes with moving
+/// spheres; inherited by every ray it scatters), its throughput, the
+/// radiance it has gathered, and what weighs the light it may hit next.
+struct Path {
+    id: PathId<f32>,
+    o: V3<f32>,
+    d: V3<f32>,
+    time: f32,
+    thr: V3<f32>,
+    sum: V3<f32>,
+    /// The density of the direction the path last scattered in (0: the
+    /// camera's, or a specular bounce's), for the weight of a light it hits.
+    pdf: f32,
+    shadow_rays: u32,
+    /// Whether the path's last direction was sampled at a diffuse or
+    /// isotropic vertex (for the probe's [`Strategy`] only).
+    scattered: bool,
+}
+
+impl Path {
+    /// The path's camera ray through pixel (x, y), and its time when `M`.
+    #[inline(always)]
+    fn start<P: Probe, const M: bool>(
+        prep: &Prepared,
+        (x, y): (u32, u32),
+        id: PathId<f32>,
+        rng: &mut impl Stream<f32>,
+        probe: &mut P,
+    ) -> Path {
+        let (o, d) = camera_ray(prep, x, y, rng);
+        let o = if P::PATHS && probe.paths() { probe.camera(id, o, d, 1) } else { o };
+        let time = if M {
+            rng.seek(layout::TIME);
+            rng.next()
+        } else {
+            0.0
+        };
+        let (thr, sum) = (V3::new(1.0, 1.0, 1.0), V3::new(0.0, 0.0, 0.0));
+        Path { id, o, d, time, thr, sum, pdf: 0.0, shadow_rays: 0, scattered: false }
+    }
+
+    /// The path's end after `rays` rays: its radiance plus `last`.
+    #[inline(always)]
+    fn end(&self, rays: u32, last: V3<f32>) -> Traced {
+        ((self.sum + last).to_array(), rays, self.shadow_rays)
+    }
+}
+
 /// [`trace`] for a scene with moving spheres (`M`: the path draws a time)
 /// or without (`false` compiles to the path of a scene without). Also
 /// returns the shadow rays it traced.
@@ -219,108 +281,130 @@ fn trace_in<P: Probe, const M: bool>(
     id: PathId<f32>,
     rng: &mut impl Stream<f32>,
     probe: &mut P,
-) -> ([f32; 3], u32, u32) {
-    let (o, mut d) = camera_ray(prep, x, y, rng);
-    let mut o = if P::PATHS && probe.paths() { probe.camera(id, o, d, 1) } else { o };
-    // The path's time (scenes with moving spheres only), inherited by every
-    // ray it scatters.
-    let time = if M {
-        rng.seek(layout::TIME);
-        rng.next()
-    } else {
-        0.0
-    };
-    let mut thr = V3::new(1.0f32, 1.0, 1.0);
-    let mut sum = V3::new(0.0f32, 0.0, 0.0);
-    // The density of the direction the path last scattered in (0: the
-    // camera's, or a specular bounce's), for the weight of a light it hits.
-    let mut pdf = 0.0f32;
-    let mut shadow_rays = 0;
-    // Whether the path's last direction was sampled at a diffuse or
-    // isotropic vertex (for the probe's [`Strategy`] only).
-    let mut scattered = false;
+) -> Traced {
+    let mut path = Path::start::<P, M>(prep, (x, y), id, rng, probe);
     for depth in 0..prep.settings.max_depth {
-        let rays = depth + 1;
         // A light sample at this bounce's vertex stands for one more ray.
-        let nee = prep.plan.nee > 0 && rays < prep.settings.max_depth;
-        probe.rays(depth, 1);
-        let (hit, t) = closest_hit::<P, M>(prep, o, d, time, probe);
-        if P::PATHS && probe.paths() {
-            probe.traced(id, o, d, hit, t, 1);
+        let nee = prep.plan.nee > 0 && depth + 1 < prep.settings.max_depth;
+        if let Some(end) = step::<P, M>(Vertex { prep, depth, nee }, &mut path, rng, probe) {
+            return end;
         }
-        // Scenes with media: the nearest of the surface and a free-flight sample per medium.
-        let (hit, t) =
-            if prep.media.is_empty() { (hit, t) } else { sample_media(&prep.media, o, d, hit, t, depth, rng) };
-        if hit == MISS {
-            // A black background adds nothing, whatever the throughput
-            // (`SkyColours::is_black`): the wavefront shades no miss then.
-            let black = prep.sky.is_black();
-            let c = if black { V3::splat3([0.0; 3]) } else { thr.mul_elem(background(&prep.sky, d)) };
-            if P::PATHS && probe.paths() {
-                probe.contributed(id, rays, Strategy::Background, c);
-            }
-            return ((if black { sum } else { sum + c }).to_array(), rays, shadow_rays);
-        }
-        let (next_o, dir, atten, shadow) = if hit >= MEDIUM_BASE {
-            // Isotropic scattering inside medium k: a uniform direction.
-            rng.seek(prep.bounces.scatter(depth));
-            let dir = unit_vector(rng);
-            let p = o + d * t;
-            let albedo = prep.media.albedo[(hit - MEDIUM_BASE) as usize];
-            scattered = true;
-            if prep.plan.sample_toward == 0 {
-                pdf = ISOTROPIC_PDF;
-                let shadow = light_sample(prep, nee, p, None, |_| ISOTROPIC_PDF, albedo, depth, rng);
-                (p, dir, albedo, shadow)
-            } else {
-                let (dir, w) = book_mixture(&prep.lights, p, dir, |_| ISOTROPIC_PDF, prep.bounces.light(depth), rng);
-                (p, dir, albedo.map(|a| a * w), None)
-            }
-        } else {
-            let (dir, atten, srf, dir_pdf, shadow, diffuse) =
-                match shade::<P, M>(prep, o, d, t, time, hit, id, depth, thr, pdf, nee, rng, probe) {
-                    Ok(s) => s,
-                    Err(c) => {
-                        if P::PATHS && probe.paths() {
-                            let how = if scattered { Strategy::Scattered } else { Strategy::Specular };
-                            probe.contributed(id, rays, how, c);
-                        }
-                        return ((sum + c).to_array(), rays, shadow_rays);
-                    }
-                };
-            pdf = dir_pdf;
-            scattered = diffuse;
-            (spawn(&srf, dir), dir, atten, shadow)
-        };
-        if let Some(sh) = shadow {
-            let c = thr.mul_elem(sh.c);
-            if c.x > 0.0 || c.y > 0.0 || c.z > 0.0 {
-                shadow_rays += 1;
-                if !prep.shapes.occluded::<f32, P, M>(sh.o, sh.d, sh.tmax, true, || time, probe) {
-                    let c = if prep.media.is_empty() { c } else { c * transmittance(&prep.media, sh.o, sh.d, sh.tmax) };
-                    if P::PATHS && probe.paths() {
-                        probe.contributed(id, rays + 1, Strategy::LightSample, c);
-                    }
-                    sum = sum + c;
-                }
-            }
-        }
-        thr = thr.mul_elem(V3::from_array(atten));
-        if thr.x == 0.0 && thr.y == 0.0 && thr.z == 0.0 {
-            return (sum.to_array(), rays, shadow_rays);
-        }
-        if roulette_applies(&prep.estimator, rays) {
-            rng.seek(prep.bounces.roulette(depth));
-            let (t, survives) = roulette(thr, rng);
-            if !survives {
-                return (sum.to_array(), rays, shadow_rays);
-            }
-            thr = t;
-        }
-        o = next_o;
-        d = dir;
     }
-    (sum.to_array(), prep.settings.max_depth, shadow_rays)
+    (path.sum.to_array(), prep.settings.max_depth, path.shadow_rays)
+}
+
+/// One bounce of `path`: its closest hit (or a medium's free flight), the
+/// vertex there, its light sample, and the path's next ray; `Some` with the
+/// path's result when it ends here.
+#[inline(always)]
+fn step<P: Probe, const M: bool>(
+    v: Vertex,
+    path: &mut Path,
+    rng: &mut impl Stream<f32>,
+    probe: &mut P,
+) -> Option<Traced> {
+    let (prep, depth, rays) = (v.prep, v.depth, v.depth + 1);
+    probe.rays(depth, 1);
+    let (hit, t) = closest_hit::<P, M>(prep, path.o, path.d, path.time, probe);
+    if P::PATHS && probe.paths() {
+        probe.traced(path.id, path.o, path.d, hit, t, 1);
+    }
+    // Scenes with media: the nearest of the surface and a free-flight sample per medium.
+    let (hit, t) =
+        if prep.media.is_empty() { (hit, t) } else { sample_media(&prep.media, path.o, path.d, hit, t, depth, rng) };
+    if hit == MISS {
+        // A black background adds nothing, whatever the throughput
+        // (`SkyColours::is_black`): the wavefront shades no miss then.
+        let black = prep.sky.is_black();
+        let c = if black { V3::splat3([0.0; 3]) } else { path.thr.mul_elem(background(&prep.sky, path.d)) };
+        if P::PATHS && probe.paths() {
+            probe.contributed(path.id, rays, Strategy::Background, c);
+        }
+        return Some(if black { (path.sum.to_array(), rays, path.shadow_rays) } else { path.end(rays, c) });
+    }
+    let (next_o, dir, atten, shadow) = if hit >= MEDIUM_BASE {
+        medium_vertex(v, path, hit, t, rng)
+    } else {
+        match shade::<P, M>(v, path, hit, t, rng, probe) {
+            Ok((dir, atten, srf, dir_pdf, shadow, diffuse)) => {
+                path.pdf = dir_pdf;
+                path.scattered = diffuse;
+                (spawn(&srf, dir), dir, atten, shadow)
+            }
+            Err(c) => {
+                if P::PATHS && probe.paths() {
+                    let how = if path.scattered { Strategy::Scattered } else { Strategy::Specular };
+                    probe.contributed(path.id, rays, how, c);
+                }
+                return Some(path.end(rays, c));
+            }
+        }
+    };
+    if let Some(sh) = shadow {
+        trace_shadow::<P, M>(prep, path, sh, rays, probe);
+    }
+    path.thr = path.thr.mul_elem(V3::from_array(atten));
+    if path.thr.x == 0.0 && path.thr.y == 0.0 && path.thr.z == 0.0 {
+        return Some((path.sum.to_array(), rays, path.shadow_rays));
+    }
+    if roulette_applies(&prep.estimator, rays) {
+        rng.seek(prep.bounces.roulette(depth));
+        let (t, survives) = roulette(path.thr, rng);
+        if !survives {
+            return Some((path.sum.to_array(), rays, path.shadow_rays));
+        }
+        path.thr = t;
+    }
+    path.o = next_o;
+    path.d = dir;
+    None
+}
+
+/// Isotropic scattering inside medium `hit - MEDIUM_BASE`, where the path
+/// stopped at `t`: a uniform direction (or the book's mixture), the
+/// medium's albedo, and the light sample from the stopping point.
+#[inline(always)]
+fn medium_vertex(
+    v: Vertex,
+    path: &mut Path,
+    hit: u32,
+    t: f32,
+    rng: &mut impl Stream<f32>,
+) -> (V3<f32>, V3<f32>, [f32; 3], Option<Shadow>) {
+    let prep = v.prep;
+    rng.seek(prep.bounces.scatter(v.depth));
+    let dir = unit_vector(rng);
+    let p = path.o + path.d * t;
+    let albedo = prep.media.albedo[(hit - MEDIUM_BASE) as usize];
+    path.scattered = true;
+    if prep.plan.sample_toward == 0 {
+        path.pdf = ISOTROPIC_PDF;
+        let shadow = light_sample(v, p, None, |_| ISOTROPIC_PDF, albedo, rng);
+        (p, dir, albedo, shadow)
+    } else {
+        let (dir, w) = book_mixture(&prep.lights, p, dir, |_| ISOTROPIC_PDF, prep.bounces.light(v.depth), rng);
+        (p, dir, albedo.map(|a| a * w), None)
+    }
+}
+
+/// The shadow ray of a light sample at the vertex after `rays` rays: what
+/// it carries is added to the path's radiance unless something blocks it
+/// (through media, times their transmittance).
+#[inline(always)]
+fn trace_shadow<P: Probe, const M: bool>(prep: &Prepared, path: &mut Path, sh: Shadow, rays: u32, probe: &mut P) {
+    let c = path.thr.mul_elem(sh.c);
+    if !(c.x > 0.0 || c.y > 0.0 || c.z > 0.0) {
+        return;
+    }
+    path.shadow_rays += 1;
+    let time = path.time;
+    if !prep.shapes.occluded::<f32, P, M>(sh.o, sh.d, sh.tmax, true, || time, probe) {
+        let c = if prep.media.is_empty() { c } else { c * transmittance(&prep.media, sh.o, sh.d, sh.tmax) };
+        if P::PATHS && probe.paths() {
+            probe.contributed(path.id, rays + 1, Strategy::LightSample, c);
+        }
+        path.sum = path.sum + c;
+    }
 }
 
 /// A scattered path: its new direction, the attenuation, the surface it
@@ -328,27 +412,21 @@ fn trace_in<P: Probe, const M: bool>(
 /// whether the vertex is diffuse.
 type Scattered = (V3<f32>, [f32; 3], Surface<f32>, f32, Option<Shadow>, bool);
 
-/// The surface hit `hit` at `t` along `o + t d`: the scattered direction, the
-/// attenuation and the surface, or the path's last term (a light, weighted
-/// under `nee-mis` against the light sample of the vertex that scattered
-/// toward it with density `pdf`; a debug shading; 0 for an absorbed path).
+/// The surface `path` hit (`hit`, at `t` along its ray): the scattered
+/// direction, the attenuation and the surface, or the path's last term (a
+/// light, weighted under `nee-mis` against the light sample of the vertex
+/// that scattered toward it with the path's density; a debug shading; 0
+/// for an absorbed path).
 #[inline(always)]
-#[allow(clippy::too_many_arguments)]
 fn shade<P: Probe, const M: bool>(
-    prep: &Prepared,
-    o: V3<f32>,
-    d: V3<f32>,
-    t: f32,
-    time: f32,
+    v: Vertex,
+    path: &Path,
     hit: u32,
-    id: PathId<f32>,
-    depth: u32,
-    thr: V3<f32>,
-    pdf: f32,
-    nee: bool,
+    t: f32,
     rng: &mut impl Stream<f32>,
     probe: &mut P,
 ) -> Result<Scattered, V3<f32>> {
+    let (prep, o, d, id) = (v.prep, path.o, path.d, path.id);
     let sp = &prep.shapes.spheres;
     let Hit { kind: hit_kind, index: i } = Hit::of(hit);
     let (srf, kind, row) = match hit_kind {
@@ -362,7 +440,7 @@ fn shade<P: Probe, const M: bool>(
         HitKind::Moving if M => {
             let m = &prep.shapes.moving;
             let r = m.s.r[i];
-            let srf = surface(o, d, t, m.centre(i, time), r);
+            let srf = surface(o, d, t, m.centre(i, path.time), r);
             if P::PATHS && probe.paths() {
                 probe.shaded(id, hit, r, srf.n, srf.front, 1);
             }
@@ -384,13 +462,13 @@ fn shade<P: Probe, const M: bool>(
         Mode::Flat | Mode::Gradient => return Err(V3::from_array(m.flat_colour(kind, row as u32))),
         Mode::Path if kind == Kind::DiffuseLight => {
             let (emit, one_sided) = m.light[row];
-            let e = thr.mul_elem(emission(V3::from_array(emit), one_sided, srf.front));
+            let e = path.thr.mul_elem(emission(V3::from_array(emit), one_sided, srf.front));
             if prep.plan.nee == 0 {
                 return Err(e);
             }
-            return Err(e * mis_bsdf(pdf, prep.emitters.pdf_of(o, d, prep.emitters.of_row[row])));
+            return Err(e * mis_bsdf(path.pdf, prep.emitters.pdf_of(o, d, prep.emitters.of_row[row])));
         }
-        Mode::Path => match scatter(prep, hit, kind, row, d, &srf, depth, nee, rng) {
+        Mode::Path => match scatter(v, hit, Material { kind, row }, d, &srf, rng) {
             Some(s) => s,
             None => return Err(V3::new(0.0, 0.0, 0.0)),
         },

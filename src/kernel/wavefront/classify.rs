@@ -3,6 +3,15 @@
 
 use super::*;
 
+/// What the classification sorts by: the kinds that get a queue (the
+/// plan's; every kind in the debug modes) and, by `Kind as usize`, the
+/// surface kinds a packet of one kind is scattered in place for.
+#[derive(Clone, Copy)]
+pub(super) struct Classes {
+    pub(super) kinds: KindSet,
+    pub(super) in_place: [bool; Kind::SURFACES.len()],
+}
+
 /// The classification of a scene of spheres and quads (no moving spheres, no
 /// media), W paths at a time: the packet's material kinds (one lookup per
 /// lane in the spheres' or, for a quad's hit index, the quads' kind table,
@@ -19,33 +28,25 @@ use super::*;
 /// the scene does not have costs one predictable branch. Returns the number
 /// of hits scattered in place (debug builds; 0 otherwise).
 #[inline(always)]
-#[allow(clippy::too_many_arguments)]
 pub(super) fn classify_packets<W: Wide, P: Probe, S: PathSampler, const M: bool, const Q: bool>(
-    prep: &Prepared,
-    sampler: S,
+    b: Bounce<S>,
     ws: &mut Workspace,
     n: usize,
-    depth: u32,
-    kinds: KindSet,
-    in_place: [bool; Kind::SURFACES.len()],
-    queues: &mut [Arr<u32>; MISS_QUEUE + 1],
-    len: &mut [usize; MISS_QUEUE + 1],
+    classes: Classes,
+    q: &mut Queues,
     probe: &mut P,
 ) -> usize {
+    let (prep, Classes { kinds, in_place }) = (b.prep, classes);
+    let (queues, len) = (&mut q.q, &mut q.len);
     const SURF: usize = Kind::SURFACES.len();
     // The fewest hits a packet scattered in place has: its lanes' arithmetic
     // is a whole packet's whatever their number, so an emptier one costs
     // more than the queue it saves (measured: docs/history.md, the fifth round).
     let full_enough = W::LANES * 3 / 4;
-    let kind_of = &prep.shapes.spheres.kind[..];
-    let kind_mask = kind_of.len().wrapping_sub(1);
     // `Q`: the scene has quads (a sphere-only scene reads one table; the
     // quads' may be empty).
     debug_assert_eq!(Q, !prep.shapes.quads.is_empty());
-    let quad_kind = &prep.shapes.quads.kind[..];
-    let quad_mask = quad_kind.len().wrapping_sub(1);
-    let only_quads = prep.shapes.spheres.is_empty();
-    debug_assert!(quad_kind.len() as u32 <= QUAD_BASE);
+    let tables = KindTables::of(prep);
     let want: [bool; SURF] = Kind::SURFACES.map(|k| kinds.contains(k));
     let mut lens: [usize; SURF] = Kind::SURFACES.map(|k| len[k as usize]);
     let iota = W::u_from_fn(|k| k as u32);
@@ -57,24 +58,7 @@ pub(super) fn classify_packets<W: Wide, P: Probe, S: PathSampler, const M: bool,
     for i in (0..n).step_by(W::LANES) {
         let hit = W::load_u_pow2(&ws.hit, i);
         let hits = W::mask_bits(W::u_lt(hit, W::u_splat(MISS))) & low_bits(n - i);
-        let kind = if Q && only_quads {
-            // Every hit is a quad's: its index masked into the quads' table
-            // (`QUAD_BASE` is above the mask), without the test per lane.
-            W::u_from_fn(|k| quad_kind[W::lane_u(hit, k) as usize & quad_mask] as u32)
-        } else if Q {
-            // Misses (MISS is above every quad's index) read some quad's
-            // kind; their lanes are not in `hits`.
-            W::u_from_fn(|k| {
-                let h = W::lane_u(hit, k);
-                if h < QUAD_BASE {
-                    kind_of[h as usize & kind_mask] as u32
-                } else {
-                    quad_kind[(h - QUAD_BASE) as usize & quad_mask] as u32
-                }
-            })
-        } else {
-            W::u_from_fn(|k| kind_of[W::lane_u(hit, k) as usize & kind_mask] as u32)
-        };
+        let kind = tables.kinds::<W, Q>(hit);
         if hits != 0 {
             let first = W::lane_u(kind, hits.trailing_zeros() as usize & (W::LANES - 1));
             let same = W::mask_bits(W::u_eq(kind, W::u_splat(first))) & hits;
@@ -83,21 +67,7 @@ pub(super) fn classify_packets<W: Wide, P: Probe, S: PathSampler, const M: bool,
                 if cfg!(debug_assertions) {
                     placed += hits.count_ones() as usize;
                 }
-                let run = Run { i, live: hits };
-                // The kind a literal in each arm: each scatter is compiled for its kind.
-                const LAMBERTIAN: u32 = Kind::Lambertian as u32;
-                const METAL: u32 = Kind::Metal as u32;
-                let bsdf = Dirs::Bsdf;
-                match first {
-                    LAMBERTIAN => {
-                        scatter::<W, P, S, M>(prep, sampler, ws, Kind::Lambertian, depth, run, false, bsdf, probe)
-                    }
-                    METAL => scatter::<W, P, S, M>(prep, sampler, ws, Kind::Metal, depth, run, false, bsdf, probe),
-                    _ => {
-                        debug_assert_eq!(first, Kind::Dielectric as u32);
-                        scatter::<W, P, S, M>(prep, sampler, ws, Kind::Dielectric, depth, run, false, bsdf, probe)
-                    }
-                }
+                scatter_in_place::<W, P, S, M>(b, ws, first, Run { i, live: hits }, probe);
                 continue;
             }
         }
@@ -114,6 +84,71 @@ pub(super) fn classify_packets<W: Wide, P: Probe, S: PathSampler, const M: bool,
         len[k as usize] = lens[s];
     }
     placed
+}
+
+/// The material kind tables of the spheres and the quads, each a power of
+/// two long above every index it is read at (`Spheres::pad`, `Quads::pad`).
+struct KindTables<'a> {
+    spheres: &'a [Kind],
+    quads: &'a [Kind],
+    /// The scene has quads and no static sphere.
+    only_quads: bool,
+}
+
+impl<'a> KindTables<'a> {
+    fn of(prep: &'a Prepared) -> Self {
+        let (spheres, quads) = (&prep.shapes.spheres.kind[..], &prep.shapes.quads.kind[..]);
+        debug_assert!(quads.len() as u32 <= QUAD_BASE);
+        KindTables { spheres, quads, only_quads: prep.shapes.spheres.is_empty() }
+    }
+
+    /// The material kind of each lane's hit (misses read some kind; their
+    /// lanes are not hits). `Q`: the scene has quads.
+    #[inline(always)]
+    fn kinds<W: Wide, const Q: bool>(&self, hit: W::U32) -> W::U32 {
+        let (kind_mask, quad_mask) = (self.spheres.len().wrapping_sub(1), self.quads.len().wrapping_sub(1));
+        if Q && self.only_quads {
+            // Every hit is a quad's: its index masked into the quads' table
+            // (`QUAD_BASE` is above the mask), without the test per lane.
+            W::u_from_fn(|k| self.quads[W::lane_u(hit, k) as usize & quad_mask] as u32)
+        } else if Q {
+            // Misses (MISS is above every quad's index) read some quad's kind.
+            W::u_from_fn(|k| {
+                let h = W::lane_u(hit, k);
+                if h < QUAD_BASE {
+                    self.spheres[h as usize & kind_mask] as u32
+                } else {
+                    self.quads[(h - QUAD_BASE) as usize & quad_mask] as u32
+                }
+            })
+        } else {
+            W::u_from_fn(|k| self.spheres[W::lane_u(hit, k) as usize & kind_mask] as u32)
+        }
+    }
+}
+
+/// A packet whose hits all share surface kind `kind` (as `Kind as u32`),
+/// scattered where it is by the bsdf estimator's pass. The kind a literal
+/// in each arm: each scatter is compiled for its kind.
+#[inline(always)]
+fn scatter_in_place<W: Wide, P: Probe, S: PathSampler, const M: bool>(
+    b: Bounce<S>,
+    ws: &mut Workspace,
+    kind: u32,
+    run: Run,
+    probe: &mut P,
+) {
+    const LAMBERTIAN: u32 = Kind::Lambertian as u32;
+    const METAL: u32 = Kind::Metal as u32;
+    let bsdf = Dirs::Bsdf;
+    match kind {
+        LAMBERTIAN => scatter::<W, P, S, M>(b, ws, Kind::Lambertian, run, false, bsdf, probe),
+        METAL => scatter::<W, P, S, M>(b, ws, Kind::Metal, run, false, bsdf, probe),
+        _ => {
+            debug_assert_eq!(kind, Kind::Dielectric as u32);
+            scatter::<W, P, S, M>(b, ws, Kind::Dielectric, run, false, bsdf, probe)
+        }
+    }
 }
 
 /// How a diffuse vertex chooses its direction: the estimator of the render,

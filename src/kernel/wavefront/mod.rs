@@ -75,6 +75,16 @@ pub use workspace::Workspace;
 /// Paths in flight per workspace (per thread), at most.
 pub const MAX_PATHS: usize = 2048;
 
+/// What every pass of one bounce reads besides the workspace: the prepared
+/// scene, the sampler and the bounce's depth (the rays each path traced
+/// before it; 0: camera rays).
+#[derive(Clone, Copy)]
+pub(super) struct Bounce<'a, S> {
+    pub(super) prep: &'a Prepared,
+    pub(super) sampler: S,
+    pub(super) depth: u32,
+}
+
 /// Renders samples `samples` of every pixel of `tile` (at most `MAX_PATHS`
 /// pixels), with the paths' values drawn by `sampler`; returns the rays traced.
 ///
@@ -253,6 +263,7 @@ pub(super) fn bounce<W: Wide, P: Probe, S: PathSampler, const M: bool>(
     depth: u32,
     probe: &mut P,
 ) -> u64 {
+    let b = Bounce { prep, sampler, depth };
     let n = ws.cur.len;
     probe.rays(depth, n as u32);
     intersect::<W, P, M>(prep, ws, n, probe);
@@ -270,85 +281,121 @@ pub(super) fn bounce<W: Wide, P: Probe, S: PathSampler, const M: bool>(
     } else if shade {
         shade_misses::<W, false>(prep, ws, n);
     }
-    let mut len = [0usize; MISS_QUEUE + 1];
-    let mut queues = ws.queue.take().expect("the queues are put back after every bounce");
+    let mut q =
+        Queues { q: ws.queue.take().expect("the queues are put back after every bounce"), len: [0; MISS_QUEUE + 1] };
     ws.next.len = 0;
+    // A scene without moving spheres or media classifies W paths at a time
+    // (`classify_packets`); the others one path at a time.
+    if !M && prep.media.is_empty() {
+        classify_bounce::<W, P, S, M>(b, ws, n, &mut q, probe);
+    } else {
+        classify_paths::<M>(prep, ws, n, &mut q);
+    }
+    material_passes::<W, P, S, M>(b, ws, &q, probe);
+    ws.queue = Some(q.q);
+    if nee && ws.shadows.len > 0 {
+        shadow_pass::<W, P, M>(prep, ws, probe);
+    }
+    std::mem::swap(&mut ws.cur, &mut ws.next);
+    n as u64
+}
+
+/// The bounce's queues: one per material kind, and the misses'; the paths
+/// (their indices in the bounce's arrays) each holds, and how many.
+pub(super) struct Queues {
+    pub(super) q: [Arr<u32>; MISS_QUEUE + 1],
+    pub(super) len: [usize; MISS_QUEUE + 1],
+}
+
+/// Classification W paths at a time (a scene without moving spheres or
+/// media): the packet's material kinds (one lookup per lane, in the
+/// spheres' or the quads' table); a packet whose hits share a kind that has
+/// a plain scatter pass is scattered where it is; the others' lanes are
+/// compressed onto their kinds' queues, in path order as one path at a time
+/// would append them. Misses (shaded before) join no queue.
+#[inline(always)]
+fn classify_bounce<W: Wide, P: Probe, S: PathSampler, const M: bool>(
+    b: Bounce<S>,
+    ws: &mut Workspace,
+    n: usize,
+    q: &mut Queues,
+    probe: &mut P,
+) {
+    let prep = b.prep;
+    debug_assert!(prep.shapes.spheres.kind.len().is_power_of_two() && prep.shapes.quads.kind.len().is_power_of_two());
+    // The path tracer queues only the kinds it has passes for (the plan's);
+    // the debug modes shade every kind.
+    let path = prep.plan.mode == Mode::Path;
+    let kinds = if path { prep.plan.kinds } else { KindSet::all() };
+    // The kinds whose pass is `scatter` alone: not lights, not a
+    // lambertian whose texture passes must run first.
+    let in_place = Kind::SURFACES.map(|k| {
+        path && Dirs::of(prep) == Dirs::Bsdf
+            && prep.plan.kinds.contains(k)
+            && match k {
+                Kind::Lambertian => prep.plan.textures.is_empty(),
+                Kind::Metal | Kind::Dielectric => true,
+                Kind::DiffuseLight | Kind::Isotropic => false,
+            }
+    });
+    let classes = Classes { kinds, in_place };
+    // Compiled apart for a scene with quads: a sphere-only scene's
+    // packets read one kind table, with no test per lane.
+    let placed = if prep.shapes.quads.is_empty() {
+        classify_packets::<W, P, S, M, false>(b, ws, n, classes, q, probe)
+    } else {
+        classify_packets::<W, P, S, M, true>(b, ws, n, classes, q, probe)
+    };
+    debug_assert!(
+        ws.hit[..n].iter().filter(|&&h| h != MISS).count() == q.len.iter().sum::<usize>() + placed,
+        "the plan left out a kind that was hit"
+    );
+}
+
+/// Classification one path at a time (scenes with moving spheres or
+/// media): each hit onto its material kind's queue (a medium's onto the
+/// isotropic one), in path order; misses onto theirs.
+#[inline(always)]
+fn classify_paths<const M: bool>(prep: &Prepared, ws: &Workspace, n: usize, q: &mut Queues) {
     // The sphere and quad arrays have a power-of-two length above every hit
-    // index (`Spheres::pad`, `Quads::pad`). Quads' hit indices are
-    // `QUAD_BASE + i`, above every sphere's and below `MISS`.
+    // index (`Spheres::pad`, `Quads::pad`).
     let kind_mask = prep.shapes.spheres.kind.len().wrapping_sub(1);
     let quad_mask = prep.shapes.quads.kind.len().wrapping_sub(1);
     let moving_mask = prep.shapes.moving.s.kind.len().wrapping_sub(1);
-    debug_assert!(prep.shapes.spheres.kind.len().is_power_of_two() && prep.shapes.quads.kind.len().is_power_of_two());
-    // A scene without moving spheres or media classifies W paths at a time:
-    // the packet's material kinds (one lookup per lane, in the spheres' or
-    // the quads' table); a packet whose hits share a kind
-    // that has a plain scatter pass is scattered where it is; the others'
-    // lanes are compressed onto their kinds' queues, in path order as one
-    // path at a time would append them. Misses (shaded above) join no queue.
-    if !M && prep.media.is_empty() {
-        // The path tracer queues only the kinds it has passes for (the plan's);
-        // the debug modes shade every kind.
-        let path = prep.plan.mode == Mode::Path;
-        let kinds = if path { prep.plan.kinds } else { KindSet::all() };
-        // The kinds whose pass is `scatter` alone: not lights, not a
-        // lambertian whose texture passes must run first.
-        let in_place = Kind::SURFACES.map(|k| {
-            path && Dirs::of(prep) == Dirs::Bsdf
-                && prep.plan.kinds.contains(k)
-                && match k {
-                    Kind::Lambertian => prep.plan.textures.is_empty(),
-                    Kind::Metal | Kind::Dielectric => true,
-                    Kind::DiffuseLight | Kind::Isotropic => false,
-                }
-        });
-        // Compiled apart for a scene with quads: a sphere-only scene's
-        // packets read one kind table, with no test per lane.
-        macro_rules! classify {
-            ($quads:literal) => {
-                classify_packets::<W, P, S, M, $quads>(
-                    prep,
-                    sampler,
-                    ws,
-                    n,
-                    depth,
-                    kinds,
-                    in_place,
-                    &mut queues,
-                    &mut len,
-                    probe,
-                )
-            };
-        }
-        let placed = if prep.shapes.quads.is_empty() { classify!(false) } else { classify!(true) };
-        debug_assert!(
-            ws.hit[..n].iter().filter(|&&h| h != MISS).count() == len.iter().sum::<usize>() + placed,
-            "the plan left out a kind that was hit"
-        );
-    } else {
-        for (i, &h) in ws.hit[..n].iter().enumerate() {
-            // Hit indices in order: spheres, quads, moving spheres, media,
-            // MISS (two tests for a sphere or a quad, as before media existed;
-            // moving spheres only in a scene that has them).
-            let q = if h < QUAD_BASE {
-                prep.shapes.spheres.kind[h as usize & kind_mask] as usize
-            } else if h < MEDIUM_BASE {
-                if !M || h < MOVING_BASE {
-                    prep.shapes.quads.kind[(h - QUAD_BASE) as usize & quad_mask] as usize
-                } else {
-                    prep.shapes.moving.s.kind[(h - MOVING_BASE) as usize & moving_mask] as usize
-                }
-            } else if h == MISS {
-                MISS_QUEUE
+    for (i, &h) in ws.hit[..n].iter().enumerate() {
+        // Hit indices in order: spheres, quads, moving spheres, media,
+        // MISS (two tests for a sphere or a quad, as before media existed;
+        // moving spheres only in a scene that has them).
+        let k = if h < QUAD_BASE {
+            prep.shapes.spheres.kind[h as usize & kind_mask] as usize
+        } else if h < MEDIUM_BASE {
+            if !M || h < MOVING_BASE {
+                prep.shapes.quads.kind[(h - QUAD_BASE) as usize & quad_mask] as usize
             } else {
-                Kind::Isotropic as usize
-            };
-            queues[q][len[q] & MASK] = i as u32;
-            len[q] += 1;
-        }
+                prep.shapes.moving.s.kind[(h - MOVING_BASE) as usize & moving_mask] as usize
+            }
+        } else if h == MISS {
+            MISS_QUEUE
+        } else {
+            Kind::Isotropic as usize
+        };
+        q.q[k][q.len[k] & MASK] = i as u32;
+        q.len[k] += 1;
     }
+}
+
+/// Each material kind's pass over its queue, as the plan and the mode say.
+#[inline(always)]
+fn material_passes<W: Wide, P: Probe, S: PathSampler, const M: bool>(
+    b: Bounce<S>,
+    ws: &mut Workspace,
+    queues: &Queues,
+    probe: &mut P,
+) {
+    let prep = b.prep;
+    let nee = prep.plan.nee > 0;
     for kind in Kind::ALL {
-        let (q, qlen) = (&queues[kind as usize], len[kind as usize]);
+        let (q, qlen) = (&queues.q[kind as usize], queues.len[kind as usize]);
         match prep.plan.mode {
             Mode::Path if kind == Kind::DiffuseLight && prep.plan.kinds.contains(kind) => {
                 for_packets::<W, P>(q, qlen, probe, |at, probe| {
@@ -363,27 +410,27 @@ pub(super) fn bounce<W: Wide, P: Probe, S: PathSampler, const M: bool>(
                 });
             }
             Mode::Path if kind == Kind::Isotropic && prep.plan.kinds.contains(kind) => {
-                isotropic_pass::<W, P, S, M>(prep, sampler, ws, q, qlen, depth, probe);
+                isotropic_pass::<W, P, S, M>(b, ws, q, qlen, probe);
             }
             Mode::Path if kind == Kind::Lambertian && !prep.plan.textures.is_empty() => {
-                textured_lambertian_pass::<W, P, S, M>(prep, sampler, ws, q, qlen, depth, probe);
+                textured_lambertian_pass::<W, P, S, M>(b, ws, q, qlen, probe);
             }
             // The book and nee-mis estimators' passes apart: the bsdf
             // estimator's are the ones it always ran (the same instructions
             // per ray).
             Mode::Path if prep.plan.kinds.contains(kind) && prep.plan.sample_toward > 0 => {
                 for_packets::<W, P>(q, qlen, probe, |at, probe| {
-                    scatter::<W, P, S, M>(prep, sampler, ws, kind, depth, at, false, Dirs::Book, probe)
+                    scatter::<W, P, S, M>(b, ws, kind, at, false, Dirs::Book, probe)
                 });
             }
             Mode::Path if prep.plan.kinds.contains(kind) && nee => {
                 for_packets::<W, P>(q, qlen, probe, |at, probe| {
-                    scatter::<W, P, S, M>(prep, sampler, ws, kind, depth, at, false, Dirs::Nee, probe)
+                    scatter::<W, P, S, M>(b, ws, kind, at, false, Dirs::Nee, probe)
                 });
             }
             Mode::Path if prep.plan.kinds.contains(kind) => {
                 for_packets::<W, P>(q, qlen, probe, |at, probe| {
-                    scatter::<W, P, S, M>(prep, sampler, ws, kind, depth, at, false, Dirs::Bsdf, probe)
+                    scatter::<W, P, S, M>(b, ws, kind, at, false, Dirs::Bsdf, probe)
                 });
             }
             Mode::Path => debug_assert!(qlen == 0, "the plan left out a kind that was hit"),
@@ -392,10 +439,4 @@ pub(super) fn bounce<W: Wide, P: Probe, S: PathSampler, const M: bool>(
             }
         }
     }
-    ws.queue = Some(queues);
-    if nee && ws.shadows.len > 0 {
-        shadow_pass::<W, P, M>(prep, ws, probe);
-    }
-    std::mem::swap(&mut ws.cur, &mut ws.next);
-    n as u64
 }

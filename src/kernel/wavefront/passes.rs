@@ -83,16 +83,14 @@ pub(super) fn medium_pass<W: Wide, S: PathSampler>(
 /// times the medium's albedo, and the new ray from the stopping point
 /// `o + t d` (inside the medium: no surface, no offset).
 #[inline(never)]
-#[allow(clippy::too_many_arguments)]
 pub(super) fn isotropic_pass<W: Wide, P: Probe, S: PathSampler, const M: bool>(
-    prep: &Prepared,
-    sampler: S,
+    b: Bounce<S>,
     ws: &mut Workspace,
     queue: &Arr<u32>,
     len: usize,
-    depth: u32,
     probe: &mut P,
 ) {
+    let Bounce { prep, sampler, depth } = b;
     let m = &prep.media;
     for_packets::<W, P>(queue, len, probe, |at, _| {
         let cur = &ws.cur;
@@ -126,7 +124,8 @@ pub(super) fn isotropic_pass<W: Wide, P: Probe, S: PathSampler, const M: bool>(
         let thr = thr.mul_elem(albedo);
         let all = W::mask_from_bits(u32::MAX);
         let pdf = nee.then(|| W::splat(ISOTROPIC_PDF));
-        continue_paths::<W, S, M>(prep, ws, at, depth, prep.bounces, rng, thr, all, p, dir, pdf);
+        let next = Scattered { thr, alive: all, o: p, dir, pdf };
+        continue_paths::<W, S, M>(prep, ws, at, depth, prep.bounces, rng, next);
     });
 }
 
@@ -156,16 +155,14 @@ pub(super) fn shade_misses<W: Wide, const ADD: bool>(prep: &Prepared, ws: &mut W
 /// the written albedo where the hit's material is textured. Out of line, so
 /// that a scene without textures runs the bounce it always ran.
 #[inline(never)]
-#[allow(clippy::too_many_arguments)]
 pub(super) fn textured_lambertian_pass<W: Wide, P: Probe, S: PathSampler, const M: bool>(
-    prep: &Prepared,
-    sampler: S,
+    b: Bounce<S>,
     ws: &mut Workspace,
     queue: &Arr<u32>,
     len: usize,
-    depth: u32,
     probe: &mut P,
 ) {
+    let prep = b.prep;
     let mut tq = ws.tex_queue.take().expect("the texture queues are put back after every pass");
     let mut tlen = [0usize; TEX_QUEUES];
     let m = &prep.materials;
@@ -197,7 +194,7 @@ pub(super) fn textured_lambertian_pass<W: Wide, P: Probe, S: PathSampler, const 
     ws.tex_queue = Some(tq);
     let dirs = Dirs::of(prep);
     for_packets::<W, P>(queue, len, probe, |at, probe| {
-        scatter::<W, P, S, M>(prep, sampler, ws, Kind::Lambertian, depth, at, true, dirs, probe)
+        scatter::<W, P, S, M>(b, ws, Kind::Lambertian, at, true, dirs, probe)
     });
 }
 

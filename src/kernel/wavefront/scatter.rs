@@ -6,18 +6,16 @@ use super::*;
 /// Scatters a packet of paths that hit material `kind`; survivors join the next bounce.
 #[cfg_attr(not(feature = "phases"), inline(always))]
 #[cfg_attr(feature = "phases", inline(never))]
-#[allow(clippy::too_many_arguments)]
 pub(super) fn scatter<W: Wide, P: Probe, S: PathSampler, const M: bool>(
-    prep: &Prepared,
-    sampler: S,
+    b: Bounce<S>,
     ws: &mut Workspace,
     kind: Kind,
-    depth: u32,
     at: impl Packet<W>,
     textured: bool,
     dirs: Dirs,
     probe: &mut P,
 ) {
+    let Bounce { prep, sampler, depth } = b;
     // `dirs`: the plan's estimator (its sampler layout, its mixture or its
     // light sample at lambertian vertices); a literal at the call, so each
     // is compiled apart.
@@ -69,11 +67,24 @@ pub(super) fn scatter<W: Wide, P: Probe, S: PathSampler, const M: bool>(
     // it reaches: the cosine lobe's, 0 for a specular bounce.
     let pdf =
         (dirs == Dirs::Nee).then(|| if kind == Kind::Lambertian { cosine_pdf(srf.n, dir) } else { W::splat(0.0) });
-    continue_paths::<W, S, M>(prep, ws, at, depth, dims, rng, thr, alive, spawn(&srf, dir), dir, pdf);
+    let next = Scattered { thr, alive, o: spawn(&srf, dir), dir, pdf };
+    continue_paths::<W, S, M>(prep, ws, at, depth, dims, rng, next);
+}
+
+/// A packet's scattered paths: their throughput after the vertex, which
+/// lanes live on, their new rays from `o` along `dir`, and (under `nee-mis`)
+/// the directions' densities.
+pub(super) struct Scattered<W: Wide> {
+    pub(super) thr: V3<W>,
+    pub(super) alive: <W as crate::real::Real>::Mask,
+    pub(super) o: V3<W>,
+    pub(super) dir: V3<W>,
+    pub(super) pdf: Option<W>,
 }
 
 /// A packet's light samples (`nee-mis`): shadow rays from `o` along `d` to
 /// `tmax`, each carrying `c` to its path's result if nothing blocks it.
+#[derive(Clone, Copy)]
 pub(super) struct Shadow<W: Wide> {
     pub(super) o: V3<W>,
     pub(super) d: V3<W>,
@@ -93,7 +104,7 @@ pub(super) fn queue_shadow<W: Wide, const M: bool>(ws: &mut Workspace, at: impl 
     }
     let slot = at.u(&ws.cur.slot);
     let time = if M { Some(at.f(&ws.cur.time)) } else { None };
-    ws.shadows.append::<W>(keep, sh.o, sh.d, sh.tmax, sh.c, slot, time);
+    ws.shadows.append::<W>(keep, &sh, slot, time);
 }
 
 /// The end of every scatter pass: paths whose throughput is zero die, then
@@ -102,7 +113,6 @@ pub(super) fn queue_shadow<W: Wide, const M: bool>(ws: &mut Workspace, at: impl 
 /// again), and the survivors' rays from `o` along `dir` join the next
 /// bounce with their slots and, in a scene that moves, their paths' times.
 #[inline(always)]
-#[allow(clippy::too_many_arguments)]
 pub(super) fn continue_paths<W: Wide, S: PathSampler, const M: bool>(
     prep: &Prepared,
     ws: &mut Workspace,
@@ -110,12 +120,9 @@ pub(super) fn continue_paths<W: Wide, S: PathSampler, const M: bool>(
     depth: u32,
     dims: Bounces,
     mut rng: S::Lanes<W>,
-    thr: V3<W>,
-    alive: <W as crate::real::Real>::Mask,
-    o: V3<W>,
-    dir: V3<W>,
-    pdf: Option<W>,
+    next: Scattered<W>,
 ) {
+    let Scattered { thr, alive, o, dir, pdf } = next;
     let zero = W::splat(0.0);
     let dark = thr.x.eq(zero) & thr.y.eq(zero) & thr.z.eq(zero);
     let mut alive = alive & !dark;
@@ -130,5 +137,6 @@ pub(super) fn continue_paths<W: Wide, S: PathSampler, const M: bool>(
     let cur = &ws.cur;
     let slot = at.u(&cur.slot);
     let time = if M { Some(at.f(&cur.time)) } else { None };
-    ws.next.append::<W, S>(alive, o, dir, thr, S::lane_words::<W>(&rng), slot, time, pdf);
+    let rng = S::lane_words::<W>(&rng);
+    ws.next.append::<W, S>(alive, NewPaths { o, d: dir, thr, rng, slot, time, pdf });
 }

@@ -33,6 +33,19 @@ pub(super) const MISS_QUEUE: usize = Kind::ALL.len();
 /// The texture queues' count: one per texture kind with a pass (`TexKind as usize - 1`).
 pub(super) const TEX_QUEUES: usize = TexKind::PASSES.len();
 
+/// A packet's paths as they join the next bounce: their rays, throughput,
+/// sampler words and slots, and (a scene with moving spheres) their times
+/// and (under `nee-mis`) their directions' densities.
+pub(super) struct NewPaths<W: Wide> {
+    pub(super) o: V3<W>,
+    pub(super) d: V3<W>,
+    pub(super) thr: V3<W>,
+    pub(super) rng: [W::U; 4],
+    pub(super) slot: W::U,
+    pub(super) time: Option<W>,
+    pub(super) pdf: Option<W>,
+}
+
 /// Path state, structure of arrays.
 pub(super) struct Paths {
     pub(super) o: [Arr<f32>; 3],
@@ -71,18 +84,8 @@ impl Paths {
     /// spheres; `pdf`: their directions' densities, under `nee-mis`.
     #[cfg_attr(not(feature = "phases"), inline(always))]
     #[cfg_attr(feature = "phases", inline(never))]
-    #[allow(clippy::too_many_arguments)]
-    pub(super) fn append<W: Wide, S: PathSampler>(
-        &mut self,
-        alive: u32,
-        o: V3<W>,
-        d: V3<W>,
-        thr: V3<W>,
-        rng: [W::U; 4],
-        slot: W::U,
-        time: Option<W>,
-        pdf: Option<W>,
-    ) {
+    pub(super) fn append<W: Wide, S: PathSampler>(&mut self, alive: u32, paths: NewPaths<W>) {
+        let NewPaths { o, d, thr, rng, slot, time, pdf } = paths;
         let at = self.len;
         debug_assert!(at <= MAX_PATHS);
         let put = |v: &mut Arr<f32>, x: W| compress_f32(v, x, alive, at);
@@ -162,17 +165,8 @@ impl Shadows {
 
     /// Appends the lanes of `keep` (a bitmask): SIMD stream compaction.
     #[inline(always)]
-    #[allow(clippy::too_many_arguments)]
-    pub(super) fn append<W: Wide>(
-        &mut self,
-        keep: u32,
-        o: V3<W>,
-        d: V3<W>,
-        tmax: W,
-        c: V3<W>,
-        slot: W::U32,
-        time: Option<W>,
-    ) {
+    pub(super) fn append<W: Wide>(&mut self, keep: u32, sh: &Shadow<W>, slot: W::U32, time: Option<W>) {
+        let Shadow { o, d, tmax, c } = *sh;
         let at = self.len;
         debug_assert!(at + keep.count_ones() as usize <= MAX_PATHS);
         let put = |v: &mut Arr<f32>, x: W| compress_f32(v, x, keep, at);
