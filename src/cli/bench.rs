@@ -4,7 +4,7 @@ use super::args::{choice, kernel_parser, ImageArgs, RunArgs};
 use super::{say, tell};
 use clap::Args;
 use rtow::instruments::bench::{self, Baseline, BaselineVerdict, BenchConfig, Gate, DEFAULT_REPEAT, DEFAULT_TOLERANCE};
-use rtow::instruments::instructions::{self, InstructionsBaseline};
+use rtow::instruments::instructions::{self, CountedProcess, InstructionsBaseline};
 use rtow::output::{OutputId, Outputs};
 use rtow::{Error, Job, KernelChoice, Result, SceneSource};
 use std::ffi::OsString;
@@ -188,9 +188,8 @@ fn count_instructions(a: &BenchArgs, source: &SceneSource, job: &Job) -> Result<
         job.threads(),
         rtow::isa()
     );
-    let report = instructions::count(job, &source.name, &a.kernels, &program, a.branch_sim, child_args, |e| match &e
-        .branches
-    {
+    let process = CountedProcess { program: &program, child_args: &child_args, branch_sim: a.branch_sim };
+    let report = instructions::count(job, &source.name, &a.kernels, &process, |e| match &e.branches {
         Some(b) => tell!(
             "  {}: {} instructions, {:.2} per ray; {:.3} mispredicted branches per ray",
             e.kernel,
