@@ -136,84 +136,21 @@ fn rectangle_factor(p: DVec3, x: [f64; 2], z: [f64; 2], h: f64) -> f64 {
     f(x[1] - p.x, z[1] - p.z) - f(x[0] - p.x, z[1] - p.z) - f(x[1] - p.x, z[0] - p.z) + f(x[0] - p.x, z[0] - p.z)
 }
 
+/// Family 1: the lights' height above the floor.
+const LIGHT_HEIGHT: f64 = 1.0;
+
+/// Family 1: the floor's albedo.
+const FLOOR_ALBEDO: f32 = 0.5;
+
 /// Family 1: small lights at constant power over a floor.
 pub(super) fn small_lights(cfg: &StressConfig, out: &mut Parts, progress: &mut dyn FnMut(&str)) -> Result<()> {
     let (w, spp) = if cfg.quick { (8, 64) } else { (16, 1024) };
-    let (h, albedo) = (1.0f64, 0.5f32);
     let estimators = [EstimatorChoice::Bsdf, EstimatorChoice::Book, EstimatorChoice::NeeMis];
     let mut rejected = 0u64;
     for shape in ["sphere", "square"] {
         for est in estimators {
-            let (mut zmax, mut worst) = (0.0f64, 1.0f64);
-            let mut line = String::new();
-            for e in 1..=5 {
-                let size = 10f64.powi(-e);
-                // Constant power: L size^2 = h^2.
-                let l = (h / size).powi(2);
-                let mut sc = scene(Camera::looking([0.0, 1.5, 3.0], [0.0, 0.0, 0.0], 0.4), [0.0; 3]);
-                sc.quads.push(Quad {
-                    q: [-100.0, 0.0, -100.0],
-                    u: [0.0, 0.0, 200.0],
-                    v: [200.0, 0.0, 0.0],
-                    material: lambertian(albedo),
-                });
-                if shape == "sphere" {
-                    sc.spheres.push(Sphere {
-                        center: [0.0, h as f32, 0.0],
-                        center1: None,
-                        radius: size as f32,
-                        material: light(l as f32),
-                    });
-                } else {
-                    let s = size as f32;
-                    sc.quads.push(Quad {
-                        q: [-s / 2.0, h as f32, -s / 2.0],
-                        u: [s, 0.0, 0.0],
-                        v: [0.0, 0.0, s],
-                        material: light(l as f32),
-                    });
-                }
-                let job = Job::new(&sc, &overrides(w, spp, cfg.seed, est, 4), &RenderOptions::default())?;
-                let at = |p: &DVec3| {
-                    let (ls, r) = (l * albedo as f64, size);
-                    if shape == "sphere" {
-                        let dd = DVec3::new(-p.x, h, -p.z).length();
-                        ls * (r / dd).powi(2) * (h / dd)
-                    } else {
-                        let half = size / 2.0;
-                        ls * rectangle_factor(*p, [-half, half], [-half, half], h)
-                    }
-                };
-                let want: Vec<f64> =
-                    floor_points(&job).iter().map(|ps| ps.iter().map(at).sum::<f64>() / 16.0).collect();
-                let r = crate::render::render(&job, None)?;
-                rejected += r.stats.rejected_samples;
-                // bsdf finds the light by chance: the noise of a sample that
-                // is `albedo L` with probability `mean / (albedo L)`.
-                let n = r.stats.samples as f64;
-                let mean_want = want.iter().sum::<f64>() / want.len() as f64;
-                let floor_se = match est {
-                    EstimatorChoice::Bsdf => (mean_want * albedo as f64 * l / n).sqrt(),
-                    _ => 0.0,
-                };
-                let (z, ratio) = z_score(&r.image, &want, floor_se);
-                if z > zmax {
-                    zmax = z;
-                }
-                if (ratio - 1.0).abs() > (worst - 1.0).abs() {
-                    worst = ratio;
-                }
-                line.push_str(&format!(" 1e-{e}: {ratio:.6}"));
-            }
-            out.checks.push(Check::at_most(
-                format!(
-                    "small lights: {shape} light, r/d 1e-1..1e-5, {}: floor vs closed form, max |z| beyond 1e-5",
-                    est.name()
-                ),
-                zmax,
-                Z_BOUND,
-                format!("image / closed form at size{line}"),
-            ));
+            let o = overrides(w, spp, cfg.seed, est, 4);
+            out.checks.push(small_light_check(shape, est, &o, &mut rejected)?);
             progress(&format!("small lights: {shape}, {}", est.name()));
         }
     }
@@ -224,6 +161,111 @@ pub(super) fn small_lights(cfg: &StressConfig, out: &mut Parts, progress: &mut d
         "emission up to 1e10 at constant power",
     ));
     Ok(())
+}
+
+/// One check of family 1: a `shape` light at every size, rendered with `o`
+/// under `est`, its floor's largest z-score against the closed form; adds the
+/// renders' rejected samples to `rejected`.
+fn small_light_check(shape: &'static str, est: EstimatorChoice, o: &Overrides, rejected: &mut u64) -> Result<Check> {
+    let (mut zmax, mut worst) = (0.0f64, 1.0f64);
+    let mut line = String::new();
+    for e in 1..=5 {
+        let size = 10f64.powi(-e);
+        // Constant power: L size^2 = h^2.
+        let light = SmallLight { shape, size, emit: (LIGHT_HEIGHT / size).powi(2) };
+        let (z, ratio) = light.score(est, o, rejected)?;
+        if z > zmax {
+            zmax = z;
+        }
+        if (ratio - 1.0).abs() > (worst - 1.0).abs() {
+            worst = ratio;
+        }
+        line.push_str(&format!(" 1e-{e}: {ratio:.6}"));
+    }
+    Ok(Check::at_most(
+        format!(
+            "small lights: {shape} light, r/d 1e-1..1e-5, {}: floor vs closed form, max |z| beyond 1e-5",
+            est.name()
+        ),
+        zmax,
+        Z_BOUND,
+        format!("image / closed form at size{line}"),
+    ))
+}
+
+/// A light of family 1 at one size, [`LIGHT_HEIGHT`] above the floor's centre.
+struct SmallLight {
+    /// `"sphere"` or `"square"`.
+    shape: &'static str,
+    /// The sphere's radius or the square's edge.
+    size: f64,
+    /// Its emitted radiance, `(h / size)^2`: the same power at every size.
+    emit: f64,
+}
+
+impl SmallLight {
+    /// The light over a wide diffuse floor, in the dark, seen from above.
+    fn scene(&self) -> Scene {
+        let (h, l) = (LIGHT_HEIGHT, self.emit);
+        let mut sc = scene(Camera::looking([0.0, 1.5, 3.0], [0.0, 0.0, 0.0], 0.4), [0.0; 3]);
+        sc.quads.push(Quad {
+            q: [-100.0, 0.0, -100.0],
+            u: [0.0, 0.0, 200.0],
+            v: [200.0, 0.0, 0.0],
+            material: lambertian(FLOOR_ALBEDO),
+        });
+        if self.shape == "sphere" {
+            sc.spheres.push(Sphere {
+                center: [0.0, h as f32, 0.0],
+                center1: None,
+                radius: self.size as f32,
+                material: light(l as f32),
+            });
+        } else {
+            let s = self.size as f32;
+            sc.quads.push(Quad {
+                q: [-s / 2.0, h as f32, -s / 2.0],
+                u: [s, 0.0, 0.0],
+                v: [0.0, 0.0, s],
+                material: light(l as f32),
+            });
+        }
+        sc
+    }
+
+    /// The floor's radiance at `p` in closed form (a sphere: `albedo L (r /
+    /// D)^2 cos`; a square: the parallel-rectangle view factor).
+    fn floor_radiance(&self, p: &DVec3) -> f64 {
+        let h = LIGHT_HEIGHT;
+        let (ls, r) = (self.emit * FLOOR_ALBEDO as f64, self.size);
+        if self.shape == "sphere" {
+            let dd = DVec3::new(-p.x, h, -p.z).length();
+            ls * (r / dd).powi(2) * (h / dd)
+        } else {
+            let half = self.size / 2.0;
+            ls * rectangle_factor(*p, [-half, half], [-half, half], h)
+        }
+    }
+
+    /// Renders the light's scene with `o` under `est` and scores its floor
+    /// against [`Self::floor_radiance`]: [`z_score`]'s `(z, ratio)`; adds the
+    /// render's rejected samples to `rejected`.
+    fn score(&self, est: EstimatorChoice, o: &Overrides, rejected: &mut u64) -> Result<(f64, f64)> {
+        let job = Job::new(&self.scene(), o, &RenderOptions::default())?;
+        let want: Vec<f64> =
+            floor_points(&job).iter().map(|ps| ps.iter().map(|p| self.floor_radiance(p)).sum::<f64>() / 16.0).collect();
+        let r = crate::render::render(&job, None)?;
+        *rejected += r.stats.rejected_samples;
+        // bsdf finds the light by chance: the noise of a sample that
+        // is `albedo L` with probability `mean / (albedo L)`.
+        let n = r.stats.samples as f64;
+        let mean_want = want.iter().sum::<f64>() / want.len() as f64;
+        let floor_se = match est {
+            EstimatorChoice::Bsdf => (mean_want * FLOOR_ALBEDO as f64 * self.emit / n).sqrt(),
+            _ => 0.0,
+        };
+        Ok(z_score(&r.image, &want, floor_se))
+    }
 }
 
 /// Family 2: a white furnace whose `book` mixture samples toward tiny shapes.
