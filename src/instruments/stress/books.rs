@@ -323,159 +323,224 @@ fn d3(v: [f32; 3]) -> DVec3 {
     DVec3::from_array(v.map(f64::from))
 }
 
+/// Family 3: the extent of the scene the quads are built for.
+const SCALE_EXTENT: f32 = 1e6;
+
+/// What family 3 counted, over every size.
+#[derive(Default)]
+struct ScaleTally {
+    /// Rays judged against f64.
+    tested: u64,
+    /// Hits and misses the f64 test contradicts, clear of the ray's band.
+    wrong: u64,
+    /// Hits whose `t` is off the f64 `t` by more than 1e-4 relative.
+    t_bad: u64,
+    /// Rays from inside a box that hit none of its faces.
+    leaks: u64,
+    /// The largest distance outside a quad at which a hit was accepted, over the quad's size.
+    grow_near: f64,
+    /// The same over the ray's band.
+    band_ratio: f64,
+    /// That largest distance over the size at every third decade, for the check's note.
+    line: String,
+}
+
 /// Family 3: quads and boxes from 1e-6 to 1e6 in a scene of extent 1e6.
 pub(super) fn quad_scale(cfg: &StressConfig, out: &mut Parts, progress: &mut dyn FnMut(&str)) -> Result<()> {
     let rays = if cfg.quick { 200 } else { 4000 };
-    let extent = 1e6f32;
     let mut g = Gen::new(cfg.seed, 0x9ad5);
-    let (mut wrong, mut t_bad, mut leaks, mut tested) = (0u64, 0u64, 0u64, 0u64);
-    let (mut grow_near, mut band_ratio) = (0.0f64, 0.0f64);
-    let mut line = String::new();
+    let mut tally = ScaleTally::default();
     for e in -6..=6 {
         let s = 10f64.powi(e);
         let mut grow_decade = 0.0f64;
         for _ in 0..rays {
-            // A quad of size about s, 10 s from the origin (at most 1e5),
-            // turned at random.
-            let centre = g.unit() * (10.0 * s).min(1e5);
-            let ud = g.unit();
-            let across = g.perp(ud);
-            let (k, skew) = (g.range(0.3, 1.0), g.range(-0.5, 0.5));
-            let (u, v) = (d3(f3(ud * s)), d3(f3((across + ud * skew) * (s * k))));
-            if u.cross(v).length() < 0.2 * u.length() * v.length() {
-                continue;
-            }
-            let q = d3(f3(centre - (u + v) * 0.5));
-            let mut quads = Quads::default();
-            quads.push(f3(q), f3(u), f3(v), extent, Kind::Lambertian, 0);
-            quads.pad();
-            let rec = quads.rec[0];
-            // From nearby (1 to 10 sizes away), aimed at a point in, on or
-            // near the quad.
-            let (a, b) = (g.range(-0.2, 1.2), g.range(-0.2, 1.2));
-            let target = q + u * a + v * b;
-            let o = d3(f3(target + g.unit() * (s * g.range(1.0, 10.0))));
-            let dir = d3(f3((target - o).normalize())).normalize();
-            let (of, df) = (V3::from_array(f3(o)), V3::from_array(f3(dir)));
-            let mut best = Closest::<f32>::none();
-            closest_quad_hit(&quads, of, df, &mut best, &mut ());
-            let hit = best.index != MISS;
-            let Some((te, ae, be)) = quad_oracle(d3(f3(o)), d3(f3(dir)), q, u, v) else { continue };
-            let cos = u.cross(v).normalize().dot(dir).abs();
-            if cos < 0.05 {
-                continue;
-            }
-            tested += 1;
-            // The band, as a length: what the test accepts beyond the edges.
-            let tol = rec.tolerance(of.max_abs(), te as f32) as f64;
-            let (ha, hb) = (u.cross(v).length() / v.length(), u.cross(v).length() / u.length());
-            // Outside the parallelogram, as a length across its edges.
-            let outside = ((-ae).max(ae - 1.0) * ha).max((-be).max(be - 1.0) * hb);
-            // The test's own error is a small part of the band (a margin of 4).
-            let clear_in = outside < -tol && te > 0.0;
-            let clear_out = outside > 2.0 * tol || te < 0.0;
-            if (clear_in && !hit) || (clear_out && hit) {
-                wrong += 1;
-            }
-            if hit {
-                if ((best.t as f64 - te) / te).abs() > 1e-4 {
-                    t_bad += 1;
-                }
-                grow_decade = grow_decade.max(outside / s);
-                band_ratio = band_ratio.max(outside / tol);
+            if let Some(grow) = quad_ray(&mut g, s, &mut tally) {
+                grow_decade = grow_decade.max(grow);
             }
         }
-        grow_near = grow_near.max(grow_decade);
+        tally.grow_near = tally.grow_near.max(grow_decade);
         if e % 3 == 0 {
-            line.push_str(&format!(" 1e{e}: {grow_decade:.1e}"));
+            tally.line.push_str(&format!(" 1e{e}: {grow_decade:.1e}"));
         }
         // Boxes: turned cuboids of size s, rays from inside at edges and
         // corners (never a leak) and from outside (hit where the f64 slab
         // test says, clear of the edges).
         for _ in 0..rays / 4 {
-            let centre = g.unit() * (10.0 * s).min(1e5);
-            let a0 = g.unit();
-            let a1 = g.perp(a0);
-            let axes = [a0, a1, a0.cross(a1)];
-            let half = [s * g.range(0.2, 1.0), s * g.range(0.2, 1.0), s * g.range(0.2, 1.0)];
-            let mut c = Cuboids::default();
-            c.push(centre.to_array(), axes.map(|a| a.to_array()), half, 0);
-            let rec = c.rec[0];
-            let (cc, ax, hh) = (d3(rec.c), rec.axes.map(d3), d3(rec.half));
-            // From inside toward a corner or an edge point: always a hit.
-            let inner = cc + ax[0] * (hh.x * g.range(-0.9, 0.9)) + ax[1] * (hh.y * g.range(-0.9, 0.9));
-            let signs = [g.range(-1.0, 1.0).signum(), g.range(-1.0, 1.0).signum(), g.range(-1.0, 1.0)];
-            let corner = cc + ax[0] * (hh.x * signs[0]) + ax[1] * (hh.y * signs[1]) + ax[2] * (hh.z * signs[2]);
-            let (o, dir) = (d3(f3(inner)), d3(f3((corner - inner).normalize())).normalize());
-            let mut best = Closest::<f32>::none();
-            closest_cuboid_hit(&c, V3::from_array(f3(o)), V3::from_array(f3(dir)), &mut best, &mut ());
-            tested += 1;
-            if best.index == MISS || best.index < QUAD_BASE {
-                leaks += 1;
-            }
-            // From outside, at a face: a point well inside it (a hit on that
-            // face at the exact distance), or straight down its normal past
-            // an edge (a miss).
-            let k = (g.range(0.0, 3.0) as usize).min(2);
-            let side = (g.range(0.0, 1.0) < 0.5) as usize;
-            let sign = if side == 1 { 1.0 } else { -1.0 };
-            let (j, l) = ((k + 1) % 3, (k + 2) % 3);
-            let (hk, hj, hl) = (hh[k], hh[j], hh[l]);
-            let face_point = |fj: f64, fl: f64| cc + ax[k] * (sign * hk) + ax[j] * (fj * hj) + ax[l] * (fl * hl);
-            let normal = ax[k] * sign;
-            let target = face_point(g.range(-0.8, 0.8), g.range(-0.8, 0.8));
-            let from = target + (normal * 2.0 + ax[j] * g.range(-0.5, 0.5)) * hh.max_element();
-            let (o, dir) = (d3(f3(from)), d3(f3((target - from).normalize())).normalize());
-            let mut best = Closest::<f32>::none();
-            closest_cuboid_hit(&c, V3::from_array(f3(o)), V3::from_array(f3(dir)), &mut best, &mut ());
-            let te = (target - o).dot(dir);
-            tested += 2;
-            if best.index != rec.faces[k][side] {
-                wrong += 1;
-            } else if ((best.t as f64 - te) / te).abs() > 1e-4 {
-                t_bad += 1;
-            }
-            let past = face_point(1.5 * g.range(-1.0, 1.0).signum(), g.range(-0.8, 0.8));
-            let o = d3(f3(past + normal * (2.0 * hh.max_element())));
-            let mut best = Closest::<f32>::none();
-            closest_cuboid_hit(&c, V3::from_array(f3(o)), V3::from_array(f3(-normal)), &mut best, &mut ());
-            if best.index != MISS {
-                wrong += 1;
-            }
+            let c = random_box(&mut g, s);
+            box_ray_from_inside(&mut g, &c, &mut tally);
+            box_rays_from_outside(&mut g, &c, &mut tally);
         }
         progress(&format!("quad and box scale: 1e{e}"));
     }
+    quad_scale_checks(&tally, out);
+    Ok(())
+}
+
+/// A parallelogram `q + a u + b v`, `a` and `b` in `[0, 1]`, with f32 corners.
+#[derive(Clone, Copy, Debug)]
+struct Parallelogram {
+    q: DVec3,
+    u: DVec3,
+    v: DVec3,
+}
+
+/// A quad of size about `s`, 10 s from the origin (at most 1e5), turned at
+/// random; `None` when it came out too thin to test.
+fn random_quad(g: &mut Gen, s: f64) -> Option<Parallelogram> {
+    let centre = g.unit() * (10.0 * s).min(1e5);
+    let ud = g.unit();
+    let across = g.perp(ud);
+    let (k, skew) = (g.range(0.3, 1.0), g.range(-0.5, 0.5));
+    let (u, v) = (d3(f3(ud * s)), d3(f3((across + ud * skew) * (s * k))));
+    if u.cross(v).length() < 0.2 * u.length() * v.length() {
+        return None;
+    }
+    let q = d3(f3(centre - (u + v) * 0.5));
+    Some(Parallelogram { q, u, v })
+}
+
+/// One ray at a random quad of size about `s`, judged against f64 into
+/// `tally`: for a hit, how far outside the quad it was accepted, over `s`;
+/// `None` for a miss or a ray not judged (too thin a quad, too grazing a ray).
+fn quad_ray(g: &mut Gen, s: f64, tally: &mut ScaleTally) -> Option<f64> {
+    let Parallelogram { q, u, v } = random_quad(g, s)?;
+    let mut quads = Quads::default();
+    quads.push(f3(q), f3(u), f3(v), SCALE_EXTENT, Kind::Lambertian, 0);
+    quads.pad();
+    let rec = quads.rec[0];
+    // From nearby (1 to 10 sizes away), aimed at a point in, on or
+    // near the quad.
+    let (a, b) = (g.range(-0.2, 1.2), g.range(-0.2, 1.2));
+    let target = q + u * a + v * b;
+    let o = d3(f3(target + g.unit() * (s * g.range(1.0, 10.0))));
+    let dir = d3(f3((target - o).normalize())).normalize();
+    let (of, df) = (V3::from_array(f3(o)), V3::from_array(f3(dir)));
+    let mut best = Closest::<f32>::none();
+    closest_quad_hit(&quads, of, df, &mut best, &mut ());
+    let hit = best.index != MISS;
+    let (te, ae, be) = quad_oracle(d3(f3(o)), d3(f3(dir)), q, u, v)?;
+    let cos = u.cross(v).normalize().dot(dir).abs();
+    if cos < 0.05 {
+        return None;
+    }
+    tally.tested += 1;
+    // The band, as a length: what the test accepts beyond the edges.
+    let tol = rec.tolerance(of.max_abs(), te as f32) as f64;
+    let (ha, hb) = (u.cross(v).length() / v.length(), u.cross(v).length() / u.length());
+    // Outside the parallelogram, as a length across its edges.
+    let outside = ((-ae).max(ae - 1.0) * ha).max((-be).max(be - 1.0) * hb);
+    // The test's own error is a small part of the band (a margin of 4).
+    let clear_in = outside < -tol && te > 0.0;
+    let clear_out = outside > 2.0 * tol || te < 0.0;
+    if (clear_in && !hit) || (clear_out && hit) {
+        tally.wrong += 1;
+    }
+    if !hit {
+        return None;
+    }
+    if ((best.t as f64 - te) / te).abs() > 1e-4 {
+        tally.t_bad += 1;
+    }
+    tally.band_ratio = tally.band_ratio.max(outside / tol);
+    Some(outside / s)
+}
+
+/// A box of size about `s`, 10 s from the origin (at most 1e5), turned at random.
+fn random_box(g: &mut Gen, s: f64) -> Cuboids {
+    let centre = g.unit() * (10.0 * s).min(1e5);
+    let a0 = g.unit();
+    let a1 = g.perp(a0);
+    let axes = [a0, a1, a0.cross(a1)];
+    let half = [s * g.range(0.2, 1.0), s * g.range(0.2, 1.0), s * g.range(0.2, 1.0)];
+    let mut c = Cuboids::default();
+    c.push(centre.to_array(), axes.map(|a| a.to_array()), half, 0);
+    c
+}
+
+/// A ray from inside box `c` toward a corner or an edge point of it: always
+/// a hit on one of its faces (a leak into `tally` if not).
+fn box_ray_from_inside(g: &mut Gen, c: &Cuboids, tally: &mut ScaleTally) {
+    let rec = c.rec[0];
+    let (cc, ax, hh) = (d3(rec.c), rec.axes.map(d3), d3(rec.half));
+    let inner = cc + ax[0] * (hh.x * g.range(-0.9, 0.9)) + ax[1] * (hh.y * g.range(-0.9, 0.9));
+    let signs = [g.range(-1.0, 1.0).signum(), g.range(-1.0, 1.0).signum(), g.range(-1.0, 1.0)];
+    let corner = cc + ax[0] * (hh.x * signs[0]) + ax[1] * (hh.y * signs[1]) + ax[2] * (hh.z * signs[2]);
+    let (o, dir) = (d3(f3(inner)), d3(f3((corner - inner).normalize())).normalize());
+    let mut best = Closest::<f32>::none();
+    closest_cuboid_hit(c, V3::from_array(f3(o)), V3::from_array(f3(dir)), &mut best, &mut ());
+    tally.tested += 1;
+    if best.index == MISS || best.index < QUAD_BASE {
+        tally.leaks += 1;
+    }
+}
+
+/// Two rays from outside box `c`, at one of its faces: at a point well inside
+/// it (a hit on that face at the exact distance), and straight down its
+/// normal past an edge (a miss); judged into `tally`.
+fn box_rays_from_outside(g: &mut Gen, c: &Cuboids, tally: &mut ScaleTally) {
+    let rec = c.rec[0];
+    let (cc, ax, hh) = (d3(rec.c), rec.axes.map(d3), d3(rec.half));
+    let k = (g.range(0.0, 3.0) as usize).min(2);
+    let side = (g.range(0.0, 1.0) < 0.5) as usize;
+    let sign = if side == 1 { 1.0 } else { -1.0 };
+    let (j, l) = ((k + 1) % 3, (k + 2) % 3);
+    let (hk, hj, hl) = (hh[k], hh[j], hh[l]);
+    let face_point = |fj: f64, fl: f64| cc + ax[k] * (sign * hk) + ax[j] * (fj * hj) + ax[l] * (fl * hl);
+    let normal = ax[k] * sign;
+    let target = face_point(g.range(-0.8, 0.8), g.range(-0.8, 0.8));
+    let from = target + (normal * 2.0 + ax[j] * g.range(-0.5, 0.5)) * hh.max_element();
+    let (o, dir) = (d3(f3(from)), d3(f3((target - from).normalize())).normalize());
+    let mut best = Closest::<f32>::none();
+    closest_cuboid_hit(c, V3::from_array(f3(o)), V3::from_array(f3(dir)), &mut best, &mut ());
+    let te = (target - o).dot(dir);
+    tally.tested += 2;
+    if best.index != rec.faces[k][side] {
+        tally.wrong += 1;
+    } else if ((best.t as f64 - te) / te).abs() > 1e-4 {
+        tally.t_bad += 1;
+    }
+    let past = face_point(1.5 * g.range(-1.0, 1.0).signum(), g.range(-0.8, 0.8));
+    let o = d3(f3(past + normal * (2.0 * hh.max_element())));
+    let mut best = Closest::<f32>::none();
+    closest_cuboid_hit(c, V3::from_array(f3(o)), V3::from_array(f3(-normal)), &mut best, &mut ());
+    if best.index != MISS {
+        tally.wrong += 1;
+    }
+}
+
+/// Family 3's verdict: its checks, from what `tally` counted over every size.
+fn quad_scale_checks(tally: &ScaleTally, out: &mut Parts) {
+    let ScaleTally { tested, wrong, t_bad, leaks, grow_near, band_ratio, line } = tally;
     out.checks.push(Check::at_most(
         format!("quad and box scale 1e-6..1e6 (extent 1e6): wrong hit/miss vs f64 ({tested} rays)"),
-        wrong as f64,
+        *wrong as f64,
         0.0,
         "clear by the ray's band (a hit outside 2x its band, a miss inside it)",
     ));
     out.checks.push(Check::at_most(
         "quad and box scale: hits with t off the f64 t by more than 1e-4 relative",
-        t_bad as f64,
+        *t_bad as f64,
         0.0,
         "rays from 1 to 10 sizes away, cos >= 0.05",
     ));
     out.checks.push(Check::at_most(
         "quad scale: accepted distance outside a quad / its size, rays from nearby",
-        grow_near,
+        *grow_near,
         1e-3,
         format!("the band follows the ray (old: 64u x extent, 1e6 sizes at 1e-6);{line}"),
     ));
     out.checks.push(Check::at_most(
         "quad scale: accepted distance outside / the ray's band",
-        band_ratio,
+        *band_ratio,
         2.0,
         "the band bounds what is accepted (with the test's own rounding)",
     ));
     out.checks.push(Check::at_most(
         "box scale 1e-6..1e6: rays from inside toward corners and edges that leak",
-        leaks as f64,
+        *leaks as f64,
         0.0,
         "faces that meet at an edge share its distances",
     ));
-    Ok(())
 }
 
 /// Family 4: emitters from 1e-30 to f32's largest.
