@@ -4,7 +4,9 @@ use super::args::{choice, kernel_parser, ImageArgs, RunArgs};
 use super::{say, tell};
 use clap::Args;
 use rtow::instruments::bench::{self, Baseline, BaselineVerdict, BenchConfig, Gate, DEFAULT_REPEAT, DEFAULT_TOLERANCE};
-use rtow::instruments::instructions::{self, InstructionsBaseline};
+use rtow::instruments::instructions::{
+    self, CountedProcess, InstructionsBaseline, InstructionsEntry, InstructionsReport,
+};
 use rtow::output::{OutputId, Outputs};
 use rtow::{Error, Job, KernelChoice, Result, SceneSource};
 use std::ffi::OsString;
@@ -150,28 +152,7 @@ fn count_instructions(a: &BenchArgs, source: &SceneSource, job: &Job) -> Result<
     }
     let (outputs, ids) = outputs(a, source)?;
     let program = std::env::current_exe().map_err(|e| Error::System(format!("cannot find this executable: {e}")))?;
-    // The counted process: this very command line's job, one kernel, rendered once.
-    let child_args = |job: &Job| -> Vec<OsString> {
-        let s = job.settings();
-        let mut v: Vec<String> = vec!["bench".into(), a.scene.clone()];
-        for (flag, value) in [
-            ("--width", s.width.to_string()),
-            ("--height", s.height.to_string()),
-            ("--spp", s.spp.to_string()),
-            ("--depth", s.max_depth.to_string()),
-            ("--seed", s.seed.to_string()),
-            ("--sampler", s.sampler.name().to_string()),
-            ("--estimator", s.estimator.name().to_string()),
-            ("--threads", job.threads().to_string()),
-            ("--accel", job.options().accel.name().to_string()),
-            ("--kernels", job.kernel().name().to_string()),
-        ] {
-            v.push(flag.into());
-            v.push(value);
-        }
-        v.push("--instructions-child".into());
-        v.into_iter().map(OsString::from).collect()
-    };
+    let child_args = |job: &Job| counted_command(&a.scene, job);
     rtow::instruments::callgrind::valgrind_version()?;
     let s = job.settings();
     tell!(
@@ -188,9 +169,40 @@ fn count_instructions(a: &BenchArgs, source: &SceneSource, job: &Job) -> Result<
         job.threads(),
         rtow::isa()
     );
-    let report = instructions::count(job, &source.name, &a.kernels, &program, a.branch_sim, child_args, |e| match &e
-        .branches
-    {
+    let process = CountedProcess { program: &program, child_args: &child_args, branch_sim: a.branch_sim };
+    let report = instructions::count(job, &source.name, &a.kernels, &process, tell_count)?;
+    write_report(&report.table(), &report.to_json(), outputs, ids)?;
+    let Some(b) = baseline else { return Ok(true) };
+    Ok(print_instructions_comparison(&report, &b))
+}
+
+/// The process `--instructions` counts: this very command line's job (the
+/// scene `scene`), one kernel, rendered once.
+fn counted_command(scene: &str, job: &Job) -> Vec<OsString> {
+    let s = job.settings();
+    let mut v: Vec<String> = vec!["bench".into(), scene.to_string()];
+    for (flag, value) in [
+        ("--width", s.width.to_string()),
+        ("--height", s.height.to_string()),
+        ("--spp", s.spp.to_string()),
+        ("--depth", s.max_depth.to_string()),
+        ("--seed", s.seed.to_string()),
+        ("--sampler", s.sampler.name().to_string()),
+        ("--estimator", s.estimator.name().to_string()),
+        ("--threads", job.threads().to_string()),
+        ("--accel", job.options().accel.name().to_string()),
+        ("--kernels", job.kernel().name().to_string()),
+    ] {
+        v.push(flag.into());
+        v.push(value);
+    }
+    v.push("--instructions-child".into());
+    v.into_iter().map(OsString::from).collect()
+}
+
+/// Tells one kernel's count as it is made.
+fn tell_count(e: &InstructionsEntry) {
+    match &e.branches {
         Some(b) => tell!(
             "  {}: {} instructions, {:.2} per ray; {:.3} mispredicted branches per ray",
             e.kernel,
@@ -199,9 +211,12 @@ fn count_instructions(a: &BenchArgs, source: &SceneSource, job: &Job) -> Result<
             b.mispredicts_per_ray
         ),
         None => tell!("  {}: {} instructions, {:.2} per ray", e.kernel, e.instructions, e.per_ray),
-    })?;
-    write_report(&report.table(), &report.to_json(), outputs, ids)?;
-    let Some(b) = baseline else { return Ok(true) };
+    }
+}
+
+/// Prints each kernel's count against the instruction baseline (after a note
+/// if another compiler built the baseline); false on a regression.
+fn print_instructions_comparison(report: &InstructionsReport, b: &InstructionsBaseline) -> bool {
     if b.provenance.rustc != report.provenance.rustc {
         say!(
             "note: the baseline was built with {}, this run with {}: counts depend on the compiler",
@@ -210,7 +225,7 @@ fn count_instructions(a: &BenchArgs, source: &SceneSource, job: &Job) -> Result<
         );
     }
     let mut ok = true;
-    for c in instructions::compare(&report, &b) {
+    for c in instructions::compare(report, b) {
         let delta = c.instructions as i128 - c.baseline as i128;
         let verdict = match (c.image_same, delta) {
             (false, _) => "REGRESSION (the image changed)".to_string(),
@@ -230,7 +245,7 @@ fn count_instructions(a: &BenchArgs, source: &SceneSource, job: &Job) -> Result<
         );
         ok &= !c.regressed;
     }
-    Ok(ok)
+    ok
 }
 
 /// Prints the verdict of each kernel against the baseline; false on a regression.

@@ -5,14 +5,14 @@
 //!
 //! Each kernel is counted in a process of its own: the current executable,
 //! re-run under `valgrind --tool=callgrind` with the job's settings and one
-//! kernel (a caller says how, [`count`]'s `child_args`), which renders once
+//! kernel (a caller says how, [`CountedProcess::child_args`]), which renders once
 //! without writing an image ([`child_render`]) and prints what it rendered.
 //! Its profile gives the render loop's instructions (every tile through its
 //! kernel), the whole process's, and, in a build with the `phases` feature,
 //! the render loop by phase. With the branch simulation (`--branch-sim`)
 //! each of these also has its branches and mispredictions per ray.
 
-use super::callgrind::{self, PhaseCount};
+use super::callgrind::{self, Cost, PhaseCount, Profile};
 use crate::choice::KernelChoice;
 use crate::error::{Error, Result};
 use crate::job::{Job, RenderOptions};
@@ -105,17 +105,25 @@ pub struct InstructionsReport {
     pub provenance: Provenance,
 }
 
-/// Counts `kernels` on `job`: each one's process is `program` run with
-/// `child_args(job with that kernel)`, under callgrind (with its branch
-/// predictor's simulation when `branch_sim`).
-#[allow(clippy::too_many_arguments)]
+/// How each kernel's counted process is run: the executable, its arguments
+/// for a job, and callgrind's options.
+pub struct CountedProcess<'a> {
+    /// The executable re-run under callgrind (`rtow bench`: itself).
+    pub program: &'a Path,
+    /// Its arguments for a job of one kernel: a command that renders that job
+    /// once and prints [`child_render`]'s line.
+    pub child_args: &'a dyn Fn(&Job) -> Vec<OsString>,
+    /// Also simulate the branch predictor (callgrind's `--branch-sim=yes`).
+    pub branch_sim: bool,
+}
+
+/// Counts `kernels` on `job` (the scene `name`): each one's process is run as
+/// `process` says, under callgrind; `on_kernel` sees each count as it is made.
 pub fn count(
     job: &Job,
     name: &str,
     kernels: &[KernelChoice],
-    program: &Path,
-    branch_sim: bool,
-    child_args: impl Fn(&Job) -> Vec<OsString>,
+    process: &CountedProcess,
     mut on_kernel: impl FnMut(&InstructionsEntry),
 ) -> Result<InstructionsReport> {
     if kernels.is_empty() {
@@ -126,63 +134,7 @@ pub fn count(
     let mut entries = Vec::new();
     for &kernel in kernels {
         let job = job.with_options(&RenderOptions { kernel, ..*job.options() })?;
-        let args = child_args(&job);
-        let (profile, stdout) = callgrind::count(program, &args, branch_sim)?;
-        let child: ChildRender = stdout
-            .lines()
-            .rev()
-            .find_map(|l| serde_json::from_str(l).ok())
-            .ok_or_else(|| Error::System(format!("the counted render printed no result: {stdout:?}")))?;
-        if child.kernel != job.kernel().name() || child.rays == 0 {
-            return Err(Error::System(format!(
-                "the counted render ran the {} kernel for {} rays, not the {} kernel",
-                child.kernel,
-                child.rays,
-                job.kernel().name()
-            )));
-        }
-        let rays = child.rays as f64;
-        let looped = profile.render_loop();
-        let instructions = looped.instructions;
-        if instructions == 0 {
-            return Err(Error::System(format!(
-                "the profile has no render loop ({} not found: a build without symbols?)",
-                callgrind::RENDER_LOOP
-            )));
-        }
-        let phases = profile.phases().map(|rows| {
-            rows.into_iter()
-                .map(|PhaseCount { phase, cost }| PhaseRow {
-                    phase,
-                    instructions: cost.instructions,
-                    per_ray: cost.instructions as f64 / rays,
-                    mispredicts_per_ray: profile.branch_sim.then(|| cost.mispredicts as f64 / rays),
-                })
-                .collect()
-        });
-        let branches = profile.branch_sim.then(|| Branches {
-            branches: looped.branches,
-            branches_per_ray: looped.branches as f64 / rays,
-            mispredicts: looped.mispredicts,
-            mispredicts_per_ray: looped.mispredicts as f64 / rays,
-        });
-        let command = callgrind::command_line(program, &args, Path::new("callgrind.out"), branch_sim)
-            .iter()
-            .map(|a| a.to_string_lossy().into_owned())
-            .collect();
-        let entry = InstructionsEntry {
-            kernel: child.kernel,
-            lanes: job.kernel().lanes(),
-            rays: child.rays,
-            image_hash: child.image_hash,
-            instructions,
-            per_ray: instructions as f64 / rays,
-            process_instructions: profile.total,
-            process_per_ray: profile.total as f64 / rays,
-            phases,
-            branches,
-            command,
-        };
+        let entry = count_kernel(&job, process)?;
         on_kernel(&entry);
         entries.push(entry);
     }
@@ -195,6 +147,86 @@ pub fn count(
         kernels: entries,
         provenance,
     })
+}
+
+/// One kernel's count: `job` (of that kernel) rendered in a process of its
+/// own under callgrind, its render loop, whole process, phases and branches per ray.
+fn count_kernel(job: &Job, process: &CountedProcess) -> Result<InstructionsEntry> {
+    let args = (process.child_args)(job);
+    let (profile, stdout) = callgrind::count(process.program, &args, process.branch_sim)?;
+    let child = counted_render(&stdout, job)?;
+    let rays = child.rays as f64;
+    let looped = profile.render_loop();
+    let instructions = looped.instructions;
+    if instructions == 0 {
+        return Err(Error::System(format!(
+            "the profile has no render loop ({} not found: a build without symbols?)",
+            callgrind::RENDER_LOOP
+        )));
+    }
+    let command = callgrind::command_line(process.program, &args, Path::new("callgrind.out"), process.branch_sim)
+        .iter()
+        .map(|a| a.to_string_lossy().into_owned())
+        .collect();
+    Ok(InstructionsEntry {
+        kernel: child.kernel,
+        lanes: job.kernel().lanes(),
+        rays: child.rays,
+        image_hash: child.image_hash,
+        instructions,
+        per_ray: instructions as f64 / rays,
+        process_instructions: profile.total,
+        process_per_ray: profile.total as f64 / rays,
+        phases: phase_rows(&profile, rays),
+        branches: profile.branch_sim.then(|| Branches::per_ray(looped, rays)),
+        command,
+    })
+}
+
+/// What the counted process of `job` printed it rendered (its last line that
+/// parses), checked: `job`'s kernel, and some rays.
+fn counted_render(stdout: &str, job: &Job) -> Result<ChildRender> {
+    let child: ChildRender = stdout
+        .lines()
+        .rev()
+        .find_map(|l| serde_json::from_str(l).ok())
+        .ok_or_else(|| Error::System(format!("the counted render printed no result: {stdout:?}")))?;
+    if child.kernel != job.kernel().name() || child.rays == 0 {
+        return Err(Error::System(format!(
+            "the counted render ran the {} kernel for {} rays, not the {} kernel",
+            child.kernel,
+            child.rays,
+            job.kernel().name()
+        )));
+    }
+    Ok(child)
+}
+
+/// The render loop by phase, per ray of the `rays` traced (a `phases` build's
+/// wavefront kernels only; mispredictions with the branch simulation).
+fn phase_rows(profile: &Profile, rays: f64) -> Option<Vec<PhaseRow>> {
+    profile.phases().map(|rows| {
+        rows.into_iter()
+            .map(|PhaseCount { phase, cost }| PhaseRow {
+                phase,
+                instructions: cost.instructions,
+                per_ray: cost.instructions as f64 / rays,
+                mispredicts_per_ray: profile.branch_sim.then(|| cost.mispredicts as f64 / rays),
+            })
+            .collect()
+    })
+}
+
+impl Branches {
+    /// The render loop's branch counts `looped`, and the same per ray of the `rays` traced.
+    fn per_ray(looped: Cost, rays: f64) -> Branches {
+        Branches {
+            branches: looped.branches,
+            branches_per_ray: looped.branches as f64 / rays,
+            mispredicts: looped.mispredicts,
+            mispredicts_per_ray: looped.mispredicts as f64 / rays,
+        }
+    }
 }
 
 impl InstructionsReport {

@@ -2,6 +2,7 @@
 
 use super::ConvergeReport;
 use crate::error::{Error, Result};
+use plotters::prelude::*;
 
 pub(super) fn ticks(lo: f64, hi: f64) -> Vec<f64> {
     let mut out = Vec::new();
@@ -30,11 +31,40 @@ pub(super) fn tick_label(v: f64) -> String {
     format!("{v:.decimals$}")
 }
 
-/// A configuration's measurements as (seconds, RMSE) points, in sample-count order.
+/// The curves' colours, in order (matplotlib's first eight), repeated past eight curves.
+const PALETTE: [RGBColor; 8] = [
+    RGBColor(31, 119, 180),
+    RGBColor(255, 127, 14),
+    RGBColor(44, 160, 44),
+    RGBColor(214, 39, 40),
+    RGBColor(148, 103, 189),
+    RGBColor(140, 86, 75),
+    RGBColor(227, 119, 194),
+    RGBColor(127, 127, 127),
+];
+
+/// A drawing error, as rtow reports it.
+fn plot_err(e: &dyn std::fmt::Display) -> Error {
+    Error::Input(format!("plot: {e}"))
+}
+
+/// The range an axis shows: from the least to the greatest value `axis`
+/// takes of `pts`, widened by a factor of 1.3 either side.
+fn axis_range(pts: &[(f64, f64)], axis: fn(&(f64, f64)) -> f64) -> (f64, f64) {
+    let bound = |lo: bool| {
+        let v = pts.iter().map(axis);
+        if lo {
+            v.reduce(f64::min).unwrap_or(1.0)
+        } else {
+            v.reduce(f64::max).unwrap_or(1.0)
+        }
+    };
+    (bound(true) / 1.3, bound(false) * 1.3)
+}
+
 impl ConvergeReport {
     /// The log-log plot of RMSE against seconds, as SVG text.
     pub fn svg(&self) -> Result<String> {
-        use plotters::prelude::*;
         let curves = self.curves();
         let mut pts: Vec<(f64, f64)> = curves.iter().flat_map(|c| c.usable()).collect();
         let empty = pts.is_empty();
@@ -43,30 +73,14 @@ impl ConvergeReport {
             // still write a plot that says so rather than fail after measuring.
             pts = vec![(1e-3, 1e-3), (1.0, 1.0)];
         }
-        let bound = |f: fn(&(f64, f64)) -> f64, lo: bool| {
-            let v = pts.iter().map(f);
-            if lo {
-                v.reduce(f64::min).unwrap_or(1.0)
-            } else {
-                v.reduce(f64::max).unwrap_or(1.0)
-            }
-        };
-        let (t0, t1) = (bound(|p| p.0, true) / 1.3, bound(|p| p.0, false) * 1.3);
-        let (e0, e1) = (bound(|p| p.1, true) / 1.3, bound(|p| p.1, false) * 1.3);
+        let (t0, t1) = axis_range(&pts, |p| p.0);
+        let (e0, e1) = axis_range(&pts, |p| p.1);
         let mut svg = String::new();
         {
             let root = SVGBackend::with_string(&mut svg, (820, 560)).into_drawing_area();
-            let plot_err = |e: &dyn std::fmt::Display| Error::Input(format!("plot: {e}"));
             root.fill(&WHITE).map_err(|e| plot_err(&e))?;
-            let title = format!(
-                "{} {}x{}: RMSE against render time (log-log){}",
-                self.scene,
-                self.width,
-                self.height,
-                if empty { ": no measurement has a positive error" } else { "" }
-            );
             let mut chart = ChartBuilder::on(&root)
-                .caption(title, ("sans-serif", 20))
+                .caption(self.plot_title(empty), ("sans-serif", 20))
                 .margin(12)
                 .x_label_area_size(44)
                 .y_label_area_size(70)
@@ -83,18 +97,8 @@ impl ConvergeReport {
                 .y_label_formatter(&|v| tick_label(*v))
                 .draw()
                 .map_err(|e| plot_err(&e))?;
-            let palette = [
-                RGBColor(31, 119, 180),
-                RGBColor(255, 127, 14),
-                RGBColor(44, 160, 44),
-                RGBColor(214, 39, 40),
-                RGBColor(148, 103, 189),
-                RGBColor(140, 86, 75),
-                RGBColor(227, 119, 194),
-                RGBColor(127, 127, 127),
-            ];
             for (i, c) in curves.iter().enumerate() {
-                let col = palette[i % palette.len()];
+                let col = PALETTE[i % PALETTE.len()];
                 let p = c.usable();
                 chart
                     .draw_series(LineSeries::new(p.clone(), col.stroke_width(2)))
@@ -113,6 +117,17 @@ impl ConvergeReport {
             root.present().map_err(|e| plot_err(&e))?;
         }
         Ok(svg)
+    }
+
+    /// The plot's title: the scene and its size, and whether there was nothing to draw.
+    fn plot_title(&self, empty: bool) -> String {
+        format!(
+            "{} {}x{}: RMSE against render time (log-log){}",
+            self.scene,
+            self.width,
+            self.height,
+            if empty { ": no measurement has a positive error" } else { "" }
+        )
     }
 }
 

@@ -136,84 +136,21 @@ fn rectangle_factor(p: DVec3, x: [f64; 2], z: [f64; 2], h: f64) -> f64 {
     f(x[1] - p.x, z[1] - p.z) - f(x[0] - p.x, z[1] - p.z) - f(x[1] - p.x, z[0] - p.z) + f(x[0] - p.x, z[0] - p.z)
 }
 
+/// Family 1: the lights' height above the floor.
+const LIGHT_HEIGHT: f64 = 1.0;
+
+/// Family 1: the floor's albedo.
+const FLOOR_ALBEDO: f32 = 0.5;
+
 /// Family 1: small lights at constant power over a floor.
 pub(super) fn small_lights(cfg: &StressConfig, out: &mut Parts, progress: &mut dyn FnMut(&str)) -> Result<()> {
     let (w, spp) = if cfg.quick { (8, 64) } else { (16, 1024) };
-    let (h, albedo) = (1.0f64, 0.5f32);
     let estimators = [EstimatorChoice::Bsdf, EstimatorChoice::Book, EstimatorChoice::NeeMis];
     let mut rejected = 0u64;
     for shape in ["sphere", "square"] {
         for est in estimators {
-            let (mut zmax, mut worst) = (0.0f64, 1.0f64);
-            let mut line = String::new();
-            for e in 1..=5 {
-                let size = 10f64.powi(-e);
-                // Constant power: L size^2 = h^2.
-                let l = (h / size).powi(2);
-                let mut sc = scene(Camera::looking([0.0, 1.5, 3.0], [0.0, 0.0, 0.0], 0.4), [0.0; 3]);
-                sc.quads.push(Quad {
-                    q: [-100.0, 0.0, -100.0],
-                    u: [0.0, 0.0, 200.0],
-                    v: [200.0, 0.0, 0.0],
-                    material: lambertian(albedo),
-                });
-                if shape == "sphere" {
-                    sc.spheres.push(Sphere {
-                        center: [0.0, h as f32, 0.0],
-                        center1: None,
-                        radius: size as f32,
-                        material: light(l as f32),
-                    });
-                } else {
-                    let s = size as f32;
-                    sc.quads.push(Quad {
-                        q: [-s / 2.0, h as f32, -s / 2.0],
-                        u: [s, 0.0, 0.0],
-                        v: [0.0, 0.0, s],
-                        material: light(l as f32),
-                    });
-                }
-                let job = Job::new(&sc, &overrides(w, spp, cfg.seed, est, 4), &RenderOptions::default())?;
-                let at = |p: &DVec3| {
-                    let (ls, r) = (l * albedo as f64, size);
-                    if shape == "sphere" {
-                        let dd = DVec3::new(-p.x, h, -p.z).length();
-                        ls * (r / dd).powi(2) * (h / dd)
-                    } else {
-                        let half = size / 2.0;
-                        ls * rectangle_factor(*p, [-half, half], [-half, half], h)
-                    }
-                };
-                let want: Vec<f64> =
-                    floor_points(&job).iter().map(|ps| ps.iter().map(at).sum::<f64>() / 16.0).collect();
-                let r = crate::render::render(&job, None)?;
-                rejected += r.stats.rejected_samples;
-                // bsdf finds the light by chance: the noise of a sample that
-                // is `albedo L` with probability `mean / (albedo L)`.
-                let n = r.stats.samples as f64;
-                let mean_want = want.iter().sum::<f64>() / want.len() as f64;
-                let floor_se = match est {
-                    EstimatorChoice::Bsdf => (mean_want * albedo as f64 * l / n).sqrt(),
-                    _ => 0.0,
-                };
-                let (z, ratio) = z_score(&r.image, &want, floor_se);
-                if z > zmax {
-                    zmax = z;
-                }
-                if (ratio - 1.0).abs() > (worst - 1.0).abs() {
-                    worst = ratio;
-                }
-                line.push_str(&format!(" 1e-{e}: {ratio:.6}"));
-            }
-            out.checks.push(Check::at_most(
-                format!(
-                    "small lights: {shape} light, r/d 1e-1..1e-5, {}: floor vs closed form, max |z| beyond 1e-5",
-                    est.name()
-                ),
-                zmax,
-                Z_BOUND,
-                format!("image / closed form at size{line}"),
-            ));
+            let o = overrides(w, spp, cfg.seed, est, 4);
+            out.checks.push(small_light_check(shape, est, &o, &mut rejected)?);
             progress(&format!("small lights: {shape}, {}", est.name()));
         }
     }
@@ -224,6 +161,111 @@ pub(super) fn small_lights(cfg: &StressConfig, out: &mut Parts, progress: &mut d
         "emission up to 1e10 at constant power",
     ));
     Ok(())
+}
+
+/// One check of family 1: a `shape` light at every size, rendered with `o`
+/// under `est`, its floor's largest z-score against the closed form; adds the
+/// renders' rejected samples to `rejected`.
+fn small_light_check(shape: &'static str, est: EstimatorChoice, o: &Overrides, rejected: &mut u64) -> Result<Check> {
+    let (mut zmax, mut worst) = (0.0f64, 1.0f64);
+    let mut line = String::new();
+    for e in 1..=5 {
+        let size = 10f64.powi(-e);
+        // Constant power: L size^2 = h^2.
+        let light = SmallLight { shape, size, emit: (LIGHT_HEIGHT / size).powi(2) };
+        let (z, ratio) = light.score(est, o, rejected)?;
+        if z > zmax {
+            zmax = z;
+        }
+        if (ratio - 1.0).abs() > (worst - 1.0).abs() {
+            worst = ratio;
+        }
+        line.push_str(&format!(" 1e-{e}: {ratio:.6}"));
+    }
+    Ok(Check::at_most(
+        format!(
+            "small lights: {shape} light, r/d 1e-1..1e-5, {}: floor vs closed form, max |z| beyond 1e-5",
+            est.name()
+        ),
+        zmax,
+        Z_BOUND,
+        format!("image / closed form at size{line}"),
+    ))
+}
+
+/// A light of family 1 at one size, [`LIGHT_HEIGHT`] above the floor's centre.
+struct SmallLight {
+    /// `"sphere"` or `"square"`.
+    shape: &'static str,
+    /// The sphere's radius or the square's edge.
+    size: f64,
+    /// Its emitted radiance, `(h / size)^2`: the same power at every size.
+    emit: f64,
+}
+
+impl SmallLight {
+    /// The light over a wide diffuse floor, in the dark, seen from above.
+    fn scene(&self) -> Scene {
+        let (h, l) = (LIGHT_HEIGHT, self.emit);
+        let mut sc = scene(Camera::looking([0.0, 1.5, 3.0], [0.0, 0.0, 0.0], 0.4), [0.0; 3]);
+        sc.quads.push(Quad {
+            q: [-100.0, 0.0, -100.0],
+            u: [0.0, 0.0, 200.0],
+            v: [200.0, 0.0, 0.0],
+            material: lambertian(FLOOR_ALBEDO),
+        });
+        if self.shape == "sphere" {
+            sc.spheres.push(Sphere {
+                center: [0.0, h as f32, 0.0],
+                center1: None,
+                radius: self.size as f32,
+                material: light(l as f32),
+            });
+        } else {
+            let s = self.size as f32;
+            sc.quads.push(Quad {
+                q: [-s / 2.0, h as f32, -s / 2.0],
+                u: [s, 0.0, 0.0],
+                v: [0.0, 0.0, s],
+                material: light(l as f32),
+            });
+        }
+        sc
+    }
+
+    /// The floor's radiance at `p` in closed form (a sphere: `albedo L (r /
+    /// D)^2 cos`; a square: the parallel-rectangle view factor).
+    fn floor_radiance(&self, p: &DVec3) -> f64 {
+        let h = LIGHT_HEIGHT;
+        let (ls, r) = (self.emit * FLOOR_ALBEDO as f64, self.size);
+        if self.shape == "sphere" {
+            let dd = DVec3::new(-p.x, h, -p.z).length();
+            ls * (r / dd).powi(2) * (h / dd)
+        } else {
+            let half = self.size / 2.0;
+            ls * rectangle_factor(*p, [-half, half], [-half, half], h)
+        }
+    }
+
+    /// Renders the light's scene with `o` under `est` and scores its floor
+    /// against [`Self::floor_radiance`]: [`z_score`]'s `(z, ratio)`; adds the
+    /// render's rejected samples to `rejected`.
+    fn score(&self, est: EstimatorChoice, o: &Overrides, rejected: &mut u64) -> Result<(f64, f64)> {
+        let job = Job::new(&self.scene(), o, &RenderOptions::default())?;
+        let want: Vec<f64> =
+            floor_points(&job).iter().map(|ps| ps.iter().map(|p| self.floor_radiance(p)).sum::<f64>() / 16.0).collect();
+        let r = crate::render::render(&job, None)?;
+        *rejected += r.stats.rejected_samples;
+        // bsdf finds the light by chance: the noise of a sample that
+        // is `albedo L` with probability `mean / (albedo L)`.
+        let n = r.stats.samples as f64;
+        let mean_want = want.iter().sum::<f64>() / want.len() as f64;
+        let floor_se = match est {
+            EstimatorChoice::Bsdf => (mean_want * FLOOR_ALBEDO as f64 * self.emit / n).sqrt(),
+            _ => 0.0,
+        };
+        Ok(z_score(&r.image, &want, floor_se))
+    }
 }
 
 /// Family 2: a white furnace whose `book` mixture samples toward tiny shapes.
@@ -281,159 +323,224 @@ fn d3(v: [f32; 3]) -> DVec3 {
     DVec3::from_array(v.map(f64::from))
 }
 
+/// Family 3: the extent of the scene the quads are built for.
+const SCALE_EXTENT: f32 = 1e6;
+
+/// What family 3 counted, over every size.
+#[derive(Default)]
+struct ScaleTally {
+    /// Rays judged against f64.
+    tested: u64,
+    /// Hits and misses the f64 test contradicts, clear of the ray's band.
+    wrong: u64,
+    /// Hits whose `t` is off the f64 `t` by more than 1e-4 relative.
+    t_bad: u64,
+    /// Rays from inside a box that hit none of its faces.
+    leaks: u64,
+    /// The largest distance outside a quad at which a hit was accepted, over the quad's size.
+    grow_near: f64,
+    /// The same over the ray's band.
+    band_ratio: f64,
+    /// That largest distance over the size at every third decade, for the check's note.
+    line: String,
+}
+
 /// Family 3: quads and boxes from 1e-6 to 1e6 in a scene of extent 1e6.
 pub(super) fn quad_scale(cfg: &StressConfig, out: &mut Parts, progress: &mut dyn FnMut(&str)) -> Result<()> {
     let rays = if cfg.quick { 200 } else { 4000 };
-    let extent = 1e6f32;
     let mut g = Gen::new(cfg.seed, 0x9ad5);
-    let (mut wrong, mut t_bad, mut leaks, mut tested) = (0u64, 0u64, 0u64, 0u64);
-    let (mut grow_near, mut band_ratio) = (0.0f64, 0.0f64);
-    let mut line = String::new();
+    let mut tally = ScaleTally::default();
     for e in -6..=6 {
         let s = 10f64.powi(e);
         let mut grow_decade = 0.0f64;
         for _ in 0..rays {
-            // A quad of size about s, 10 s from the origin (at most 1e5),
-            // turned at random.
-            let centre = g.unit() * (10.0 * s).min(1e5);
-            let ud = g.unit();
-            let across = g.perp(ud);
-            let (k, skew) = (g.range(0.3, 1.0), g.range(-0.5, 0.5));
-            let (u, v) = (d3(f3(ud * s)), d3(f3((across + ud * skew) * (s * k))));
-            if u.cross(v).length() < 0.2 * u.length() * v.length() {
-                continue;
-            }
-            let q = d3(f3(centre - (u + v) * 0.5));
-            let mut quads = Quads::default();
-            quads.push(f3(q), f3(u), f3(v), extent, Kind::Lambertian, 0);
-            quads.pad();
-            let rec = quads.rec[0];
-            // From nearby (1 to 10 sizes away), aimed at a point in, on or
-            // near the quad.
-            let (a, b) = (g.range(-0.2, 1.2), g.range(-0.2, 1.2));
-            let target = q + u * a + v * b;
-            let o = d3(f3(target + g.unit() * (s * g.range(1.0, 10.0))));
-            let dir = d3(f3((target - o).normalize())).normalize();
-            let (of, df) = (V3::from_array(f3(o)), V3::from_array(f3(dir)));
-            let mut best = Closest::<f32>::none();
-            quads.brute::<_, _, false>(of, df, 0.0, &mut best, &mut ());
-            let hit = best.index != MISS;
-            let Some((te, ae, be)) = quad_oracle(d3(f3(o)), d3(f3(dir)), q, u, v) else { continue };
-            let cos = u.cross(v).normalize().dot(dir).abs();
-            if cos < 0.05 {
-                continue;
-            }
-            tested += 1;
-            // The band, as a length: what the test accepts beyond the edges.
-            let tol = rec.tolerance(of.max_abs(), te as f32) as f64;
-            let (ha, hb) = (u.cross(v).length() / v.length(), u.cross(v).length() / u.length());
-            // Outside the parallelogram, as a length across its edges.
-            let outside = ((-ae).max(ae - 1.0) * ha).max((-be).max(be - 1.0) * hb);
-            // The test's own error is a small part of the band (a margin of 4).
-            let clear_in = outside < -tol && te > 0.0;
-            let clear_out = outside > 2.0 * tol || te < 0.0;
-            if (clear_in && !hit) || (clear_out && hit) {
-                wrong += 1;
-            }
-            if hit {
-                if ((best.t as f64 - te) / te).abs() > 1e-4 {
-                    t_bad += 1;
-                }
-                grow_decade = grow_decade.max(outside / s);
-                band_ratio = band_ratio.max(outside / tol);
+            if let Some(grow) = quad_ray(&mut g, s, &mut tally) {
+                grow_decade = grow_decade.max(grow);
             }
         }
-        grow_near = grow_near.max(grow_decade);
+        tally.grow_near = tally.grow_near.max(grow_decade);
         if e % 3 == 0 {
-            line.push_str(&format!(" 1e{e}: {grow_decade:.1e}"));
+            tally.line.push_str(&format!(" 1e{e}: {grow_decade:.1e}"));
         }
         // Boxes: turned cuboids of size s, rays from inside at edges and
         // corners (never a leak) and from outside (hit where the f64 slab
         // test says, clear of the edges).
         for _ in 0..rays / 4 {
-            let centre = g.unit() * (10.0 * s).min(1e5);
-            let a0 = g.unit();
-            let a1 = g.perp(a0);
-            let axes = [a0, a1, a0.cross(a1)];
-            let half = [s * g.range(0.2, 1.0), s * g.range(0.2, 1.0), s * g.range(0.2, 1.0)];
-            let mut c = Cuboids::default();
-            c.push(centre.to_array(), axes.map(|a| a.to_array()), half, 0);
-            let rec = c.rec[0];
-            let (cc, ax, hh) = (d3(rec.c), rec.axes.map(d3), d3(rec.half));
-            // From inside toward a corner or an edge point: always a hit.
-            let inner = cc + ax[0] * (hh.x * g.range(-0.9, 0.9)) + ax[1] * (hh.y * g.range(-0.9, 0.9));
-            let signs = [g.range(-1.0, 1.0).signum(), g.range(-1.0, 1.0).signum(), g.range(-1.0, 1.0)];
-            let corner = cc + ax[0] * (hh.x * signs[0]) + ax[1] * (hh.y * signs[1]) + ax[2] * (hh.z * signs[2]);
-            let (o, dir) = (d3(f3(inner)), d3(f3((corner - inner).normalize())).normalize());
-            let mut best = Closest::<f32>::none();
-            c.brute::<_, _, false>(V3::from_array(f3(o)), V3::from_array(f3(dir)), 0.0, &mut best, &mut ());
-            tested += 1;
-            if best.index == MISS || best.index < QUAD_BASE {
-                leaks += 1;
-            }
-            // From outside, at a face: a point well inside it (a hit on that
-            // face at the exact distance), or straight down its normal past
-            // an edge (a miss).
-            let k = (g.range(0.0, 3.0) as usize).min(2);
-            let side = (g.range(0.0, 1.0) < 0.5) as usize;
-            let sign = if side == 1 { 1.0 } else { -1.0 };
-            let (j, l) = ((k + 1) % 3, (k + 2) % 3);
-            let (hk, hj, hl) = (hh[k], hh[j], hh[l]);
-            let face_point = |fj: f64, fl: f64| cc + ax[k] * (sign * hk) + ax[j] * (fj * hj) + ax[l] * (fl * hl);
-            let normal = ax[k] * sign;
-            let target = face_point(g.range(-0.8, 0.8), g.range(-0.8, 0.8));
-            let from = target + (normal * 2.0 + ax[j] * g.range(-0.5, 0.5)) * hh.max_element();
-            let (o, dir) = (d3(f3(from)), d3(f3((target - from).normalize())).normalize());
-            let mut best = Closest::<f32>::none();
-            c.brute::<_, _, false>(V3::from_array(f3(o)), V3::from_array(f3(dir)), 0.0, &mut best, &mut ());
-            let te = (target - o).dot(dir);
-            tested += 2;
-            if best.index != rec.faces[k][side] {
-                wrong += 1;
-            } else if ((best.t as f64 - te) / te).abs() > 1e-4 {
-                t_bad += 1;
-            }
-            let past = face_point(1.5 * g.range(-1.0, 1.0).signum(), g.range(-0.8, 0.8));
-            let o = d3(f3(past + normal * (2.0 * hh.max_element())));
-            let mut best = Closest::<f32>::none();
-            c.brute::<_, _, false>(V3::from_array(f3(o)), V3::from_array(f3(-normal)), 0.0, &mut best, &mut ());
-            if best.index != MISS {
-                wrong += 1;
-            }
+            let c = random_box(&mut g, s);
+            box_ray_from_inside(&mut g, &c, &mut tally);
+            box_rays_from_outside(&mut g, &c, &mut tally);
         }
         progress(&format!("quad and box scale: 1e{e}"));
     }
+    quad_scale_checks(&tally, out);
+    Ok(())
+}
+
+/// A parallelogram `q + a u + b v`, `a` and `b` in `[0, 1]`, with f32 corners.
+#[derive(Clone, Copy, Debug)]
+struct Parallelogram {
+    q: DVec3,
+    u: DVec3,
+    v: DVec3,
+}
+
+/// A quad of size about `s`, 10 s from the origin (at most 1e5), turned at
+/// random; `None` when it came out too thin to test.
+fn random_quad(g: &mut Gen, s: f64) -> Option<Parallelogram> {
+    let centre = g.unit() * (10.0 * s).min(1e5);
+    let ud = g.unit();
+    let across = g.perp(ud);
+    let (k, skew) = (g.range(0.3, 1.0), g.range(-0.5, 0.5));
+    let (u, v) = (d3(f3(ud * s)), d3(f3((across + ud * skew) * (s * k))));
+    if u.cross(v).length() < 0.2 * u.length() * v.length() {
+        return None;
+    }
+    let q = d3(f3(centre - (u + v) * 0.5));
+    Some(Parallelogram { q, u, v })
+}
+
+/// One ray at a random quad of size about `s`, judged against f64 into
+/// `tally`: for a hit, how far outside the quad it was accepted, over `s`;
+/// `None` for a miss or a ray not judged (too thin a quad, too grazing a ray).
+fn quad_ray(g: &mut Gen, s: f64, tally: &mut ScaleTally) -> Option<f64> {
+    let Parallelogram { q, u, v } = random_quad(g, s)?;
+    let mut quads = Quads::default();
+    quads.push(f3(q), f3(u), f3(v), SCALE_EXTENT, Kind::Lambertian, 0);
+    quads.pad();
+    let rec = quads.rec[0];
+    // From nearby (1 to 10 sizes away), aimed at a point in, on or
+    // near the quad.
+    let (a, b) = (g.range(-0.2, 1.2), g.range(-0.2, 1.2));
+    let target = q + u * a + v * b;
+    let o = d3(f3(target + g.unit() * (s * g.range(1.0, 10.0))));
+    let dir = d3(f3((target - o).normalize())).normalize();
+    let (of, df) = (V3::from_array(f3(o)), V3::from_array(f3(dir)));
+    let mut best = Closest::<f32>::none();
+    quads.brute::<_, _, false>(of, df, 0.0, &mut best, &mut ());
+    let hit = best.index != MISS;
+    let (te, ae, be) = quad_oracle(d3(f3(o)), d3(f3(dir)), q, u, v)?;
+    let cos = u.cross(v).normalize().dot(dir).abs();
+    if cos < 0.05 {
+        return None;
+    }
+    tally.tested += 1;
+    // The band, as a length: what the test accepts beyond the edges.
+    let tol = rec.tolerance(of.max_abs(), te as f32) as f64;
+    let (ha, hb) = (u.cross(v).length() / v.length(), u.cross(v).length() / u.length());
+    // Outside the parallelogram, as a length across its edges.
+    let outside = ((-ae).max(ae - 1.0) * ha).max((-be).max(be - 1.0) * hb);
+    // The test's own error is a small part of the band (a margin of 4).
+    let clear_in = outside < -tol && te > 0.0;
+    let clear_out = outside > 2.0 * tol || te < 0.0;
+    if (clear_in && !hit) || (clear_out && hit) {
+        tally.wrong += 1;
+    }
+    if !hit {
+        return None;
+    }
+    if ((best.t as f64 - te) / te).abs() > 1e-4 {
+        tally.t_bad += 1;
+    }
+    tally.band_ratio = tally.band_ratio.max(outside / tol);
+    Some(outside / s)
+}
+
+/// A box of size about `s`, 10 s from the origin (at most 1e5), turned at random.
+fn random_box(g: &mut Gen, s: f64) -> Cuboids {
+    let centre = g.unit() * (10.0 * s).min(1e5);
+    let a0 = g.unit();
+    let a1 = g.perp(a0);
+    let axes = [a0, a1, a0.cross(a1)];
+    let half = [s * g.range(0.2, 1.0), s * g.range(0.2, 1.0), s * g.range(0.2, 1.0)];
+    let mut c = Cuboids::default();
+    c.push(centre.to_array(), axes.map(|a| a.to_array()), half, 0);
+    c
+}
+
+/// A ray from inside box `c` toward a corner or an edge point of it: always
+/// a hit on one of its faces (a leak into `tally` if not).
+fn box_ray_from_inside(g: &mut Gen, c: &Cuboids, tally: &mut ScaleTally) {
+    let rec = c.rec[0];
+    let (cc, ax, hh) = (d3(rec.c), rec.axes.map(d3), d3(rec.half));
+    let inner = cc + ax[0] * (hh.x * g.range(-0.9, 0.9)) + ax[1] * (hh.y * g.range(-0.9, 0.9));
+    let signs = [g.range(-1.0, 1.0).signum(), g.range(-1.0, 1.0).signum(), g.range(-1.0, 1.0)];
+    let corner = cc + ax[0] * (hh.x * signs[0]) + ax[1] * (hh.y * signs[1]) + ax[2] * (hh.z * signs[2]);
+    let (o, dir) = (d3(f3(inner)), d3(f3((corner - inner).normalize())).normalize());
+    let mut best = Closest::<f32>::none();
+    c.brute::<_, _, false>(V3::from_array(f3(o)), V3::from_array(f3(dir)), 0.0, &mut best, &mut ());
+    tally.tested += 1;
+    if best.index == MISS || best.index < QUAD_BASE {
+        tally.leaks += 1;
+    }
+}
+
+/// Two rays from outside box `c`, at one of its faces: at a point well inside
+/// it (a hit on that face at the exact distance), and straight down its
+/// normal past an edge (a miss); judged into `tally`.
+fn box_rays_from_outside(g: &mut Gen, c: &Cuboids, tally: &mut ScaleTally) {
+    let rec = c.rec[0];
+    let (cc, ax, hh) = (d3(rec.c), rec.axes.map(d3), d3(rec.half));
+    let k = (g.range(0.0, 3.0) as usize).min(2);
+    let side = (g.range(0.0, 1.0) < 0.5) as usize;
+    let sign = if side == 1 { 1.0 } else { -1.0 };
+    let (j, l) = ((k + 1) % 3, (k + 2) % 3);
+    let (hk, hj, hl) = (hh[k], hh[j], hh[l]);
+    let face_point = |fj: f64, fl: f64| cc + ax[k] * (sign * hk) + ax[j] * (fj * hj) + ax[l] * (fl * hl);
+    let normal = ax[k] * sign;
+    let target = face_point(g.range(-0.8, 0.8), g.range(-0.8, 0.8));
+    let from = target + (normal * 2.0 + ax[j] * g.range(-0.5, 0.5)) * hh.max_element();
+    let (o, dir) = (d3(f3(from)), d3(f3((target - from).normalize())).normalize());
+    let mut best = Closest::<f32>::none();
+    c.brute::<_, _, false>(V3::from_array(f3(o)), V3::from_array(f3(dir)), 0.0, &mut best, &mut ());
+    let te = (target - o).dot(dir);
+    tally.tested += 2;
+    if best.index != rec.faces[k][side] {
+        tally.wrong += 1;
+    } else if ((best.t as f64 - te) / te).abs() > 1e-4 {
+        tally.t_bad += 1;
+    }
+    let past = face_point(1.5 * g.range(-1.0, 1.0).signum(), g.range(-0.8, 0.8));
+    let o = d3(f3(past + normal * (2.0 * hh.max_element())));
+    let mut best = Closest::<f32>::none();
+    c.brute::<_, _, false>(V3::from_array(f3(o)), V3::from_array(f3(-normal)), 0.0, &mut best, &mut ());
+    if best.index != MISS {
+        tally.wrong += 1;
+    }
+}
+
+/// Family 3's verdict: its checks, from what `tally` counted over every size.
+fn quad_scale_checks(tally: &ScaleTally, out: &mut Parts) {
+    let ScaleTally { tested, wrong, t_bad, leaks, grow_near, band_ratio, line } = tally;
     out.checks.push(Check::at_most(
         format!("quad and box scale 1e-6..1e6 (extent 1e6): wrong hit/miss vs f64 ({tested} rays)"),
-        wrong as f64,
+        *wrong as f64,
         0.0,
         "clear by the ray's band (a hit outside 2x its band, a miss inside it)",
     ));
     out.checks.push(Check::at_most(
         "quad and box scale: hits with t off the f64 t by more than 1e-4 relative",
-        t_bad as f64,
+        *t_bad as f64,
         0.0,
         "rays from 1 to 10 sizes away, cos >= 0.05",
     ));
     out.checks.push(Check::at_most(
         "quad scale: accepted distance outside a quad / its size, rays from nearby",
-        grow_near,
+        *grow_near,
         1e-3,
         format!("the band follows the ray (old: 64u x extent, 1e6 sizes at 1e-6);{line}"),
     ));
     out.checks.push(Check::at_most(
         "quad scale: accepted distance outside / the ray's band",
-        band_ratio,
+        *band_ratio,
         2.0,
         "the band bounds what is accepted (with the test's own rounding)",
     ));
     out.checks.push(Check::at_most(
         "box scale 1e-6..1e6: rays from inside toward corners and edges that leak",
-        leaks as f64,
+        *leaks as f64,
         0.0,
         "faces that meet at an edge share its distances",
     ));
-    Ok(())
 }
 
 /// Family 4: emitters from 1e-30 to f32's largest.

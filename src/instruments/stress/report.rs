@@ -137,6 +137,22 @@ impl StressReport {
     /// The tables `rtow stress` prints.
     pub fn table(&self) -> String {
         let mut s = String::new();
+        self.write_legend(&mut s);
+        self.write_rows(&mut s);
+        self.write_decades(&mut s);
+        self.write_offset_scan(&mut s);
+        self.write_checks(&mut s);
+        let f = self.failures();
+        if f.is_empty() {
+            let _ = writeln!(s, "\nall bounds hold");
+        } else {
+            let _ = writeln!(s, "\nBROKEN: {}", f.join(", "));
+        }
+        s
+    }
+
+    /// The run's first line (seed, SIMD, time) and what the rows' columns mean.
+    fn write_legend(&self, s: &mut String) {
         let _ = writeln!(
             s,
             "rtow stress{}: seed {}, SIMD {}, {:.1} s",
@@ -154,6 +170,10 @@ impl StressReport {
              NaN = non-finite values met. Below f32 resolution: hit points where the offset exceeds |r|\n\
              (|p|_inf > ~1e6 |r|), where entering rays may be pushed through the sphere: wrong does not gate."
         );
+    }
+
+    /// The rows, a table per section, each under its header.
+    fn write_rows(&self, s: &mut String) {
         let mut section = "";
         for r in &self.rows {
             if r.section != section {
@@ -197,37 +217,51 @@ impl StressReport {
                 }
             );
         }
-        if !self.decades.is_empty() {
+    }
+
+    /// The outside sweep by decade of `r / |o - c|`, robust against textbook (if measured).
+    fn write_decades(&self, s: &mut String) {
+        if self.decades.is_empty() {
+            return;
+        }
+        let _ = writeln!(
+            s,
+            "\noutside sweep by r/|o-c| (scalar robust vs textbook b*b-4ac, t_min = 0.001)\n\
+             {:<12} {:>8} {:>14} {:>12} {:>16} {:>14}",
+            "r/|o-c|", "rays", "robust wrong", "robust err/r", "textbook wrong", "textbook err/r"
+        );
+        for d in &self.decades {
             let _ = writeln!(
                 s,
-                "\noutside sweep by r/|o-c| (scalar robust vs textbook b*b-4ac, t_min = 0.001)\n\
-                 {:<12} {:>8} {:>14} {:>12} {:>16} {:>14}",
-                "r/|o-c|", "rays", "robust wrong", "robust err/r", "textbook wrong", "textbook err/r"
+                "1e{:<3}..1e{:<3} {:>8} {:>14} {:>12.2e} {:>16} {:>14.2e}",
+                d.ratio_exp,
+                d.ratio_exp + 1,
+                d.robust.rays,
+                d.robust.wrong,
+                d.robust.max_err_r,
+                d.textbook.wrong,
+                d.textbook.max_err_r
             );
-            for d in &self.decades {
-                let _ = writeln!(
-                    s,
-                    "1e{:<3}..1e{:<3} {:>8} {:>14} {:>12.2e} {:>16} {:>14.2e}",
-                    d.ratio_exp,
-                    d.ratio_exp + 1,
-                    d.robust.rays,
-                    d.robust.wrong,
-                    d.robust.max_err_r,
-                    d.textbook.wrong,
-                    d.textbook.max_err_r
-                );
-            }
         }
-        if !self.offset_scan.is_empty() {
-            let _ = writeln!(
-                s,
-                "\noffset rules (self-intersection sweep, scalar, every scatter, resolvable hit points; u = 2^-24)\n{:<36} {:>9} {:>8} {:>7}",
-                "offset", "rays", "re-hits", "wrong"
-            );
-            for o in &self.offset_scan {
-                let _ = writeln!(s, "{:<36} {:>9} {:>8} {:>7}", o.rule, o.rays, o.rehits, o.wrong);
-            }
+    }
+
+    /// Re-hits and leaks under each other offset rule (if scanned).
+    fn write_offset_scan(&self, s: &mut String) {
+        if self.offset_scan.is_empty() {
+            return;
         }
+        let _ = writeln!(
+            s,
+            "\noffset rules (self-intersection sweep, scalar, every scatter, resolvable hit points; u = 2^-24)\n{:<36} {:>9} {:>8} {:>7}",
+            "offset", "rays", "re-hits", "wrong"
+        );
+        for o in &self.offset_scan {
+            let _ = writeln!(s, "{:<36} {:>9} {:>8} {:>7}", o.rule, o.rays, o.rehits, o.wrong);
+        }
+    }
+
+    /// The checks that are not rows of counts, each with its value, limit and note.
+    fn write_checks(&self, s: &mut String) {
         let _ = writeln!(s, "\nchecks");
         for c in &self.checks {
             let _ = writeln!(
@@ -240,12 +274,5 @@ impl StressReport {
                 c.note
             );
         }
-        let f = self.failures();
-        if f.is_empty() {
-            let _ = writeln!(s, "\nall bounds hold");
-        } else {
-            let _ = writeln!(s, "\nBROKEN: {}", f.join(", "));
-        }
-        s
     }
 }

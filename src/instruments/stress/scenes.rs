@@ -39,6 +39,20 @@ impl Leaving {
     }
 }
 
+/// One ray as a kernel traced it: where it starts, where it goes, and the
+/// closest hit the kernel found.
+#[derive(Clone, Copy, Debug)]
+struct TracedRay {
+    /// The origin.
+    o: V3<f32>,
+    /// The direction.
+    d: V3<f32>,
+    /// The sphere hit, or [`MISS`].
+    hit: u32,
+    /// The distance to the hit, in lengths of `d`.
+    t: f32,
+}
+
 /// Judges every ray of a scene against every sphere in f64.
 pub(super) struct SceneOracle {
     c: Vec<DVec3>,
@@ -53,10 +67,10 @@ impl SceneOracle {
         }
     }
 
-    /// Checks one traced ray: `hit`/`t` is the kernel's closest hit, `front` its
-    /// front/back face there, `prev` the surface the ray left.
-    #[allow(clippy::too_many_arguments)] // one ray's whole record, as the kernels report it
-    fn check(&self, t: &mut Tally, o: V3<f32>, d: V3<f32>, hit: u32, th: f32, front: bool, prev: Option<Leaving>) {
+    /// Checks one traced ray: `traced.hit`/`traced.t` is the kernel's closest
+    /// hit, `front` its front/back face there, `prev` the surface the ray left.
+    fn check(&self, t: &mut Tally, traced: TracedRay, front: bool, prev: Option<Leaving>) {
+        let TracedRay { o, d, hit, t: th } = traced;
         if !finite3(o) || !finite3(d) || (hit != MISS && !th.is_finite()) {
             t.nan += 1;
             return;
@@ -137,7 +151,7 @@ struct PathLog {
     /// The surface the path's current ray left.
     prev: Option<Leaving>,
     /// A hit waiting for its shading (front face) to be judged.
-    pending: Option<(V3<f32>, V3<f32>, u32, f32)>,
+    pending: Option<TracedRay>,
     /// Hash of every ray of the path (origin, direction, hit, t).
     hash: Fnv,
 }
@@ -179,16 +193,16 @@ impl PathEvents for StressProbe<'_> {
     ) {
         for k in ids.live() {
             let key = (ids.pixel[k], ids.sample[k]);
-            let (o, d, hit, t) = (o[k], d[k], hit[k], t[k]);
+            let ray = TracedRay { o: o[k], d: d[k], hit: hit[k], t: t[k] };
             let log = self.paths.entry(key).or_default();
-            log.hash.v(o);
-            log.hash.v(d);
-            log.hash.u32(hit);
-            log.hash.f(t);
-            if hit == MISS {
-                self.oracle.check(&mut self.tally, o, d, hit, t, false, log.prev);
+            log.hash.v(ray.o);
+            log.hash.v(ray.d);
+            log.hash.u32(ray.hit);
+            log.hash.f(ray.t);
+            if ray.hit == MISS {
+                self.oracle.check(&mut self.tally, ray, false, log.prev);
             } else {
-                log.pending = Some((o, d, hit, t));
+                log.pending = Some(ray);
             }
         }
     }
@@ -197,13 +211,13 @@ impl PathEvents for StressProbe<'_> {
         for k in ids.live() {
             let key = (ids.pixel[k], ids.sample[k]);
             let log = self.paths.entry(key).or_default();
-            let Some((o, d, hit, t)) = log.pending.take() else {
+            let Some(ray) = log.pending.take() else {
                 self.tally.wrong += 1; // a shading without its ray: the probe's events are out of order
                 continue;
             };
             let f = front & (1 << k) != 0;
-            self.oracle.check(&mut self.tally, o, d, hit, t, f, log.prev);
-            log.prev = Some(Leaving::new(hit, n[k], radius[k], f));
+            self.oracle.check(&mut self.tally, ray, f, log.prev);
+            log.prev = Some(Leaving::new(ray.hit, n[k], radius[k], f));
         }
     }
 

@@ -2,7 +2,7 @@
 //!
 //! 1. **Intersection.** Radius and distance over 1e-4 .. 1e6, grazing rays,
 //!    origins on the surface, inside and at the centre, negative radii; each
-//!    group of 8 rays through `closest_hit` at one lane and at 8.
+//!    group of 8 rays through `closest_brute` at one lane and at 8.
 //! 2. **Self-intersection.** Hit points on spheres of radius 10^U(-4,4), rays
 //!    scattered from each by every material (and synthetic grazing
 //!    directions), spawned with `spawn` and intersected again, by the same
@@ -159,8 +159,33 @@ pub struct GroupResult {
     pub max_disc_ratio: f64,
 }
 
-#[allow(clippy::too_many_arguments)] // one ray's whole record
-fn record_hit(t: &mut Tally, tr: &Truth, ray: &RayF64, c: DVec3, hit: bool, tk: f32, front: bool, gated: bool) {
+/// What the f64 oracle knows of one ray of a group: the ray, the sphere's
+/// centre, and the exact answer an implementation's is judged against.
+struct RayOracle {
+    /// The ray, in f64 on its f32 inputs.
+    ray: RayF64,
+    /// The sphere's centre.
+    c: DVec3,
+    /// The exact answer for the ray against the sphere.
+    truth: Truth,
+}
+
+/// One implementation's answer for a ray: hit or miss, where, and which face.
+#[derive(Clone, Copy, Debug)]
+struct Answer {
+    /// A hit was reported.
+    hit: bool,
+    /// The distance to the hit, in lengths of the ray's direction.
+    t: f32,
+    /// The hit was called a front face.
+    front: bool,
+}
+
+/// Judges `answer` against `oracle` into `t`; `gated`: also records the hit
+/// point's error over its bound (the kernels' tests, not the textbook's).
+fn record_hit(t: &mut Tally, oracle: &RayOracle, answer: Answer, gated: bool) {
+    let (tr, ray, c) = (&oracle.truth, &oracle.ray, oracle.c);
+    let Answer { hit, t: tk, front } = answer;
     t.rays += 1;
     if hit && !tk.is_finite() {
         t.nan += 1;
@@ -185,7 +210,7 @@ fn record_hit(t: &mut Tally, tr: &Truth, ray: &RayF64, c: DVec3, hit: bool, tk: 
     }
 }
 
-/// Runs one group through `closest_hit` and `sphere_disc` at one and 8 lanes
+/// Runs one group through `closest_brute` and `sphere_disc` at one and 8 lanes
 /// (both widths) and the textbook test, and judges every answer.
 pub fn check_group(grp: &Group, spheres: &mut Spheres) -> GroupResult {
     let mut res = GroupResult::default();
@@ -208,14 +233,15 @@ pub fn check_group(grp: &Group, spheres: &mut Spheres) -> GroupResult {
         let ray = RayF64::new(o, d);
         let tr = Truth::new(&ray, c64, grp.r as f64);
         res.max_disc_ratio = res.max_disc_ratio.max((disc as f64 - tr.disc).abs() / tr.e_disc);
+        let oracle = RayOracle { ray, c: c64, truth: tr };
         let fs = hs != MISS && surface(o, d, ts, grp.c, grp.r).front;
-        record_hit(&mut res.scalar, &tr, &ray, c64, hs != MISS, ts, fs, true);
+        record_hit(&mut res.scalar, &oracle, Answer { hit: hs != MISS, t: ts, front: fs }, true);
         let f8 = front8 & (1 << k) != 0;
-        record_hit(&mut res.simd, &tr, &ray, c64, hit8[k] != MISS, t8[k], f8, true);
+        record_hit(&mut res.simd, &oracle, Answer { hit: hit8[k] != MISS, t: t8[k], front: f8 }, true);
         let tb = textbook_hit(o, d, grp.c, grp.r, TEXTBOOK_T_MIN);
         let tt = tb.unwrap_or(f32::INFINITY);
         let ftb = tb.is_some() && d.dot((ray_point32(o, d, tt) - grp.c) * (1.0 / grp.r)) < 0.0;
-        record_hit(&mut res.textbook, &tr, &ray, c64, tb.is_some(), tt, ftb, false);
+        record_hit(&mut res.textbook, &oracle, Answer { hit: tb.is_some(), t: tt, front: ftb }, false);
     }
     res
 }
@@ -495,7 +521,7 @@ pub(super) fn self_sweep(scatter: Scatter, imp: Impl, sizes: &Sizes, seed: u64, 
 }
 
 /// Hit points on one sphere, and rays scattered from each by the kernels'
-/// functions (`closest_hit`, `surface`, `spawn`, the materials) at width `R`,
+/// functions (`closest_brute`, `surface`, `spawn`, the materials) at width `R`,
 /// `R::LANES` rays at a time.
 fn kernel_sweep<R: SweepLanes>(scatter: Scatter, sizes: &Sizes, seed: u64, rule: OffsetRule) -> SelfOut {
     let mut g = Gen::new(seed, 200 + scatter as u64);
