@@ -311,3 +311,41 @@ fn the_picture_in_the_docs_is_the_code() {
         "docs/architecture.md's import graph is not the code's; replace the block between the markers with:\n{want}"
     );
 }
+
+/// The house's two size rules, held: no function in `src` is longer than 80
+/// lines (from its `fn` line to its closing brace), and none silences
+/// clippy's `too_many_arguments` (arguments that travel together are a
+/// struct: a pass's context, a packet's lanes).
+#[test]
+fn functions_are_short_and_take_few_arguments() {
+    let src = Path::new(env!("CARGO_MANIFEST_DIR")).join("src");
+    let mut all = Vec::new();
+    files(&src, &mut all);
+    let (mut long, mut allows) = (Vec::new(), Vec::new());
+    for p in &all {
+        let text = std::fs::read_to_string(p).unwrap();
+        let lines: Vec<&str> = text.lines().collect();
+        let name = p.strip_prefix(&src).unwrap().display().to_string();
+        for (i, line) in lines.iter().enumerate() {
+            if line.contains("allow(clippy::too_many_arguments)") {
+                allows.push(format!("{name}:{}", i + 1));
+            }
+            let code = line.trim_start();
+            let indent = line.len() - code.len();
+            let is_fn = ["fn ", "pub fn ", "pub(crate) fn ", "pub(super) fn ", "const fn ", "pub const fn "]
+                .iter()
+                .any(|p| code.starts_with(p));
+            if !is_fn || code.ends_with(';') {
+                continue;
+            }
+            let close = format!("{}}}", " ".repeat(indent));
+            if let Some(len) = lines[i..].iter().position(|l| l.trim_end() == close) {
+                if len + 1 > 80 {
+                    long.push(format!("{name}:{} ({} lines)", i + 1, len + 1));
+                }
+            }
+        }
+    }
+    assert!(long.is_empty(), "functions over 80 lines (split them): {long:#?}");
+    assert!(allows.is_empty(), "too_many_arguments allowed (group the arguments): {allows:#?}");
+}
