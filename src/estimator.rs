@@ -30,6 +30,71 @@ use crate::sampling::Stream;
 use crate::vec3::V3;
 use serde::{Deserialize, Serialize};
 
+/// How a diffuse or isotropic vertex chooses its direction: the render's
+/// estimator, decided once from the plan (`Plan::directions`), the one type
+/// both kernels read ([`Directions::at`]). The wavefront passes it as a
+/// literal at each scatter pass's call, so each is compiled apart.
+#[derive(Clone, Copy, Debug, PartialEq, Eq)]
+pub enum Directions {
+    /// The material's density (`bsdf`).
+    Bsdf,
+    /// The book's mixture toward the `sample_toward` shapes or the lights (`book`).
+    Book,
+    /// The material's density, and a light sample (`nee-mis`).
+    Nee,
+}
+
+/// What a vertex's directions are drawn toward: the `book` mixture's
+/// shapes, the `nee-mis` lights, and the sampler dimension of the bounce's
+/// light draws ([`crate::sampling::layout::Bounces::light`]).
+#[derive(Clone, Copy)]
+pub struct Toward<'a> {
+    pub lights: &'a Lights,
+    pub emitters: &'a Emitters,
+    pub dim: u32,
+}
+
+/// A diffuse vertex's decision: the path's next direction, the factor on
+/// its albedo (the `book` mixture's weight; 1 otherwise) and, under
+/// `nee-mis`, the light sample to send ([`next_event`]'s direction,
+/// distance and carry).
+pub struct Diffuse<R: Real> {
+    pub dir: V3<R>,
+    pub weight: R,
+    pub light: Option<(V3<R>, R, V3<R>)>,
+}
+
+impl Directions {
+    /// The decision at a diffuse vertex `x` whose material sampled `dir`
+    /// with density `own_pdf`, written once for both kernels and every
+    /// width: `bsdf` keeps `dir`; `book` draws the mixture
+    /// ([`book_mixture`]); `nee-mis` keeps `dir` and, when `send` (a ray is
+    /// left for it), draws a light sample ([`next_event`]).
+    #[inline(always)]
+    pub fn at<R: Real, S: Stream<R>>(
+        self,
+        toward: Toward,
+        x: V3<R>,
+        dir: V3<R>,
+        own_pdf: impl Fn(V3<R>) -> R,
+        send: bool,
+        rng: &mut S,
+    ) -> Diffuse<R> {
+        let one = R::splat(1.0);
+        match self {
+            Directions::Bsdf => Diffuse { dir, weight: one, light: None },
+            Directions::Book => {
+                let (dir, weight) = book_mixture(toward.lights, x, dir, own_pdf, toward.dim, rng);
+                Diffuse { dir, weight, light: None }
+            }
+            Directions::Nee => {
+                let light = send.then(|| next_event(toward.emitters, x, own_pdf, toward.dim, rng));
+                Diffuse { dir, weight: one, light }
+            }
+        }
+    }
+}
+
 /// The `book` estimator at a diffuse vertex `x` (The Rest of Your Life's
 /// `mixture_pdf` of the material's density and the `lights` list, 50/50):
 /// `own` is the direction the material sampled (from the bounce's

@@ -5,7 +5,7 @@
 
 use crate::camera::PreparedCamera;
 use crate::choice::Mode;
-use crate::estimator::Estimator;
+use crate::estimator::{Directions, Estimator};
 use crate::film::accum::Scale;
 use crate::geometry::{Emitters, Lights, Media, Shapes};
 use crate::material::{Kind, MaterialTables};
@@ -146,6 +146,17 @@ fn is_zero_u32(n: &u32) -> bool {
 }
 
 impl Plan {
+    /// How diffuse vertices choose their directions: the estimator the plan runs.
+    pub fn directions(&self) -> Directions {
+        if self.sample_toward > 0 {
+            Directions::Book
+        } else if self.nee > 0 {
+            Directions::Nee
+        } else {
+            Directions::Bsdf
+        }
+    }
+
     /// The film's fixed-point scale (of [`Plan::film_exponent`]).
     pub fn film_scale(&self) -> Scale {
         Scale::new(self.film_exponent).expect("the plan's exponent is at most MAX_EXPONENT")

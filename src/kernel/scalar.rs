@@ -4,7 +4,7 @@
 use super::{background, normal_colour, texture_albedo};
 use crate::choice::Mode;
 use crate::estimator::{
-    book_mixture, cosine_pdf, mis_bsdf, next_event, roulette, roulette_applies, shadow_tmax, ISOTROPIC_PDF,
+    cosine_pdf, mis_bsdf, roulette, roulette_applies, shadow_tmax, Directions, Toward, ISOTROPIC_PDF,
 };
 use crate::film::TileFilm;
 use crate::geometry::{
@@ -115,6 +115,17 @@ struct Vertex<'a> {
     prep: &'a Prepared,
     depth: u32,
     nee: bool,
+    /// The estimator's directions at diffuse vertices (the plan's).
+    how: Directions,
+}
+
+impl Vertex<'_> {
+    /// What the vertex's directions are drawn toward.
+    #[inline(always)]
+    fn toward(&self) -> Toward<'_> {
+        let p = self.prep;
+        Toward { lights: &p.lights, emitters: &p.emitters, dim: p.bounces.light(self.depth) }
+    }
 }
 
 /// A material as the kernels read it: its kind and its row in the kind's table.
@@ -124,23 +135,18 @@ struct Material {
     row: usize,
 }
 
-/// What a diffuse vertex sends toward a light under `nee-mis` (`None`
-/// when the estimator does not run at this bounce): the shadow ray from
-/// `o` (`x` moved off its surface along the ray by `offset`), carrying
-/// `albedo` times the light's weighted radiance.
+/// The shadow ray of a light sample drawn at `x` (`Some` from
+/// [`Directions::at`]): from `x` moved off its surface along the ray by the
+/// surface's offset (none inside a medium), carrying `albedo` times the
+/// light's weighted radiance.
 #[inline(always)]
-fn light_sample(
-    v: Vertex,
+fn shadow_ray(
+    light: Option<(V3<f32>, f32, V3<f32>)>,
     x: V3<f32>,
     srf: Option<&Surface<f32>>,
-    own_pdf: impl Fn(V3<f32>) -> f32,
     albedo: [f32; 3],
-    rng: &mut impl Stream<f32>,
 ) -> Option<Shadow> {
-    if !v.nee {
-        return None;
-    }
-    let (d, t, carry) = next_event(&v.prep.emitters, x, own_pdf, v.prep.bounces.light(v.depth), rng);
+    let (d, t, carry) = light?;
     let (o, offset) = match srf {
         Some(srf) => (spawn(srf, d), srf.offset),
         None => (x, 0.0),
@@ -173,14 +179,10 @@ fn scatter(
                 kind => texture_albedo(prep, kind, srf.p, |_| hit, |_| tex.row as usize).to_array(),
             };
             let dir = lambertian(srf.n, rng);
-            if prep.plan.sample_toward == 0 {
-                let shadow = light_sample(v, srf.p, Some(srf), |d| cosine_pdf(srf.n, d), albedo, rng);
-                (dir, albedo, cosine_pdf(srf.n, dir), shadow)
-            } else {
-                let (dir, w) =
-                    book_mixture(&prep.lights, srf.p, dir, |d| cosine_pdf(srf.n, d), prep.bounces.light(v.depth), rng);
-                (dir, albedo.map(|a| a * w), 0.0, None)
-            }
+            let vx = v.how.at(v.toward(), srf.p, dir, |d| cosine_pdf(srf.n, d), v.nee, rng);
+            let shadow = shadow_ray(vx.light, srf.p, Some(srf), albedo);
+            let pdf = if v.how == Directions::Book { 0.0 } else { cosine_pdf(srf.n, vx.dir) };
+            (vx.dir, albedo.map(|a| a * vx.weight), pdf, shadow)
         }
         Kind::Metal => {
             let (albedo, fuzz) = m.metal[row];
@@ -283,10 +285,11 @@ fn trace_in<P: Probe, const M: bool>(
     probe: &mut P,
 ) -> Traced {
     let mut path = Path::start::<P, M>(prep, (x, y), id, rng, probe);
+    let how = prep.plan.directions();
     for depth in 0..prep.settings.max_depth {
         // A light sample at this bounce's vertex stands for one more ray.
         let nee = prep.plan.nee > 0 && depth + 1 < prep.settings.max_depth;
-        if let Some(end) = step::<P, M>(Vertex { prep, depth, nee }, &mut path, rng, probe) {
+        if let Some(end) = step::<P, M>(Vertex { prep, depth, nee, how }, &mut path, rng, probe) {
             return end;
         }
     }
@@ -377,14 +380,12 @@ fn medium_vertex(
     let p = path.o + path.d * t;
     let albedo = prep.media.albedo[(hit - MEDIUM_BASE) as usize];
     path.scattered = true;
-    if prep.plan.sample_toward == 0 {
+    if v.how != Directions::Book {
         path.pdf = ISOTROPIC_PDF;
-        let shadow = light_sample(v, p, None, |_| ISOTROPIC_PDF, albedo, rng);
-        (p, dir, albedo, shadow)
-    } else {
-        let (dir, w) = book_mixture(&prep.lights, p, dir, |_| ISOTROPIC_PDF, prep.bounces.light(v.depth), rng);
-        (p, dir, albedo.map(|a| a * w), None)
     }
+    let vx = v.how.at(v.toward(), p, dir, |_| ISOTROPIC_PDF, v.nee, rng);
+    let shadow = shadow_ray(vx.light, p, None, albedo);
+    (p, vx.dir, albedo.map(|a| a * vx.weight), shadow)
 }
 
 /// The shadow ray of a light sample at the vertex after `rays` rays: what

@@ -53,7 +53,7 @@ pub(super) fn classify_packets<W: Wide, P: Probe, S: PathSampler, const M: bool,
     // In place: the bsdf estimator's passes only (book one's scenes, and
     // any other scene this classification serves, rendered with it); under
     // the book and nee-mis estimators every packet is queued, as before.
-    debug_assert!(Dirs::of(prep) == Dirs::Bsdf || !in_place.contains(&true));
+    debug_assert!(prep.plan.directions() == Directions::Bsdf || !in_place.contains(&true));
     let mut placed = 0;
     for i in (0..n).step_by(W::LANES) {
         let hit = W::load_u_pow2(&ws.hit, i);
@@ -140,38 +140,13 @@ fn scatter_in_place<W: Wide, P: Probe, S: PathSampler, const M: bool>(
 ) {
     const LAMBERTIAN: u32 = Kind::Lambertian as u32;
     const METAL: u32 = Kind::Metal as u32;
-    let bsdf = Dirs::Bsdf;
+    let bsdf = Directions::Bsdf;
     match kind {
         LAMBERTIAN => scatter::<W, P, S, M>(b, ws, Kind::Lambertian, run, false, bsdf, probe),
         METAL => scatter::<W, P, S, M>(b, ws, Kind::Metal, run, false, bsdf, probe),
         _ => {
             debug_assert_eq!(kind, Kind::Dielectric as u32);
             scatter::<W, P, S, M>(b, ws, Kind::Dielectric, run, false, bsdf, probe)
-        }
-    }
-}
-
-/// How a diffuse vertex chooses its direction: the estimator of the render,
-/// a literal at each scatter pass's call, so that each is compiled apart.
-#[derive(Clone, Copy, Debug, PartialEq, Eq)]
-pub(super) enum Dirs {
-    /// The material's density (`bsdf`).
-    Bsdf,
-    /// The book's mixture.
-    Book,
-    /// The material's density, and a light sample on the shadow queue (`nee-mis`).
-    Nee,
-}
-
-impl Dirs {
-    /// The plan's.
-    pub(super) fn of(prep: &Prepared) -> Self {
-        if prep.plan.sample_toward > 0 {
-            Dirs::Book
-        } else if prep.plan.nee > 0 {
-            Dirs::Nee
-        } else {
-            Dirs::Bsdf
         }
     }
 }

@@ -46,7 +46,7 @@ mod workspace;
 
 use crate::choice::Mode;
 use crate::estimator::{
-    book_mixture, cosine_pdf, mis_bsdf, next_event, roulette, roulette_applies, shadow_tmax, ISOTROPIC_PDF,
+    cosine_pdf, mis_bsdf, roulette, roulette_applies, shadow_tmax, Directions, Toward, ISOTROPIC_PDF,
 };
 use crate::film::TileFilm;
 use crate::geometry::{
@@ -330,7 +330,7 @@ fn classify_bounce<W: Wide, P: Probe, S: PathSampler, const M: bool>(
     // The kinds whose pass is `scatter` alone: not lights, not a
     // lambertian whose texture passes must run first.
     let in_place = Kind::SURFACES.map(|k| {
-        path && Dirs::of(prep) == Dirs::Bsdf
+        path && prep.plan.directions() == Directions::Bsdf
             && prep.plan.kinds.contains(k)
             && match k {
                 Kind::Lambertian => prep.plan.textures.is_empty(),
@@ -420,17 +420,17 @@ fn material_passes<W: Wide, P: Probe, S: PathSampler, const M: bool>(
             // per ray).
             Mode::Path if prep.plan.kinds.contains(kind) && prep.plan.sample_toward > 0 => {
                 for_packets::<W, P>(q, qlen, probe, |at, probe| {
-                    scatter::<W, P, S, M>(b, ws, kind, at, false, Dirs::Book, probe)
+                    scatter::<W, P, S, M>(b, ws, kind, at, false, Directions::Book, probe)
                 });
             }
             Mode::Path if prep.plan.kinds.contains(kind) && nee => {
                 for_packets::<W, P>(q, qlen, probe, |at, probe| {
-                    scatter::<W, P, S, M>(b, ws, kind, at, false, Dirs::Nee, probe)
+                    scatter::<W, P, S, M>(b, ws, kind, at, false, Directions::Nee, probe)
                 });
             }
             Mode::Path if prep.plan.kinds.contains(kind) => {
                 for_packets::<W, P>(q, qlen, probe, |at, probe| {
-                    scatter::<W, P, S, M>(b, ws, kind, at, false, Dirs::Bsdf, probe)
+                    scatter::<W, P, S, M>(b, ws, kind, at, false, Directions::Bsdf, probe)
                 });
             }
             Mode::Path => debug_assert!(qlen == 0, "the plan left out a kind that was hit"),

@@ -108,19 +108,14 @@ pub(super) fn isotropic_pass<W: Wide, P: Probe, S: PathSampler, const M: bool>(
         let dir = unit_vector(&mut rng);
         let thr = at.v3(&cur.thr);
         let nee = prep.plan.nee > 0;
-        let (dir, albedo) = if prep.plan.sample_toward == 0 {
-            if nee && depth + 1 < prep.settings.max_depth {
-                let (ld, t, carry) =
-                    next_event(&prep.emitters, p, |_| W::splat(ISOTROPIC_PDF), prep.bounces.light(depth), &mut rng);
-                let c = thr.mul_elem(albedo.mul_elem(carry));
-                queue_shadow::<W, M>(ws, at, Shadow { o: p, d: ld, tmax: shadow_tmax(t, W::splat(0.0)), c });
-            }
-            (dir, albedo)
-        } else {
-            let (dir, w) =
-                book_mixture(&prep.lights, p, dir, |_| W::splat(ISOTROPIC_PDF), prep.bounces.light(depth), &mut rng);
-            (dir, albedo * w)
-        };
+        let toward = Toward { lights: &prep.lights, emitters: &prep.emitters, dim: prep.bounces.light(depth) };
+        let send = depth + 1 < prep.settings.max_depth;
+        let vx = prep.plan.directions().at(toward, p, dir, |_| W::splat(ISOTROPIC_PDF), send, &mut rng);
+        if let Some((ld, t, carry)) = vx.light {
+            let c = thr.mul_elem(albedo.mul_elem(carry));
+            queue_shadow::<W, M>(ws, at, Shadow { o: p, d: ld, tmax: shadow_tmax(t, W::splat(0.0)), c });
+        }
+        let (dir, albedo) = (vx.dir, albedo * vx.weight);
         let thr = thr.mul_elem(albedo);
         let all = W::mask_from_bits(u32::MAX);
         let pdf = nee.then(|| W::splat(ISOTROPIC_PDF));
@@ -192,7 +187,7 @@ pub(super) fn textured_lambertian_pass<W: Wide, P: Probe, S: PathSampler, const 
         });
     }
     ws.tex_queue = Some(tq);
-    let dirs = Dirs::of(prep);
+    let dirs = prep.plan.directions();
     for_packets::<W, P>(queue, len, probe, |at, probe| {
         scatter::<W, P, S, M>(b, ws, Kind::Lambertian, at, true, dirs, probe)
     });

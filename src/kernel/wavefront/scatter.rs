@@ -12,16 +12,16 @@ pub(super) fn scatter<W: Wide, P: Probe, S: PathSampler, const M: bool>(
     kind: Kind,
     at: impl Packet<W>,
     textured: bool,
-    dirs: Dirs,
+    dirs: Directions,
     probe: &mut P,
 ) {
     let Bounce { prep, sampler, depth } = b;
     // `dirs`: the plan's estimator (its sampler layout, its mixture or its
     // light sample at lambertian vertices); a literal at the call, so each
     // is compiled apart.
-    debug_assert_eq!(dirs == Dirs::Book, prep.plan.sample_toward > 0);
-    debug_assert_eq!(dirs == Dirs::Nee, prep.plan.nee > 0);
-    let dims = if dirs == Dirs::Bsdf { Bounces::BSDF } else { prep.bounces };
+    debug_assert_eq!(dirs == Directions::Book, prep.plan.sample_toward > 0);
+    debug_assert_eq!(dirs == Directions::Nee, prep.plan.nee > 0);
+    let dims = if dirs == Directions::Bsdf { Bounces::BSDF } else { prep.bounces };
     let Hits { d, srf, albedo, param } = surfaces::<W, P, M>(prep, ws, at, probe);
     // A textured lambertian's record has parameter 1: its albedo is the one
     // its texture pass wrote.
@@ -34,24 +34,15 @@ pub(super) fn scatter<W: Wide, P: Probe, S: PathSampler, const M: bool>(
     let (dir, alive, albedo) = match kind {
         Kind::Lambertian => {
             let dir = lambertian(srf.n, &mut rng);
-            match dirs {
-                Dirs::Bsdf => (dir, all, albedo),
-                Dirs::Book => {
-                    let (dir, w) =
-                        book_mixture(&prep.lights, srf.p, dir, |d| cosine_pdf(srf.n, d), dims.light(depth), &mut rng);
-                    (dir, all, albedo * w)
-                }
-                Dirs::Nee => {
-                    if depth + 1 < prep.settings.max_depth {
-                        let (ld, t, carry) =
-                            next_event(&prep.emitters, srf.p, |d| cosine_pdf(srf.n, d), dims.light(depth), &mut rng);
-                        let c = thr.mul_elem(albedo.mul_elem(carry));
-                        let shadow = Shadow { o: spawn(&srf, ld), d: ld, tmax: shadow_tmax(t, srf.offset), c };
-                        queue_shadow::<W, M>(ws, at, shadow);
-                    }
-                    (dir, all, albedo)
-                }
+            let toward = Toward { lights: &prep.lights, emitters: &prep.emitters, dim: dims.light(depth) };
+            let send = depth + 1 < prep.settings.max_depth;
+            let vx = dirs.at(toward, srf.p, dir, |d| cosine_pdf(srf.n, d), send, &mut rng);
+            if let Some((ld, t, carry)) = vx.light {
+                let c = thr.mul_elem(albedo.mul_elem(carry));
+                let shadow = Shadow { o: spawn(&srf, ld), d: ld, tmax: shadow_tmax(t, srf.offset), c };
+                queue_shadow::<W, M>(ws, at, shadow);
             }
+            (vx.dir, all, albedo * vx.weight)
         }
         Kind::Metal => {
             let (dir, alive) = metal(d, srf.n, param, &mut rng);
@@ -66,7 +57,8 @@ pub(super) fn scatter<W: Wide, P: Probe, S: PathSampler, const M: bool>(
     // Under nee-mis, the density of the direction, for the weight of a light
     // it reaches: the cosine lobe's, 0 for a specular bounce.
     let pdf =
-        (dirs == Dirs::Nee).then(|| if kind == Kind::Lambertian { cosine_pdf(srf.n, dir) } else { W::splat(0.0) });
+        (dirs == Directions::Nee)
+            .then(|| if kind == Kind::Lambertian { cosine_pdf(srf.n, dir) } else { W::splat(0.0) });
     let next = Scattered { thr, alive, o: spawn(&srf, dir), dir, pdf };
     continue_paths::<W, S, M>(prep, ws, at, depth, dims, rng, next);
 }
