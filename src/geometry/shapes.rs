@@ -114,7 +114,7 @@ impl Shapes {
         let mut best = Closest::live(live);
         match &self.trees.spheres {
             Some(b) if R::LANES > 1 && b.built_for() == Walk::Wide8 => R::closest_wide8(b, o, d, &mut best, counter),
-            Some(b) => b.walk::<R, C, false>(o, d, R::splat(0.0), &mut best, counter),
+            Some(b) => best = b.walk::<R, C, false>(o, d, R::splat(0.0), best, counter),
             None => self.spheres.brute::<R, C, false>(o, d, R::splat(0.0), &mut best, counter),
         }
         if !M && !self.others {
@@ -176,7 +176,7 @@ fn search<K: Primitive, R: Walker, C: Counter, const M: bool, const ANY: bool>(
         return;
     }
     match tree {
-        Some(b) => b.walk::<R, C, ANY>(o, d, time, best, counter),
+        Some(b) => *best = b.walk::<R, C, ANY>(o, d, time, *best, counter),
         None => prims.brute::<R, C, ANY>(o, d, time, best, counter),
     }
 }

@@ -58,10 +58,9 @@ fn walk<L: rtow::internals::geometry::Leaf, R: Walker>(
     bvh: &Bvh<L>,
     o: V3<R>,
     d: V3<R>,
-    mut best: Closest<R>,
+    best: Closest<R>,
 ) -> Closest<R> {
-    bvh.walk::<R, (), false>(o, d, R::splat(0.0), &mut best, &mut ());
-    best
+    bvh.walk::<R, (), false>(o, d, R::splat(0.0), best, &mut ())
 }
 
 /// Up to `W::LANES` rays as a packet (the last one repeated in the lanes beyond).

@@ -145,7 +145,7 @@ proptest! {
         };
         for &(o, d, t) in &rays {
             let mut tree = Closest::<f32>::none();
-            bvh.walk::<f32, (), false>(o, d, t, &mut tree, &mut ());
+            tree = bvh.walk::<f32, (), false>(o, d, t, tree, &mut ());
             prop_assert_eq!(brute(o, d, t), (tree.index, tree.t.to_bits()));
         }
         packets::<f32x8>(&bvh, &rays, &brute)?;
@@ -165,7 +165,7 @@ fn packets<W: Wide>(
         let d = V3::new(lanes(&|k| at(k).1.x), lanes(&|k| at(k).1.y), lanes(&|k| at(k).1.z));
         let t = lanes(&|k| at(k).2);
         let mut best = Closest::<W>::none();
-        bvh.walk::<W, (), false>(o, d, t, &mut best, &mut ());
+        best = bvh.walk::<W, (), false>(o, d, t, best, &mut ());
         for (k, &(o, d, t)) in chunk.iter().enumerate() {
             prop_assert_eq!(brute(o, d, t), (W::lane_u(best.index, k), best.t.lane(k).to_bits()), "lane {}", k);
         }
