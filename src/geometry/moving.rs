@@ -8,7 +8,7 @@
 //! multiply-add anywhere, so the scalar kernel and every lane width compute
 //! the same bits). The hit test is then the static sphere test
 //! ([`super::sphere_disc`], [`super::sphere_t`]) with that centre, and the
-//! surface is [`super::surface`] with that centre: the hit of a moving sphere
+//! surface is [`super::surface()`] with that centre: the hit of a moving sphere
 //! at time `t` *is* the hit of the static sphere at `c(t)`, bit for bit
 //! (`tests/suite/motion.rs`). At `t = 0`, `c0 + 0 v` is exactly `c0`.
 //!

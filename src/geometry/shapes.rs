@@ -6,7 +6,7 @@
 //! of the ones before; the tie rule ([`Closest::offer`]) makes the answer
 //! independent of that order. The spheres come first (the one kind with a
 //! second walk, `--accel bvh-ray`); the others are registered in
-//! [`for_each_kind_after_spheres`], each searched only when it has
+//! `for_each_kind_after_spheres`, each searched only when it has
 //! primitives, and a scene of spheres alone stops after them. Adding a kind
 //! is its own file (its [`Primitive`] and [`super::Leaf`]), a field here and in
 //! [`Trees`], and a line in that list.

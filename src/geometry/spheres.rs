@@ -16,7 +16,7 @@
 //! equal numbers.
 //!
 //! Self-intersection is prevented by where a new ray starts, not by a magic
-//! `t_min`: see [`surface`] and [`spawn`]. Hits must have `t > 0`.
+//! `t_min`: see [`surface`] and [`spawn`](super::spawn). Hits must have `t > 0`.
 //!
 //! # Error bounds
 //!
@@ -51,7 +51,7 @@
 //!   The bound grows without limit when `|q| -> 0`, i.e. for an origin on the
 //!   surface and a tangent direction, where both roots meet at `t = 0` and the
 //!   returned `t` is meaningless (`rtow stress` measures such hits up to a few
-//!   radii away). Rendering never asks that question: [`spawn`] moves every new
+//!   radii away). Rendering never asks that question: [`spawn`](super::spawn) moves every new
 //!   origin off the surface by more than the bound on `c'`.
 
 use super::hit::Closest;
@@ -302,7 +302,7 @@ impl Primitive for Spheres {
 ///
 /// # The offset
 ///
-/// A new ray starts at `p +- offset n` (see [`spawn`]). Its origin must be on
+/// A new ray starts at `p +- offset n` (see [`spawn`](super::spawn)). Its origin must be on
 /// the intended side of the sphere *as the next intersection test sees it*:
 /// the test's inside/outside decision (the sign of `c' = |f|^2 - r^2`) errs by
 /// at most `5u |f|^2 + u r^2`, i.e. `3u |r|` in distance at `|f| ~ |r|`; the
