@@ -31,7 +31,7 @@ use crate::kernel::Kernel;
 use crate::limits::{self, MAX_TILE};
 use crate::plan::{Plan, Prepared};
 use crate::sampling::Sampler;
-use crate::scene::{Scene, SceneSource};
+use crate::scene::{Flat, Scene, SceneSource};
 use crate::settings::Settings;
 use std::path::Path;
 use std::sync::{Arc, OnceLock};
@@ -201,7 +201,21 @@ pub struct Job {
     plan: Plan,
     /// The image textures' files, read when the job was resolved.
     images: Arc<Images>,
-    prepared: OnceLock<(Prepared, f64)>,
+    /// The scene flattened into world-space primitives, once per scene
+    /// (shared by the jobs derived from this one).
+    flat: Arc<Flat>,
+    /// The scene laid out for the kernels, built on first use; shared by a
+    /// derived job whose settings, plan and estimator are this one's (another
+    /// kernel, say), which then builds no tree of its own.
+    prepared: Arc<OnceLock<(Prepared, f64)>>,
+}
+
+/// What a derived job takes from the job it derives from instead of
+/// reading or computing it again.
+#[derive(Default)]
+struct Known {
+    images: Option<Arc<Images>>,
+    flat: Option<Arc<Flat>>,
 }
 
 impl Job {
@@ -231,19 +245,24 @@ impl Job {
 
     /// The same scene (and its images, read once) with other overrides and options.
     pub fn with(&self, overrides: &Overrides, options: &RenderOptions) -> Result<Job> {
-        Job::resolve_with(&self.scene, None, Some(self.images.clone()), overrides, options)
+        let known = Known { images: Some(self.images.clone()), flat: Some(self.flat.clone()) };
+        let mut job = Job::resolve_with(&self.scene, None, known, overrides, options)?;
+        if (job.settings, &job.plan, job.estimator()) == (self.settings, &self.plan, self.estimator()) {
+            job.prepared = self.prepared.clone();
+        }
+        Ok(job)
     }
 
     fn resolve(scene: &Scene, origin: Option<&Path>, overrides: &Overrides, options: &RenderOptions) -> Result<Job> {
-        Job::resolve_with(scene, origin, None, overrides, options)
+        Job::resolve_with(scene, origin, Known::default(), overrides, options)
     }
 
     /// Resolves the job; reads the scene's images (beside `origin`, else in
-    /// `RTOW_IMAGES`) unless `images` already holds them.
+    /// `RTOW_IMAGES`) and flattens it unless `known` already holds them.
     fn resolve_with(
         scene: &Scene,
         origin: Option<&Path>,
-        images: Option<Arc<Images>>,
+        known: Known,
         overrides: &Overrides,
         options: &RenderOptions,
     ) -> Result<Job> {
@@ -261,7 +280,8 @@ impl Job {
         options.validate()?;
         let requested = *options;
         let (options, mut warnings) = options.effective(&settings);
-        let plan = prepare::plan(scene, &settings, options.accel);
+        let flat = known.flat.unwrap_or_else(|| Arc::new(scene.flatten()));
+        let plan = prepare::plan(scene, &flat, &settings, options.accel);
         if plan.sample_toward > limits::MAX_SAMPLED_SHAPES {
             return Err(Error::invalid(
                 "estimator",
@@ -298,7 +318,7 @@ impl Job {
                  list): every direction comes from the materials, as under bsdf",
             ));
         }
-        let images = match images {
+        let images = match known.images {
             Some(i) => i,
             None => Arc::new(Images::load(scene, origin).map_err(in_file)?),
         };
@@ -315,7 +335,8 @@ impl Job {
             kernel: Kernel::resolve(options.kernel),
             plan,
             images,
-            prepared: OnceLock::new(),
+            flat,
+            prepared: Arc::new(OnceLock::new()),
         })
     }
 
@@ -411,7 +432,14 @@ impl Job {
     fn prepared_timed(&self) -> &(Prepared, f64) {
         self.prepared.get_or_init(|| {
             let t = Instant::now();
-            let p = prepare::prepare(&self.scene, &self.images, self.settings, self.plan.clone(), self.estimator());
+            let p = prepare::prepare(
+                &self.scene,
+                &self.flat,
+                &self.images,
+                self.settings,
+                self.plan.clone(),
+                self.estimator(),
+            );
             (p, t.elapsed().as_secs_f64())
         })
     }
@@ -453,6 +481,25 @@ impl Job {
 mod tests {
     use super::*;
     use crate::scene::{preset, RenderTable};
+
+    /// A derived job that only runs another kernel shares the scene as laid
+    /// out (trees included), built once; one whose settings or options change
+    /// what the kernels read lays it out anew.
+    #[test]
+    fn derived_jobs_share_the_prepared_scene_when_it_is_theirs() {
+        let small = Overrides { width: Some(32), height: Some(18), spp: Some(1), ..Default::default() };
+        let job = Job::new(&preset("final").unwrap(), &small, &RenderOptions::default()).unwrap();
+        let scalar = job.with_options(&RenderOptions { kernel: KernelChoice::Scalar, ..Default::default() }).unwrap();
+        assert!(std::ptr::eq(job.prepared(), scalar.prepared()), "another kernel: the same prepared scene");
+        assert!(Arc::ptr_eq(&job.flat, &scalar.flat), "one flattening per scene");
+        let wider = job.with(&Overrides { width: Some(64), ..small }, &RenderOptions::default()).unwrap();
+        assert!(!std::ptr::eq(job.prepared(), wider.prepared()), "another size: its own camera");
+        assert_eq!(wider.prepared().settings.width, 64);
+        let roulette = RenderOptions { roulette: Some(Roulette::new(3).unwrap()), ..Default::default() };
+        let rr = job.with_options(&roulette).unwrap();
+        assert!(!std::ptr::eq(job.prepared(), rr.prepared()), "another estimator: its own");
+        assert!(rr.prepared().estimator.roulette.is_some());
+    }
 
     #[test]
     fn flags_win_over_the_book_which_wins_over_the_scene() {

@@ -70,8 +70,7 @@ fn choose_quad_accel(choice: AccelChoice, quads: usize, mode: Mode) -> Option<Ac
 }
 
 /// The plan (cheap: no geometry is built).
-pub(super) fn plan(scene: &Scene, settings: &Settings, accel: AccelChoice) -> Plan {
-    let flat = scene.flatten();
+pub(super) fn plan(scene: &Scene, flat: &Flat, settings: &Settings, accel: AccelChoice) -> Plan {
     let sample_toward = match (scene.mode, settings.estimator) {
         (Mode::Path, EstimatorChoice::Book) => scene.sampled_shapes(&flat).len(),
         _ => 0,
@@ -173,12 +172,12 @@ pub(super) fn view(c: &Camera) -> View {
 /// Lays a validated scene out for the kernels, as `plan` says.
 pub(super) fn prepare(
     scene: &Scene,
+    flat: &Flat,
     images: &Images,
     settings: Settings,
     plan: Plan,
     estimator: Estimator,
 ) -> Prepared {
-    let flat = scene.flatten();
     let view = view(&scene.camera);
     let extent = extent(scene, &flat, &view, &plan);
     let mut tables = Tables { images, materials: MaterialTables::default(), textures: TextureTables::default() };
@@ -430,35 +429,36 @@ mod tests {
     #[test]
     fn the_plan_takes_only_the_kinds_a_scene_uses() {
         let ch07 = preset("ch07-diffuse").unwrap();
-        let p = plan(&ch07, &settings(4), AccelChoice::Auto);
+        let p = plan(&ch07, &ch07.flatten(), &settings(4), AccelChoice::Auto);
         assert_eq!(p.kinds.iter().collect::<Vec<_>>(), [Kind::Lambertian]);
         let fin = preset("final").unwrap();
-        let p = plan(&fin, &settings(4), AccelChoice::Auto);
+        let p = plan(&fin, &fin.flatten(), &settings(4), AccelChoice::Auto);
         assert_eq!(p.kinds.iter().collect::<Vec<_>>(), [Kind::Lambertian, Kind::Metal, Kind::Dielectric]);
         assert_eq!(p.quads, None);
         let cornell = preset("nw-cornell-box").unwrap();
-        let p = plan(&cornell, &settings(4), AccelChoice::Auto);
+        let p = plan(&cornell, &cornell.flatten(), &settings(4), AccelChoice::Auto);
         assert_eq!(p.kinds.iter().collect::<Vec<_>>(), [Kind::Lambertian, Kind::DiffuseLight]);
         // Six walls and the light (below the crossover) and two boxes, tested whole.
         assert_eq!((p.quads, p.cuboids), (Some(Accel::Brute), Some(Accel::Brute)));
-        let p = plan(&cornell, &settings(4), AccelChoice::Bvh);
+        let p = plan(&cornell, &cornell.flatten(), &settings(4), AccelChoice::Bvh);
         assert_eq!((p.quads, p.cuboids), (Some(Accel::BvhPackets), Some(Accel::BvhPackets)));
         // The book's final scene: its one light quad, and 400 ground boxes in a tree of their own.
-        let p = plan(&preset("nw-final").unwrap(), &settings(4), AccelChoice::Auto);
+        let nw = preset("nw-final").unwrap();
+        let p = plan(&nw, &nw.flatten(), &settings(4), AccelChoice::Auto);
         assert_eq!((p.quads, p.cuboids), (Some(Accel::Brute), Some(Accel::BvhPackets)));
-        assert_eq!(plan(&fin, &settings(4), AccelChoice::Auto).cuboids, None);
+        assert_eq!(plan(&fin, &fin.flatten(), &settings(4), AccelChoice::Auto).cuboids, None);
         let normals = preset("ch05-normals").unwrap();
-        assert!(plan(&normals, &settings(4), AccelChoice::Auto).kinds.is_empty());
+        assert!(plan(&normals, &normals.flatten(), &settings(4), AccelChoice::Auto).kinds.is_empty());
     }
 
     #[test]
     fn pinhole_or_lens_and_jitter_follow_the_scene() {
         let fin = preset("final").unwrap();
-        assert!(plan(&fin, &settings(4), AccelChoice::Auto).lens);
+        assert!(plan(&fin, &fin.flatten(), &settings(4), AccelChoice::Auto).lens);
         let ch10 = preset("ch10-wide-fov").unwrap();
-        let p = plan(&ch10, &settings(1), AccelChoice::Auto);
+        let p = plan(&ch10, &ch10.flatten(), &settings(1), AccelChoice::Auto);
         assert!(!p.lens && !p.jitter);
-        assert!(plan(&ch10, &settings(2), AccelChoice::Auto).jitter);
+        assert!(plan(&ch10, &ch10.flatten(), &settings(2), AccelChoice::Auto).jitter);
     }
 
     #[test]
