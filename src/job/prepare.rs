@@ -72,11 +72,11 @@ fn choose_quad_accel(choice: AccelChoice, quads: usize, mode: Mode) -> Option<Ac
 /// The plan (cheap: no geometry is built).
 pub(super) fn plan(scene: &Scene, flat: &Flat, settings: &Settings, accel: AccelChoice) -> Plan {
     let sample_toward = match (scene.mode, settings.estimator) {
-        (Mode::Path, EstimatorChoice::Book) => scene.sampled_shapes(&flat).len(),
+        (Mode::Path, EstimatorChoice::Book) => scene.sampled_shapes(flat).len(),
         _ => 0,
     };
     let nee = match (scene.mode, settings.estimator) {
-        (Mode::Path, EstimatorChoice::NeeMis) => Scene::emitter_shapes(&flat).len(),
+        (Mode::Path, EstimatorChoice::NeeMis) => Scene::emitter_shapes(flat).len(),
         _ => 0,
     };
     let kinds: KindSet = match scene.mode {
@@ -114,7 +114,7 @@ pub(super) fn plan(scene: &Scene, flat: &Flat, settings: &Settings, accel: Accel
         moving: choose_quad_accel(accel, flat.spheres.iter().filter(|s| s.center1.is_some()).count(), scene.mode),
         sample_toward,
         nee,
-        film_exponent: Scale::for_brightness(brightest(scene, &flat) as f64).exponent(),
+        film_exponent: Scale::for_brightness(brightest(scene, flat) as f64).exponent(),
     }
 }
 
@@ -179,18 +179,18 @@ pub(super) fn prepare(
     estimator: Estimator,
 ) -> Prepared {
     let view = view(&scene.camera);
-    let extent = extent(scene, &flat, &view, &plan);
+    let extent = extent(scene, flat, &view, &plan);
     let mut tables = Tables { images, materials: MaterialTables::default(), textures: TextureTables::default() };
-    let (spheres, moving) = spheres(&flat, &mut tables);
-    let (quads, cuboids) = quads(&flat, extent, &mut tables);
+    let (spheres, moving) = spheres(flat, &mut tables);
+    let (quads, cuboids) = quads(flat, extent, &mut tables);
     let Tables { materials, textures, .. } = tables;
-    let media = if plan.kinds.contains(Kind::Isotropic) { media(&flat) } else { Media::default() };
+    let media = if plan.kinds.contains(Kind::Isotropic) { media(flat) } else { Media::default() };
     let shapes = shapes(spheres, quads, cuboids, moving, &materials, &plan, extent);
     let camera =
         PreparedCamera { lens: plan.lens, ..PreparedCamera::new(&view, settings.width, settings.height, plan.jitter) };
     let mut lights = Lights::default();
     if plan.sample_toward > 0 {
-        for shape in scene.sampled_shapes(&flat) {
+        for shape in scene.sampled_shapes(flat) {
             match shape {
                 Shape::Quad { q, u, v } => lights.quads.push(LightQuad::new(q, u, v)),
                 Shape::Sphere { center, radius } => lights.spheres.push(LightSphere { c: center, r: radius.abs() }),
