@@ -77,12 +77,6 @@ impl Hit {
         };
         Hit { kind, index: (h - kind.base()) as usize }
     }
-
-    /// The hit index of primitive `index` of `kind`.
-    #[inline(always)]
-    pub fn id(kind: HitKind, index: usize) -> u32 {
-        kind.base() + index as u32
-    }
 }
 
 /// The closest hit found so far by a group of rays (one, or a packet), and

@@ -18,7 +18,7 @@
 //! union of its boxes at `t = 0` and `t = 1`), so traversal ignores time.
 
 use super::hit::{Closest, MOVING_BASE};
-use super::primitive::{brute, Leaf, Primitive};
+use super::primitive::{Leaf, Primitive};
 use super::quads::{next_down, next_up};
 use super::slab::Aabb;
 use super::spheres::{test_sphere, Shade, Spheres};
@@ -138,20 +138,5 @@ impl Primitive for MovingSpheres {
     fn bounds(&self, i: usize, pad: f32) -> Aabb {
         let (lo, hi) = self.swept(i);
         Aabb { min: lo.map(|x| next_down(x) - pad), max: hi.map(|x| next_up(x) + pad) }
-    }
-
-    #[inline(always)]
-    fn brute<R: Real, C: Counter, const ANY: bool>(
-        &self,
-        o: V3<R>,
-        d: V3<R>,
-        time: R,
-        best: &mut Closest<R>,
-        counter: &mut C,
-    ) {
-        brute::<R, C, ANY>(self.s.len, best, counter, |i, best, tally| {
-            let c = centre_at(V3::splat3(self.c0(i)), V3::splat3(self.v(i)), time);
-            test_sphere(best, o, d, c, R::splat(self.s.r2[i]), MOVING_BASE + i as u32, tally);
-        });
     }
 }

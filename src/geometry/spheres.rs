@@ -55,7 +55,7 @@
 //!   origin off the surface by more than the bound on `c'`.
 
 use super::hit::Closest;
-use super::primitive::{brute, Leaf, Primitive};
+use super::primitive::{Leaf, Primitive};
 use super::slab::Aabb;
 use super::surface::{Surface, OFFSET_ULPS};
 use super::work::{Counter, Work};
@@ -271,21 +271,6 @@ impl Primitive for Spheres {
         (0..self.len).fold(extent.abs(), |d, i| {
             d.max(self.cx[i].abs().max(self.cy[i].abs()).max(self.cz[i].abs()) + self.r[i].abs())
         })
-    }
-
-    #[inline(always)]
-    fn brute<R: Real, C: Counter, const ANY: bool>(
-        &self,
-        o: V3<R>,
-        d: V3<R>,
-        _time: R,
-        best: &mut Closest<R>,
-        counter: &mut C,
-    ) {
-        brute::<R, C, ANY>(self.len, best, counter, |i, best, tally| {
-            let c = V3::new(R::splat(self.cx[i]), R::splat(self.cy[i]), R::splat(self.cz[i]));
-            test_sphere(best, o, d, c, R::splat(self.r2[i]), i as u32, tally);
-        });
     }
 }
 
