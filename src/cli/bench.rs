@@ -61,6 +61,15 @@ pub struct BenchArgs {
     /// in a `phases` build (the counted runs take about twice as long).
     #[arg(long, requires = "instructions")]
     branch_sim: bool,
+    /// With --instructions --baseline: the rise in a kernel's count that still
+    /// passes, in percent of the baseline's (0: exact; the CI gate allows 0.5,
+    /// for the C library's memcpy and the like, which differ between machines).
+    #[arg(long, value_name = "PERCENT", default_value_t = 0.0, allow_negative_numbers = true, requires_all = ["instructions", "baseline"])]
+    max_rise: f64,
+    /// With --instructions --save: one line kept in the baseline saying why
+    /// these counts are the baseline (what a committed baseline's change was for).
+    #[arg(long, value_name = "TEXT", requires_all = ["instructions", "save"])]
+    reason: Option<String>,
     /// The process --instructions counts: render once, print the result.
     #[arg(long, hide = true)]
     instructions_child: bool,
@@ -146,6 +155,10 @@ fn write_report(table: &str, json: &str, mut outputs: Outputs, ids: Vec<OutputId
 
 /// `--instructions`: each kernel counted under callgrind; against a baseline, exactly.
 fn count_instructions(a: &BenchArgs, source: &SceneSource, job: &Job) -> Result<bool> {
+    instructions::check_max_rise(a.max_rise)?;
+    if let Some(r) = &a.reason {
+        instructions::check_reason(r)?;
+    }
     let baseline = a.baseline.as_deref().map(InstructionsBaseline::load).transpose()?;
     if let Some(b) = &baseline {
         b.check(&source.name, job.settings(), job.threads(), &a.kernels)?;
@@ -154,6 +167,7 @@ fn count_instructions(a: &BenchArgs, source: &SceneSource, job: &Job) -> Result<
     let program = std::env::current_exe().map_err(|e| Error::System(format!("cannot find this executable: {e}")))?;
     let child_args = |job: &Job| counted_command(&a.scene, job);
     rtow::instruments::callgrind::valgrind_version()?;
+    rtow::instruments::callgrind::check_countable_build()?;
     let s = job.settings();
     tell!(
         "bench --instructions {}: {}x{} {} spp depth {} seed {}, {} sampler, {} estimator, {} thread(s), built for \
@@ -170,10 +184,11 @@ fn count_instructions(a: &BenchArgs, source: &SceneSource, job: &Job) -> Result<
         rtow::isa()
     );
     let process = CountedProcess { program: &program, child_args: &child_args, branch_sim: a.branch_sim };
-    let report = instructions::count(job, &source.name, &a.kernels, &process, tell_count)?;
+    let mut report = instructions::count(job, &source.name, &a.kernels, &process, tell_count)?;
+    report.reason = a.reason.clone();
     write_report(&report.table(), &report.to_json(), outputs, ids)?;
     let Some(b) = baseline else { return Ok(true) };
-    Ok(print_instructions_comparison(&report, &b))
+    Ok(print_instructions_comparison(&report, &b, a.max_rise))
 }
 
 /// The process `--instructions` counts: this very command line's job (the
@@ -216,7 +231,7 @@ fn tell_count(e: &InstructionsEntry) {
 
 /// Prints each kernel's count against the instruction baseline (after a note
 /// if another compiler built the baseline); false on a regression.
-fn print_instructions_comparison(report: &InstructionsReport, b: &InstructionsBaseline) -> bool {
+fn print_instructions_comparison(report: &InstructionsReport, b: &InstructionsBaseline, max_rise: f64) -> bool {
     if b.provenance.rustc != report.provenance.rustc {
         say!(
             "note: the baseline was built with {}, this run with {}: counts depend on the compiler",
@@ -224,13 +239,17 @@ fn print_instructions_comparison(report: &InstructionsReport, b: &InstructionsBa
             report.provenance.rustc
         );
     }
+    if let Some(r) = &b.reason {
+        say!("baseline: {}", rtow::output::clip_to(r, instructions::MAX_REASON_CHARS));
+    }
     let mut ok = true;
-    for c in instructions::compare(report, b) {
+    for c in instructions::compare(report, b, max_rise) {
         let delta = c.instructions as i128 - c.baseline as i128;
         let verdict = match (c.image_same, delta) {
             (false, _) => "REGRESSION (the image changed)".to_string(),
             (true, 0) => "ok (identical)".to_string(),
-            (true, d) if d > 0 => format!("REGRESSION ({d:+} instructions)"),
+            (true, d) if c.regressed => format!("REGRESSION ({d:+} instructions, {max_rise}% allowed)"),
+            (true, d) if d > 0 => format!("ok ({d:+} instructions, within the {max_rise}% allowed)"),
             (true, d) => format!("ok ({d:+} instructions)"),
         };
         say!(

@@ -129,8 +129,10 @@ fn run(cli: Cli) -> Result<bool> {
         }
         Command::Stress { quick, seed, threads } => cmd_stress(quick, seed, threads),
         Command::Export { preset, output } => {
-            let s = scene::preset(&preset)
-                .ok_or_else(|| Error::Input(format!("unknown preset '{preset}' (see `rtow scenes`)")))?;
+            let s = scene::preset(&preset).ok_or_else(|| {
+                let hint = scene::nearest_preset(&preset).map_or(String::new(), |p| format!("did you mean '{p}'? "));
+                Error::Input(format!("unknown preset '{}' ({hint}see `rtow scenes`)", rtow::output::clip(&preset)))
+            })?;
             scene::save_scene(&s, &output).map(|_| true)
         }
     }

@@ -290,6 +290,22 @@ pub fn valgrind_version() -> Result<String> {
     Ok(String::from_utf8_lossy(&out.stdout).trim().to_string())
 }
 
+/// Refuses a build valgrind cannot run: one compiled for AVX-512 (a native
+/// build on a CPU that has it), which valgrind does not know; says how to
+/// build one it can count.
+pub fn check_countable_build() -> Result<()> {
+    if cfg!(target_feature = "avx512f") {
+        return Err(Error::System(
+            "this build uses AVX-512 (built for this CPU), which valgrind does not know: count a build for \
+             x86-64-v3: RUSTFLAGS=\"-C target-cpu=x86-64-v3\" cargo build --release --target x86_64-unknown-linux-gnu \
+             --target-dir target/isa-v3, then run target/isa-v3/x86_64-unknown-linux-gnu/release/rtow bench ... \
+             --instructions (rtow's own gate, benches/instructions/gate, builds it itself)"
+                .into(),
+        ));
+    }
+    Ok(())
+}
+
 /// The callgrind command line that counts `program` with `args`, writing
 /// the profile to `profile`; `branch_sim` adds the branch predictor's simulation.
 pub fn command_line(program: &Path, args: &[OsString], profile: &Path, branch_sim: bool) -> Vec<OsString> {

@@ -103,6 +103,28 @@ pub struct InstructionsReport {
     pub valgrind: String,
     pub kernels: Vec<InstructionsEntry>,
     pub provenance: Provenance,
+    /// Why these counts are the baseline (`--save --reason`): one line kept
+    /// with a committed baseline, e.g. what changed the counts.
+    #[serde(skip_serializing_if = "Option::is_none")]
+    pub reason: Option<String>,
+}
+
+/// The longest [`InstructionsReport::reason`], in characters.
+pub const MAX_REASON_CHARS: usize = 300;
+
+/// Checks a baseline's reason: one line of text, not blank, at most
+/// [`MAX_REASON_CHARS`] characters.
+pub fn check_reason(reason: &str) -> Result<()> {
+    if reason.trim().is_empty() {
+        return Err(Error::invalid("--reason", "say in one line why these counts are the baseline"));
+    }
+    if reason.contains(['\n', '\r']) {
+        return Err(Error::invalid("--reason", "one line: no line breaks"));
+    }
+    if reason.chars().count() > MAX_REASON_CHARS {
+        return Err(Error::invalid("--reason", format!("at most {MAX_REASON_CHARS} characters, one line")));
+    }
+    Ok(())
 }
 
 /// How each kernel's counted process is run: the executable, its arguments
@@ -146,6 +168,7 @@ pub fn count(
         valgrind,
         kernels: entries,
         provenance,
+        reason: None,
     })
 }
 
@@ -328,9 +351,15 @@ pub struct InstructionsBaseline {
     pub max_depth: u32,
     pub seed: u64,
     pub sampler: String,
+    /// The estimator (absent in baselines saved before there was a choice).
+    #[serde(default)]
+    pub estimator: Option<String>,
     pub threads: usize,
     pub kernels: Vec<InstructionsBaselineEntry>,
     pub provenance: BaselineBuild,
+    /// Why these counts are the baseline (absent in baselines saved without `--reason`).
+    #[serde(default)]
+    pub reason: Option<String>,
 }
 
 impl InstructionsBaseline {
@@ -410,6 +439,9 @@ impl InstructionsBaseline {
         if theirs != ours {
             return Err(differs("settings", &theirs, &ours));
         }
+        if let Some(e) = self.estimator.as_deref().filter(|&e| e != s.estimator.name()) {
+            return Err(differs("estimator", e, s.estimator.name()));
+        }
         if self.threads != threads {
             return Err(differs("thread count", &self.threads.to_string(), &threads.to_string()));
         }
@@ -433,28 +465,122 @@ pub struct InstructionsComparison {
     pub kernel: String,
     pub baseline: u64,
     pub instructions: u64,
+    /// The most instructions that pass: the baseline's, plus the allowed rise.
+    pub allowed: u64,
     pub baseline_per_ray: f64,
     pub per_ray: f64,
     pub image_same: bool,
-    /// Exit status 1: the image changed or the count grew (by one instruction or more).
+    /// Exit status 1: the image changed or the count grew past `allowed`.
     pub regressed: bool,
 }
 
-/// Compares counts exactly.
-pub fn compare(report: &InstructionsReport, base: &InstructionsBaseline) -> Vec<InstructionsComparison> {
+/// Compares counts: a kernel regresses when its image changed or its count
+/// rose by more than `max_rise_percent` of the baseline's (0: by one
+/// instruction). A count rounds the allowance down: exact and the same on
+/// every machine.
+pub fn compare(
+    report: &InstructionsReport,
+    base: &InstructionsBaseline,
+    max_rise_percent: f64,
+) -> Vec<InstructionsComparison> {
     let mut out = Vec::new();
     for e in &report.kernels {
         let Some(b) = base.kernels.iter().find(|b| b.kernel == e.kernel) else { continue };
         let image_same = b.image_hash == e.image_hash && b.rays == e.rays;
+        let allowed = b.instructions + allowance(b.instructions, max_rise_percent);
         out.push(InstructionsComparison {
             kernel: e.kernel.clone(),
             baseline: b.instructions,
             instructions: e.instructions,
+            allowed,
             baseline_per_ray: b.instructions as f64 / b.rays as f64,
             per_ray: e.per_ray,
             image_same,
-            regressed: !image_same || e.instructions > b.instructions,
+            regressed: !image_same || e.instructions > allowed,
         });
     }
     out
+}
+
+/// `percent` of `count`, rounded down (in millionths of a percent, so that
+/// 0.5 means exactly five in a thousand).
+fn allowance(count: u64, percent: f64) -> u64 {
+    let micro = (percent * 1e6).round() as u128;
+    (count as u128 * micro / 100_000_000) as u64
+}
+
+/// Checks `--max-rise`: a percentage from 0 to 100.
+pub fn check_max_rise(percent: f64) -> Result<()> {
+    if !(0.0..=100.0).contains(&percent) {
+        return Err(Error::invalid("--max-rise", format!("{percent} is not a percentage from 0 to 100")));
+    }
+    Ok(())
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    #[test]
+    fn the_allowance_is_exact_and_rounds_down() {
+        assert_eq!(allowance(1_000, 0.5), 5);
+        assert_eq!(allowance(1_999, 0.5), 9);
+        assert_eq!(allowance(123_456_789, 0.0), 0);
+        assert_eq!(allowance(709_827_165, 0.5), 3_549_135);
+        assert_eq!(allowance(u64::MAX, 100.0), u64::MAX);
+        assert!(check_max_rise(0.5).is_ok() && check_max_rise(-0.1).is_err() && check_max_rise(f64::NAN).is_err());
+    }
+
+    fn entry(kernel: &str, instructions: u64, image_hash: &str) -> InstructionsEntry {
+        InstructionsEntry {
+            kernel: kernel.into(),
+            lanes: 8,
+            rays: 1000,
+            image_hash: image_hash.into(),
+            instructions,
+            per_ray: instructions as f64 / 1000.0,
+            process_instructions: instructions + 1,
+            process_per_ray: 0.0,
+            phases: None,
+            branches: None,
+            command: Vec::new(),
+        }
+    }
+
+    /// A count within the allowance passes, one instruction past it fails,
+    /// and so does another image at any count.
+    #[test]
+    fn a_rise_past_the_allowance_or_another_image_regresses() {
+        let report = |n: u64, hash: &str| InstructionsReport {
+            schema: INSTRUCTIONS_SCHEMA,
+            scene: "final".into(),
+            settings: Settings::default(),
+            threads: 1,
+            valgrind: String::new(),
+            kernels: vec![entry("simd8", n, hash)],
+            provenance: Provenance::collect(),
+            reason: None,
+        };
+        let mut saved = serde_json::to_value(report(200_000, "00000000000000aa")).unwrap();
+        saved["reason"] = "test".into();
+        let base = InstructionsBaseline::from_bytes(saved.to_string().as_bytes(), Path::new("b.json")).unwrap();
+        assert_eq!(base.reason.as_deref(), Some("test"));
+        let verdict = |n: u64, hash: &str, rise: f64| compare(&report(n, hash), &base, rise)[0].regressed;
+        assert!(!verdict(200_000, "00000000000000aa", 0.0));
+        assert!(verdict(200_001, "00000000000000aa", 0.0));
+        assert!(!verdict(1, "00000000000000aa", 0.0));
+        assert!(!verdict(201_000, "00000000000000aa", 0.5));
+        assert!(verdict(201_001, "00000000000000aa", 0.5));
+        assert!(verdict(200_000, "00000000000000ab", 0.5));
+        assert_eq!(compare(&report(201_000, "00000000000000aa"), &base, 0.5)[0].allowed, 201_000);
+    }
+
+    #[test]
+    fn a_reason_is_one_line() {
+        assert!(check_reason("simd8: the walk's stack entry is 8 bytes smaller").is_ok());
+        for bad in ["", "   ", "two\nlines", "a\r"] {
+            assert!(check_reason(bad).is_err(), "{bad:?}");
+        }
+        assert!(check_reason(&"x".repeat(MAX_REASON_CHARS + 1)).is_err());
+    }
 }

@@ -20,7 +20,7 @@ pub use file::{load_scene, save_scene, scene_from_bytes, scene_from_str, scene_t
 pub use flatten::{box_quads, Flat, FlatBoundary, FlatMedium};
 pub use presets::{final_scene, preset, presets, Preset, PresetGroup};
 pub use render_table::{BookTable, RenderTable};
-pub use source::SceneSource;
+pub use source::{nearest_preset, SceneSource};
 
 use serde::{Deserialize, Serialize};
 

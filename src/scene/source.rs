@@ -1,6 +1,6 @@
 //! A scene named the way a user names one: a preset or a scene file.
 
-use super::{load_scene, preset, Scene};
+use super::{load_scene, preset, presets, Scene};
 use crate::error::{Error, Result};
 use std::path::{Path, PathBuf};
 
@@ -27,13 +27,41 @@ impl SceneSource {
             let name = path.file_stem().map(|s| s.to_string_lossy().into_owned()).unwrap_or_else(|| "scene".into());
             return Ok(SceneSource { scene, name, file: Some(path.to_path_buf()) });
         }
+        let hint = nearest_preset(spec).map_or(String::new(), |p| format!("did you mean '{p}'? "));
         Err(Error::Input(format!(
-            "unknown scene '{spec}': not a preset (see `rtow scenes`) and not a .json/.toml file"
+            "unknown scene '{}': not a preset ({hint}see `rtow scenes`) and not a .json/.toml file",
+            crate::output::clip(spec)
         )))
     }
 
     /// A scene built in code, named `name`.
     pub fn built(scene: Scene, name: impl Into<String>) -> SceneSource {
         SceneSource { scene, name: name.into(), file: None }
+    }
+}
+
+/// The preset a mistyped name most likely meant: the most similar name
+/// (Jaro-Winkler, as the command line's own suggestions), if similar enough.
+pub fn nearest_preset(spec: &str) -> Option<&'static str> {
+    presets()
+        .iter()
+        .map(|p| (strsim::jaro_winkler(spec, p.name), p.name))
+        .filter(|&(similarity, _)| similarity > 0.8)
+        .max_by(|a, b| a.0.total_cmp(&b.0))
+        .map(|(_, name)| name)
+}
+
+#[cfg(test)]
+mod tests {
+    use super::nearest_preset;
+
+    #[test]
+    fn a_mistyped_preset_gets_the_nearest_name() {
+        assert_eq!(nearest_preset("fnal"), Some("final"));
+        assert_eq!(nearest_preset("nw-cornel-box"), Some("nw-cornell-box"));
+        assert_eq!(nearest_preset("rol-cornell"), Some("rol-cornell-box"));
+        assert_eq!(nearest_preset("ch7-diffuse"), Some("ch07-diffuse"));
+        assert_eq!(nearest_preset("teapot"), None);
+        assert_eq!(nearest_preset(""), None);
     }
 }

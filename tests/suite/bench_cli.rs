@@ -225,14 +225,19 @@ fn instructions_are_counted_and_compared_exactly() {
         eprintln!("valgrind is not installed: only the refusal was checked");
         return;
     }
-    let r = rtow(d, &args(&["--save", "i.json"]));
-    if r.code == 1 && r.stderr.contains("instruction valgrind does not know") {
+    let line = common::failure(&rtow(d, &args(&["--save", "i.json", "--reason", "a\nb"])), 2, "two-line reason");
+    assert!(line.contains("--reason") && line.contains("one line"), "{line}");
+    let line = common::failure(&rtow(d, &args(&["--baseline", "i.json", "--max-rise", "-1"])), 2, "negative rise");
+    assert!(line.contains("--max-rise"), "{line}");
+    let r = rtow(d, &args(&["--save", "i.json", "--reason", "the first count"]));
+    if r.code == 1 && r.stderr.contains("valgrind does not know") {
         eprintln!("valgrind cannot run this build: {}", r.stderr);
         return;
     }
     assert_eq!(r.code, 0, "{}", r.stderr);
     let v: serde_json::Value = serde_json::from_str(&std::fs::read_to_string(d.join("i.json")).unwrap()).unwrap();
     assert_eq!(v["schema"], "rtow-instructions/1");
+    assert_eq!(v["reason"], "the first count");
     let k = &v["kernels"];
     assert_eq!(k[0]["image_hash"], k[1]["image_hash"], "scalar and SIMD images differ");
     for e in k.as_array().unwrap() {
@@ -251,11 +256,58 @@ fn instructions_are_counted_and_compared_exactly() {
     });
     let r = rtow(d, &args(&["--baseline", "i.json"]));
     assert_eq!(r.code, 1, "{}", r.stdout);
-    assert!(r.stdout.contains("REGRESSION (+1 instructions)"), "{}", r.stdout);
+    assert!(r.stdout.contains("REGRESSION (+1 instructions, 0% allowed)"), "{}", r.stdout);
+    assert!(r.stdout.contains("baseline: the first count"), "{}", r.stdout);
+    // Within an allowed rise (the CI gate's 0.5%): passes, and says so.
+    let r = rtow(d, &args(&["--baseline", "i.json", "--max-rise", "0.5"]));
+    assert_eq!(r.code, 0, "{}", r.stdout);
+    assert!(r.stdout.contains("ok (+1 instructions, within the 0.5% allowed)"), "{}", r.stdout);
     // A timing baseline is not an instruction baseline, and the other way round.
     assert_eq!(bench(d, &["--save", "t.json"]).code, 0);
     let line = common::failure(&rtow(d, &args(&["--baseline", "t.json"])), 2, "time baseline");
     assert!(line.contains("not an instruction baseline"), "{line}");
     let line = common::failure(&bench(d, &["--baseline", "i.json"]), 2, "instruction baseline");
     assert!(line.contains("holds instruction counts"), "{line}");
+}
+
+/// The instruction gate (`benches/instructions/gate`, run by `.ci/run`): a
+/// committed baseline for each of the script's cases and a case for each
+/// baseline, counted with the case's scene, settings and kernels, on one
+/// thread of an x86-64-v3 build, each with a one-line reason.
+#[test]
+fn the_instruction_gate_has_a_baseline_for_each_case_each_with_a_reason() {
+    use rtow::instruments::instructions::{check_reason, InstructionsBaseline};
+    let dir = Path::new(env!("CARGO_MANIFEST_DIR")).join("benches/instructions");
+    let script = std::fs::read_to_string(dir.join("gate")).unwrap();
+    let cases: Vec<Vec<&str>> = script
+        .lines()
+        .filter_map(|l| l.trim().strip_prefix('"').and_then(|l| l.strip_suffix('"')))
+        .map(|l| l.split('|').collect::<Vec<_>>())
+        .filter(|f| f.len() == 3)
+        .collect();
+    assert_eq!(cases.len(), 4, "the gate's cases: {cases:?}");
+    let mut files: Vec<String> = std::fs::read_dir(&dir)
+        .unwrap()
+        .map(|e| e.unwrap().file_name().into_string().unwrap())
+        .filter(|n| n.ends_with(".json"))
+        .collect();
+    files.sort();
+    let mut scenes: Vec<String> = cases.iter().map(|c| format!("{}.json", c[0])).collect();
+    scenes.sort();
+    assert_eq!(files, scenes, "one baseline per case");
+    for c in &cases {
+        let path = dir.join(format!("{}.json", c[0]));
+        let b = InstructionsBaseline::from_bytes(&std::fs::read(&path).unwrap(), &path).unwrap();
+        let reason = b.reason.as_deref().unwrap_or_else(|| panic!("{}: no reason", c[0]));
+        check_reason(reason).unwrap();
+        assert_eq!((b.scene.as_str(), b.threads), (c[0], 1));
+        assert!(b.provenance.isa.contains("x86-64-v3"), "{}: {}", c[0], b.provenance.isa);
+        let words: Vec<&str> = c[1].split_whitespace().collect();
+        let value = |flag: &str| words[words.iter().position(|w| *w == flag).unwrap() + 1].to_string();
+        let settings = [b.width.to_string(), b.height.to_string(), b.spp.to_string(), b.max_depth.to_string()];
+        assert_eq!(settings.to_vec(), ["--width", "--height", "--spp", "--depth"].map(value).to_vec(), "{}", c[0]);
+        let kernels: Vec<&str> = b.kernels.iter().map(|k| k.kernel.as_str()).collect();
+        assert_eq!(kernels.join(","), c[2], "{}", c[0]);
+        assert_eq!(b.estimator, Some(value("--estimator")), "{}", c[0]);
+    }
 }

@@ -77,6 +77,9 @@ fn bad_arguments_exit_2_naming_the_argument_and_write_nothing() {
         (vec!["render", "scene.yaml", "-o", "keep.png"], &["scene.yaml", "unknown scene file type"]),
         (vec!["render"], &["<SCENE>"]),
         (vec!["export", "no-such-preset", "-o", "new.json"], &["unknown preset 'no-such-preset'"]),
+        // A mistyped preset: the nearest name.
+        (vec!["render", "fnal", "-o", "keep.png"], &["unknown scene 'fnal'", "did you mean 'final'?"]),
+        (vec!["export", "nw-cornel-box", "-o", "new.json"], &["did you mean 'nw-cornell-box'?"]),
         (vec!["export", "final"], &["--output"]),
         (vec!["paint"], &["'paint'"]),
     ];
