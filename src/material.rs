@@ -96,13 +96,6 @@ impl MaterialTables {
     }
 }
 
-/// The radiance a light emits towards a ray that hit it: `emit`, or 0 on the
-/// back face (`front` false) of a one-sided light (`one_sided` true).
-#[inline(always)]
-pub fn emission<R: Real>(emit: V3<R>, one_sided: R::Mask, front: R::Mask) -> V3<R> {
-    V3::select(one_sided & !front, V3::splat3([0.0; 3]), emit)
-}
-
 /// Mirror `d` about `n`: `d - 2 (d.n) n`.
 #[inline(always)]
 pub fn reflect<R: Real>(d: V3<R>, n: V3<R>) -> V3<R> {

@@ -21,7 +21,7 @@
 //! - [`media`]: constant media (a sphere or box boundary), sampled after the
 //!   closest hit; not in a tree. [`lights`]: the shapes the `book` and
 //!   `nee-mis` estimators sample (static spheres and quads), their points
-//!   and densities.
+//!   and densities, and what a light emits toward a ray (front face or both).
 
 pub mod bvh;
 pub mod cuboids;
@@ -40,7 +40,7 @@ pub mod work;
 pub use bvh::{Bvh, SahCost, Walk, Walker};
 pub use cuboids::{cuboid_hit, CuboidRec, Cuboids, LeafCuboid};
 pub use hit::{Closest, Hit, HitKind, MEDIUM_BASE, MISS, MOVING_BASE, QUAD_BASE};
-pub use lights::{Emitters, LightQuad, LightSample, LightSphere, Lights};
+pub use lights::{emission, Emitters, LightQuad, LightSample, LightSphere, Lights};
 pub use media::{sample_media, transmittance, Boundary, Media};
 pub use moving::{centre_at, LeafMoving, MovingSpheres};
 pub use primitive::{closest_brute, Leaf, Primitive};
