@@ -59,7 +59,7 @@ use super::primitive::{Leaf, Primitive};
 use super::slab::Aabb;
 use super::surface::{Surface, OFFSET_ULPS};
 use super::work::{Counter, Work};
-use crate::material::{Kind, MaterialTables};
+use crate::material::Kind;
 use crate::real::{Mask, Real};
 use crate::vec3::V3;
 
@@ -79,7 +79,8 @@ pub struct Spheres {
     /// Number of real spheres; the arrays are longer (padding).
     pub len: usize,
     /// Per sphere (padding included), what shading reads: [`Shade`]. Filled
-    /// by [`Spheres::shade_with`] once the materials are known; empty before.
+    /// when the scene is laid out for the kernels (`job::prepare`), after
+    /// [`Spheres::pad`], once the materials are known; empty before.
     pub shade: Vec<Shade>,
 }
 
@@ -155,17 +156,6 @@ impl Spheres {
 
     pub fn is_empty(&self) -> bool {
         self.len == 0
-    }
-
-    /// Fills [`Spheres::shade`] from the material tables (after [`Spheres::pad`]).
-    pub fn shade_with(&mut self, m: &MaterialTables) {
-        self.shade = (0..self.cx.len())
-            .map(|i| {
-                let (albedo, param) = if i < self.len { m.record(self.kind[i], self.row[i]) } else { ([0.0; 3], 0.0) };
-                let [a0, a1, a2] = albedo;
-                Shade([self.cx[i], self.cy[i], self.cz[i], self.r[i], a0, a1, a2, param])
-            })
-            .collect();
     }
 }
 
