@@ -14,7 +14,9 @@
 //!   normal lies along an axis or that stand upright about one), [`cuboids`]
 //!   (a box, six quads after the search, tested whole by one slab test in
 //!   its own frame), [`moving`] (spheres whose centre moves over the
-//!   shutter interval, tested at each path's time).
+//!   shutter interval, tested at each path's time). A primitive carries its
+//!   material's handle (`handle::Kind` and a row) and nothing else of
+//!   materials: the tables it indexes, and the shading, live above.
 //! - [`bvh`]: an 8-wide SAH tree over any kind, its one walk written once for
 //!   one ray and for packets; [`shapes`]: every kind and its tree, searched
 //!   in one closest-hit and one any-hit search.

@@ -59,7 +59,7 @@ use super::primitive::{Leaf, Primitive};
 use super::slab::Aabb;
 use super::surface::{Surface, OFFSET_ULPS};
 use super::work::{Counter, Work};
-use crate::material::Kind;
+use crate::handle::Kind;
 use crate::real::{Mask, Real};
 use crate::vec3::V3;
 
@@ -72,9 +72,10 @@ pub struct Spheres {
     pub r: Vec<f32>,
     /// `r * r`; padding has -1, which no ray can hit (disc = -1 - |l|^2 < 0).
     pub r2: Vec<f32>,
-    /// Material kind of each sphere.
+    /// The kind of each sphere's material (with `row`, the material's
+    /// handle: `crate::handle`).
     pub kind: Vec<Kind>,
-    /// Row of the sphere's material in its kind's table.
+    /// The row of each sphere's material in its kind's table.
     pub row: Vec<u32>,
     /// Number of real spheres; the arrays are longer (padding).
     pub len: usize,
@@ -113,7 +114,7 @@ impl AsRef<[f32; 8]> for Shade {
 }
 
 impl Spheres {
-    /// Appends a sphere: centre, signed radius, and its material's (kind, row).
+    /// Appends a sphere: centre, signed radius, and its material's handle (kind, row).
     pub fn push(&mut self, center: [f32; 3], radius: f32, kind: Kind, row: u32) {
         self.cx.push(center[0]);
         self.cy.push(center[1]);

@@ -13,7 +13,8 @@ use crate::geometry::{
     Boundary, Cuboids, Emitters, LightQuad, LightSphere, Lights, Media, MovingSpheres, Quads, Shade, Shapes, Spheres,
     TreeChoice, Walk,
 };
-use crate::material::{Kind, MaterialTables};
+use crate::handle::Kind;
+use crate::material::MaterialTables;
 use crate::plan::{Accel, KindSet, Plan, Prepared, SkyColours};
 use crate::sampling::layout::Bounces;
 use crate::scene::{Background, Camera, Flat, FlatBoundary, Material, Scene, Shape, Texture};

@@ -10,7 +10,8 @@ use crate::film::TileFilm;
 use crate::geometry::{
     emission, quad_surface, sample_media, spawn, surface, transmittance, Hit, HitKind, Surface, MEDIUM_BASE, MISS,
 };
-use crate::material::{dielectric, lambertian, metal, Kind};
+use crate::handle::Kind;
+use crate::material::{dielectric, lambertian, metal};
 use crate::plan::Prepared;
 use crate::probe::{PathId, Probe, Strategy};
 use crate::sampling::{layout, unit_vector, PathSampler, Stream};

@@ -13,7 +13,10 @@ use std::path::{Path, PathBuf};
 const LAYERS: &[(&str, &[&str])] = &[
     ("foundation", &["error", "choice", "real", "math", "limits", "output", "vec3", "sampling", "settings"]),
     ("user side", &["scene"]),
-    ("kernel side", &["probe", "film", "material", "texture", "geometry", "camera", "estimator", "plan", "kernel"]),
+    (
+        "kernel side",
+        &["handle", "probe", "film", "material", "texture", "geometry", "camera", "estimator", "plan", "kernel"],
+    ),
     ("bridge", &["job"]),
     ("driver", &["render", "shard", "files", "provenance"]),
     ("instruments", &["instruments"]),

@@ -53,8 +53,9 @@ use crate::geometry::{
     centre_at, emission, quad_surface, sample_media, spawn, surface, transmittance, Shade, Surface, MEDIUM_BASE, MISS,
     MOVING_BASE, QUAD_BASE,
 };
+use crate::handle::Kind;
 use crate::kernel::{background, normal_colour, texture_albedo};
-use crate::material::{dielectric, lambertian, metal, Kind};
+use crate::material::{dielectric, lambertian, metal};
 use crate::plan::{KindSet, Prepared};
 use crate::probe::{PathId, Probe, Stage};
 use crate::real::{U32Lanes, Wide, MAX_LANES};
