@@ -59,6 +59,7 @@ mod estimator;
 pub mod files;
 pub mod film;
 mod geometry;
+mod handle;
 pub mod instruments;
 mod job;
 mod kernel;
@@ -101,6 +102,9 @@ pub mod internals {
     }
     pub mod geometry {
         pub use crate::geometry::*;
+    }
+    pub mod handle {
+        pub use crate::handle::*;
     }
     pub mod kernel {
         pub use crate::kernel::*;

@@ -1,9 +1,10 @@
-//! The material kinds (the kernels keep one queue and one pass per kind):
-//! book one's lambertian, metal and dielectric, The Next Week's
+//! The materials of each kind (the kernels keep one queue and one pass per
+//! kind): book one's lambertian, metal and dielectric, The Next Week's
 //! `diffuse_light` (emission, two-sided or one-sided, and the path ends) and
 //! `isotropic` (the scattering inside a constant medium); the per-kind
-//! material tables (a lambertian's albedo a colour or a texture reference);
-//! and the scatter functions, at one lane and every width.
+//! material tables (a lambertian's albedo a colour or a texture reference),
+//! which a primitive's material handle ([`Kind`] and a row, `crate::handle`)
+//! indexes; and the scatter functions, at one lane and every width.
 //!
 //! Physics as in the book (v4), not the slips of the C# retelling this
 //! project grew from (its Lambertian was the normal plus a normalized cube
@@ -13,42 +14,13 @@
 //! Snell refraction, total internal reflection and Schlick's reflectance drawn
 //! against a uniform random number. All directions leave normalized.
 
+use crate::handle::Kind;
 use crate::real::Real;
 use crate::sampling::{unit_vector, Stream};
 use crate::texture::{TexKind, TexRef};
 use crate::vec3::V3;
 
-/// Material kinds, one wavefront queue each.
-#[derive(Clone, Copy, Debug, PartialEq, Eq, Hash, PartialOrd, Ord)]
-#[repr(u8)]
-pub enum Kind {
-    Lambertian = 0,
-    Metal = 1,
-    Dielectric = 2,
-    /// The Next Week's `diffuse_light`: emission, and the path ends (no scatter).
-    DiffuseLight = 3,
-    /// The Next Week's `isotropic`: a path that stopped inside a constant
-    /// medium scatters to a uniform direction, attenuated by the medium's
-    /// albedo. Media are not primitives: no sphere or quad has this kind.
-    Isotropic = 4,
-}
-
-impl Kind {
-    pub const ALL: [Kind; 5] = [Kind::Lambertian, Kind::Metal, Kind::Dielectric, Kind::DiffuseLight, Kind::Isotropic];
-    /// The kinds a sphere or a quad can have (all but `Isotropic`).
-    pub const SURFACES: [Kind; 4] = [Kind::Lambertian, Kind::Metal, Kind::Dielectric, Kind::DiffuseLight];
-    pub fn name(self) -> &'static str {
-        match self {
-            Kind::Lambertian => "lambertian",
-            Kind::Metal => "metal",
-            Kind::Dielectric => "dielectric",
-            Kind::DiffuseLight => "diffuse_light",
-            Kind::Isotropic => "isotropic",
-        }
-    }
-}
-
-/// One table per material kind; a sphere's (kind, row) indexes them.
+/// One table per material kind; a primitive's handle, (kind, row), indexes them.
 #[derive(Clone, Debug, Default)]
 pub struct MaterialTables {
     /// The albedo of a solid lambertian; for a textured one, the colour of
@@ -94,13 +66,6 @@ impl MaterialTables {
             Kind::Isotropic => ([1.0; 3], 0.0),
         }
     }
-}
-
-/// The radiance a light emits towards a ray that hit it: `emit`, or 0 on the
-/// back face (`front` false) of a one-sided light (`one_sided` true).
-#[inline(always)]
-pub fn emission<R: Real>(emit: V3<R>, one_sided: R::Mask, front: R::Mask) -> V3<R> {
-    V3::select(one_sided & !front, V3::splat3([0.0; 3]), emit)
 }
 
 /// Mirror `d` about `n`: `d - 2 (d.n) n`.

@@ -54,7 +54,6 @@
 //! [`crate::limits::MAX_SAMPLED_SHAPES`]) and the same for every lane.
 
 use super::spheres::{sphere_disc, sphere_t};
-use crate::material::emission;
 use crate::real::Real;
 use crate::sampling::cos_sin_turn;
 use crate::vec3::V3;
@@ -294,6 +293,15 @@ impl Emitters {
         }
         pdf * R::splat(1.0 / self.len().max(1) as f32)
     }
+}
+
+/// The radiance a light emits towards a ray that hit it: `emit`, or 0 on the
+/// back face (`front` false) of a one-sided light (`one_sided` true). The
+/// kernels' light passes weigh a hit light by it, and [`Emitters::sample`]
+/// a sampled one.
+#[inline(always)]
+pub fn emission<R: Real>(emit: V3<R>, one_sided: R::Mask, front: R::Mask) -> V3<R> {
+    V3::select(one_sided & !front, V3::splat3([0.0; 3]), emit)
 }
 
 /// A mask of every lane set to `b`.

@@ -14,14 +14,16 @@
 //!   normal lies along an axis or that stand upright about one), [`cuboids`]
 //!   (a box, six quads after the search, tested whole by one slab test in
 //!   its own frame), [`moving`] (spheres whose centre moves over the
-//!   shutter interval, tested at each path's time).
+//!   shutter interval, tested at each path's time). A primitive carries its
+//!   material's handle (`handle::Kind` and a row) and nothing else of
+//!   materials: the tables it indexes, and the shading, live above.
 //! - [`bvh`]: an 8-wide SAH tree over any kind, its one walk written once for
 //!   one ray and for packets; [`shapes`]: every kind and its tree, searched
 //!   in one closest-hit and one any-hit search.
 //! - [`media`]: constant media (a sphere or box boundary), sampled after the
 //!   closest hit; not in a tree. [`lights`]: the shapes the `book` and
 //!   `nee-mis` estimators sample (static spheres and quads), their points
-//!   and densities.
+//!   and densities, and what a light emits toward a ray (front face or both).
 
 pub mod bvh;
 pub mod cuboids;
@@ -40,7 +42,7 @@ pub mod work;
 pub use bvh::{Bvh, SahCost, Walk, Walker};
 pub use cuboids::{cuboid_hit, CuboidRec, Cuboids, LeafCuboid};
 pub use hit::{Closest, Hit, HitKind, MEDIUM_BASE, MISS, MOVING_BASE, QUAD_BASE};
-pub use lights::{Emitters, LightQuad, LightSample, LightSphere, Lights};
+pub use lights::{emission, Emitters, LightQuad, LightSample, LightSphere, Lights};
 pub use media::{sample_media, transmittance, Boundary, Media};
 pub use moving::{centre_at, LeafMoving, MovingSpheres};
 pub use primitive::{closest_brute, Leaf, Primitive};

@@ -23,7 +23,7 @@ use super::quads::{next_down, next_up};
 use super::slab::Aabb;
 use super::spheres::{test_sphere, Shade, Spheres};
 use super::work::Counter;
-use crate::material::Kind;
+use crate::handle::Kind;
 use crate::real::Real;
 use crate::vec3::V3;
 
@@ -33,7 +33,7 @@ pub fn centre_at<R: Real>(c0: V3<R>, v: V3<R>, t: R) -> V3<R> {
     c0 + v * t
 }
 
-/// Moving spheres: their centre at time 0, radius and material in a
+/// Moving spheres: their centre at time 0, radius and material handle in a
 /// [`Spheres`] (with its padding and shading records: the centre there is
 /// `c0`), and their motion `v` per sphere (padding included: zero), as
 /// 32-byte records (`[vx, vy, vz, 0, ...]`) that a packet gathers as it

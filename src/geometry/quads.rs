@@ -40,7 +40,7 @@ use super::slab::Aabb;
 use super::spheres::Shade;
 use super::surface::{Surface, OFFSET_ULPS};
 use super::work::{Counter, Work, WorkTally};
-use crate::material::Kind;
+use crate::handle::Kind;
 use crate::real::Real;
 use crate::vec3::V3;
 
@@ -151,7 +151,7 @@ pub(super) fn next_down(x: f64) -> f32 {
 #[derive(Clone, Debug, Default)]
 pub struct Quads {
     pub rec: Vec<QuadRec>,
-    /// Material kind and row of each quad.
+    /// Each quad's material, as a handle (`crate::handle`): its kind and row.
     pub kind: Vec<Kind>,
     pub row: Vec<u32>,
     /// The unit normal `u x v / |u x v|` and `n^ . q`, per quad, for the
@@ -165,10 +165,10 @@ pub struct Quads {
 }
 
 impl Quads {
-    /// Appends the quad `(q, u, v)` with material (`kind`, `row`); the
-    /// shading record's material slots are filled by the caller. `extent`
-    /// bounds every ray origin and hit point of the scene (for the bounds'
-    /// widest band, not the test: [`QuadRec::tolerance`]).
+    /// Appends the quad `(q, u, v)` with its material's handle (`kind`,
+    /// `row`); the shading record's material slots are filled by the caller.
+    /// `extent` bounds every ray origin and hit point of the scene (for the
+    /// bounds' widest band, not the test: [`QuadRec::tolerance`]).
     ///
     /// The test computes `a'` as `p.Ea - ka` (`Ea`, `ka` as the module says,
     /// from the exact `u x v` in f64, rounded once to f32). The f64 oracle's

@@ -59,7 +59,7 @@ use super::primitive::{Leaf, Primitive};
 use super::slab::Aabb;
 use super::surface::{Surface, OFFSET_ULPS};
 use super::work::{Counter, Work};
-use crate::material::{Kind, MaterialTables};
+use crate::handle::Kind;
 use crate::real::{Mask, Real};
 use crate::vec3::V3;
 
@@ -72,14 +72,16 @@ pub struct Spheres {
     pub r: Vec<f32>,
     /// `r * r`; padding has -1, which no ray can hit (disc = -1 - |l|^2 < 0).
     pub r2: Vec<f32>,
-    /// Material kind of each sphere.
+    /// The kind of each sphere's material (with `row`, the material's
+    /// handle: `crate::handle`).
     pub kind: Vec<Kind>,
-    /// Row of the sphere's material in its kind's table.
+    /// The row of each sphere's material in its kind's table.
     pub row: Vec<u32>,
     /// Number of real spheres; the arrays are longer (padding).
     pub len: usize,
     /// Per sphere (padding included), what shading reads: [`Shade`]. Filled
-    /// by [`Spheres::shade_with`] once the materials are known; empty before.
+    /// when the scene is laid out for the kernels (`job::prepare`), after
+    /// [`Spheres::pad`], once the materials are known; empty before.
     pub shade: Vec<Shade>,
 }
 
@@ -112,7 +114,7 @@ impl AsRef<[f32; 8]> for Shade {
 }
 
 impl Spheres {
-    /// Appends a sphere: centre, signed radius, and its material's (kind, row).
+    /// Appends a sphere: centre, signed radius, and its material's handle (kind, row).
     pub fn push(&mut self, center: [f32; 3], radius: f32, kind: Kind, row: u32) {
         self.cx.push(center[0]);
         self.cy.push(center[1]);
@@ -155,17 +157,6 @@ impl Spheres {
 
     pub fn is_empty(&self) -> bool {
         self.len == 0
-    }
-
-    /// Fills [`Spheres::shade`] from the material tables (after [`Spheres::pad`]).
-    pub fn shade_with(&mut self, m: &MaterialTables) {
-        self.shade = (0..self.cx.len())
-            .map(|i| {
-                let (albedo, param) = if i < self.len { m.record(self.kind[i], self.row[i]) } else { ([0.0; 3], 0.0) };
-                let [a0, a1, a2] = albedo;
-                Shade([self.cx[i], self.cy[i], self.cz[i], self.r[i], a0, a1, a2, param])
-            })
-            .collect();
     }
 }
 

@@ -1,6 +1,7 @@
 //! From a validated scene to what the kernels read: the [`Plan`] (what the
-//! scene needs), SoA spheres, per-kind material tables, the camera and, when
-//! the plan chose it, the BVH. The scene's types are read here and nowhere
+//! scene needs), SoA primitives, per-kind material tables, the primitives'
+//! shading records (their geometry and their materials' parameters, side by
+//! side), the camera and, when the plan chose it, the trees. The scene's types are read here and nowhere
 //! on the kernel side.
 
 use super::Images;
@@ -9,10 +10,11 @@ use crate::choice::{AccelChoice, EstimatorChoice, Mode};
 use crate::estimator::Estimator;
 use crate::film::accum::Scale;
 use crate::geometry::{
-    Boundary, Cuboids, Emitters, LightQuad, LightSphere, Lights, Media, MovingSpheres, Quads, Shapes, Spheres,
+    Boundary, Cuboids, Emitters, LightQuad, LightSphere, Lights, Media, MovingSpheres, Quads, Shade, Shapes, Spheres,
     TreeChoice, Walk,
 };
-use crate::material::{Kind, MaterialTables};
+use crate::handle::Kind;
+use crate::material::MaterialTables;
 use crate::plan::{Accel, KindSet, Plan, Prepared, SkyColours};
 use crate::sampling::layout::Bounces;
 use crate::scene::{Background, Camera, Flat, FlatBoundary, Material, Scene, Shape, Texture};
@@ -359,8 +361,8 @@ fn shapes(
     quads.pad();
     moving.pad();
     // The wavefront's per-primitive shading records (geometry::Shade).
-    spheres.shade_with(materials);
-    moving.s.shade_with(materials);
+    shade_spheres(&mut spheres, materials);
+    shade_spheres(&mut moving.s, materials);
     for i in 0..quads.len {
         let (albedo, param) = materials.record(quads.kind[i], quads.row[i]);
         quads.shade[i].0[4..].copy_from_slice(&[albedo[0], albedo[1], albedo[2], param]);
@@ -379,6 +381,20 @@ fn shapes(
     };
     shapes.build_trees(choice, extent);
     shapes
+}
+
+/// Fills the spheres' shading records ([`Spheres::shade`], after
+/// [`Spheres::pad`]): each sphere's centre and signed radius, and its
+/// material's albedo and parameter ([`MaterialTables::record`]); the
+/// padding's material slots are 0.
+fn shade_spheres(s: &mut Spheres, m: &MaterialTables) {
+    s.shade = (0..s.cx.len())
+        .map(|i| {
+            let (albedo, param) = if i < s.len { m.record(s.kind[i], s.row[i]) } else { ([0.0; 3], 0.0) };
+            let [a0, a1, a2] = albedo;
+            Shade([s.cx[i], s.cy[i], s.cz[i], s.r[i], a0, a1, a2, param])
+        })
+        .collect();
 }
 
 /// Appends to a material table; returns the row.

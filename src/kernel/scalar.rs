@@ -8,9 +8,10 @@ use crate::estimator::{
 };
 use crate::film::TileFilm;
 use crate::geometry::{
-    quad_surface, sample_media, spawn, surface, transmittance, Hit, HitKind, Surface, MEDIUM_BASE, MISS,
+    emission, quad_surface, sample_media, spawn, surface, transmittance, Hit, HitKind, Surface, MEDIUM_BASE, MISS,
 };
-use crate::material::{dielectric, emission, lambertian, metal, Kind};
+use crate::handle::Kind;
+use crate::material::{dielectric, lambertian, metal};
 use crate::plan::Prepared;
 use crate::probe::{PathId, Probe, Strategy};
 use crate::sampling::{layout, unit_vector, PathSampler, Stream};

@@ -7,7 +7,7 @@ use proptest::prelude::*;
 use rtow::internals::geometry::{
     closest_brute, Bvh, Closest, Cuboids, LeafCuboid, LeafQuad, LeafSphere, Primitive, Quads, Spheres, Walk, Walker,
 };
-use rtow::internals::material::Kind;
+use rtow::internals::handle::Kind;
 use rtow::internals::real::Wide;
 use rtow::internals::vec3::V3;
 use rtow::scene::{box_quads, Camera, Group, Material, QuadBox};

@@ -2,8 +2,9 @@
 //! of the top-level modules (read from the sources: every `crate::<module>`
 //! outside comments and test modules) has no cycle, every import goes down
 //! the layers (the user side and the kernel side never import each other),
-//! nothing inside the crate imports through `lib.rs`, and the picture in
-//! docs/architecture.md is the graph the code has.
+//! nothing inside the crate imports through `lib.rs`, geometry imports none
+//! of the kernel side's rooms that read it (materials, probes, ...), and the
+//! picture in docs/architecture.md is the graph the code has.
 
 use std::collections::{BTreeMap, BTreeSet};
 use std::path::{Path, PathBuf};
@@ -13,7 +14,10 @@ use std::path::{Path, PathBuf};
 const LAYERS: &[(&str, &[&str])] = &[
     ("foundation", &["error", "choice", "real", "math", "limits", "output", "vec3", "sampling", "settings"]),
     ("user side", &["scene"]),
-    ("kernel side", &["probe", "film", "material", "texture", "geometry", "camera", "estimator", "plan", "kernel"]),
+    (
+        "kernel side",
+        &["handle", "probe", "film", "material", "texture", "geometry", "camera", "estimator", "plan", "kernel"],
+    ),
     ("bridge", &["job"]),
     ("driver", &["render", "shard", "files", "provenance"]),
     ("instruments", &["instruments"]),
@@ -348,4 +352,38 @@ fn functions_are_short_and_take_few_arguments() {
     }
     assert!(long.is_empty(), "functions over 80 lines (split them): {long:#?}");
     assert!(allows.is_empty(), "too_many_arguments allowed (group the arguments): {allows:#?}");
+}
+
+/// The modules geometry must not import (issue 38): geometry is shapes, their
+/// tests and their searches, and the rooms that read it (materials and
+/// textures that shade its hits, the probes that count its work, the plan,
+/// the estimator, the kernels, the film, the camera, the bridge) stay above
+/// it. What a primitive carries of its material is a handle
+/// (`handle::Kind` and a row; `handle` imports nothing).
+const GEOMETRY_NEVER_IMPORTS: &[&str] =
+    &["material", "probe", "texture", "kernel", "job", "plan", "estimator", "film", "camera"];
+
+/// No file under `src/geometry` imports a module of
+/// [`GEOMETRY_NEVER_IMPORTS`], as `crate::<module>` or through the crate
+/// root by `super::super::<module>` (read as the graph is: outside comments
+/// and test modules).
+#[test]
+fn geometry_needs_nothing_from_materials_or_probes() {
+    let src = Path::new(env!("CARGO_MANIFEST_DIR")).join("src");
+    let mut all = Vec::new();
+    files(&src.join("geometry"), &mut all);
+    assert!(!all.is_empty(), "src/geometry has source files");
+    let mut bad = Vec::new();
+    for p in &all {
+        let text = code(&std::fs::read_to_string(p).unwrap());
+        let name = p.strip_prefix(&src).unwrap().display().to_string();
+        for ident in crate_paths(&text).into_iter().chain(paths_after(&text, "super::super::")) {
+            if GEOMETRY_NEVER_IMPORTS.contains(&ident.as_str()) {
+                bad.push(format!("{name}: crate::{ident}"));
+            }
+        }
+    }
+    bad.sort();
+    bad.dedup();
+    assert!(bad.is_empty(), "geometry imports what it must not (issue 38): {bad:#?}");
 }

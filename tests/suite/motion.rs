@@ -11,7 +11,7 @@ use proptest::prelude::*;
 use rtow::internals::geometry::{
     centre_at, closest_brute, Bvh, Closest, LeafMoving, MovingSpheres, Primitive, Spheres, Walk, MISS, MOVING_BASE,
 };
-use rtow::internals::material::Kind;
+use rtow::internals::handle::Kind;
 use rtow::internals::real::{Real, Wide};
 use rtow::internals::vec3::V3;
 use rtow::scene::{self, Background, Camera, Format, Material, Mode, Scene, Sky, Sphere};

@@ -11,7 +11,7 @@ use rtow::internals::geometry::{
     cuboid_hit, quad_hit, quad_hit_general, quad_surface, spawn, Closest, CuboidRec, Cuboids, Primitive, QuadRec,
     Quads, MISS, QUAD_BASE,
 };
-use rtow::internals::material::Kind;
+use rtow::internals::handle::Kind;
 use rtow::internals::vec3::V3;
 use rtow::scene::{self, Background, Camera, Format, Group, Material, Mode, Quad, QuadBox, Scene, Sky, Sphere};
 use rtow::KernelChoice::{Scalar, Simd16, Simd8};

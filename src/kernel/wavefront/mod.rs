@@ -50,11 +50,12 @@ use crate::estimator::{
 };
 use crate::film::TileFilm;
 use crate::geometry::{
-    centre_at, quad_surface, sample_media, spawn, surface, transmittance, Shade, Surface, MEDIUM_BASE, MISS,
+    centre_at, emission, quad_surface, sample_media, spawn, surface, transmittance, Shade, Surface, MEDIUM_BASE, MISS,
     MOVING_BASE, QUAD_BASE,
 };
+use crate::handle::Kind;
 use crate::kernel::{background, normal_colour, texture_albedo};
-use crate::material::{dielectric, emission, lambertian, metal, Kind};
+use crate::material::{dielectric, lambertian, metal};
 use crate::plan::{KindSet, Prepared};
 use crate::probe::{PathId, Probe, Stage};
 use crate::real::{U32Lanes, Wide, MAX_LANES};
