@@ -120,15 +120,16 @@ pub fn render_to_files(req: &RenderRequest, progress: Option<&(dyn Fn(Progress) 
         Some(p) => Some((p.clone(), Part::read(p)?)),
         None => None,
     };
-    let film = FilmRequest { split: req.split, resume };
-    let partial = files.writes_film() || film.resume.is_some();
-    let mut verified = None;
-    if partial {
-        shard::check(req.job, &film)?;
-        if let Some((p, f)) = &film.resume {
-            verified = Some(shard::verify_film(req.job, p, f, req.verify)?);
-        }
-    }
+    // A partial film (a shard, a resumed render, or a whole render to
+    // resume later) is checked against the job once, here.
+    let film = match files.writes_film() || resume.is_some() {
+        true => Some(FilmRequest::new(req.job, req.split, resume)?),
+        false => None,
+    };
+    let verified = match &film {
+        Some(f) => shard::verify_film(f, req.verify)?,
+        None => None,
+    };
     // The outputs are one transaction: checked now, written only when all
     // of them are ready. The resume film was read whole above, so the
     // output (and only the output) may replace it: a render continued in place.
@@ -141,8 +142,8 @@ pub fn render_to_files(req: &RenderRequest, progress: Option<&(dyn Fn(Progress) 
     }
     let (out_id, float_id, stats_id) = files.add_to(&mut outputs)?;
     let gamma = files.gamma.unwrap_or(req.job.default_gamma());
-    let r = if partial {
-        let (r, part) = shard::render_part(req.job, &film, progress)?;
+    let r = if let Some(film) = &film {
+        let (r, part) = shard::render_part(film, progress)?;
         r.stats.rejected().check(req.on_rejected)?;
         let bytes = if files.writes_film() {
             part.to_bytes()

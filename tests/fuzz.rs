@@ -465,7 +465,7 @@ fn film_corpus() -> Films {
         |spp| Overrides { width: Some(8), height: Some(6), spp: Some(spp), max_depth: Some(6), ..Default::default() };
     let opts = RenderOptions { threads: Some(1), ..Default::default() };
     let job = Job::new(&scene, &o(4), &opts).unwrap();
-    let film = |split| shard::render_part(&job, &FilmRequest { split, resume: None }, None).unwrap().1.to_bytes();
+    let film = |split| shard::render_part(&FilmRequest::new(&job, split, None).unwrap(), None).unwrap().1.to_bytes();
     let parts = vec![
         ("s1.rtfilm", film(Split { kind: SplitKind::Samples, shard: 1, of: 2 })),
         ("s2.rtfilm", film(Split { kind: SplitKind::Samples, shard: 2, of: 2 })),
