@@ -141,7 +141,8 @@ impl Default for RenderOptions {
 }
 
 impl RenderOptions {
-    /// Every option in range; the error names it.
+    /// Every option in range; the error names it (roulette and adaptive
+    /// sampling are valid by construction).
     fn validate(&self) -> Result<()> {
         limits::check_threads(self.threads)?;
         if !(1..=MAX_TILE).contains(&self.tile) {
@@ -152,12 +153,6 @@ impl RenderOptions {
                     self.tile
                 ),
             ));
-        }
-        if let Some(a) = self.adaptive {
-            Adaptive::new(a.threshold, a.min_spp)?;
-        }
-        if let Some(r) = self.roulette {
-            Roulette::new(r.after_rays)?;
         }
         Ok(())
     }
@@ -170,14 +165,16 @@ impl RenderOptions {
         let mut run = *self;
         let mut warnings = Vec::new();
         if let Some(a) = self.adaptive {
-            if settings.spp <= a.min_spp {
+            if settings.spp <= a.min_spp() {
                 run.adaptive = None;
                 warnings.push(Error::invalid(
                     "adaptive.min_spp",
                     format!(
                         "adaptive sampling decides first after {} samples per pixel, but this render takes only {}: \
                          it is off (the image is the one without it); ask for more than {} samples or decide earlier",
-                        a.min_spp, settings.spp, a.min_spp
+                        a.min_spp(),
+                        settings.spp,
+                        a.min_spp()
                     ),
                 ));
             }
@@ -596,8 +593,6 @@ mod tests {
         let scene = preset("ch04-sphere").unwrap();
         let refuse = |o: RenderOptions| Job::new(&scene, &Overrides::default(), &o).unwrap_err().to_string();
         assert!(refuse(RenderOptions { tile: 0, ..Default::default() }).starts_with("tile:"));
-        let rr = Some(Roulette { after_rays: 0 });
-        assert!(refuse(RenderOptions { roulette: rr, ..Default::default() }).starts_with("roulette.after_rays:"));
         assert!(refuse(RenderOptions { threads: Some(0), ..Default::default() }).starts_with("threads:"));
     }
 
