@@ -7,7 +7,7 @@
 
 use crate::choice::{EstimatorChoice, OnRejected};
 use crate::error::{Error, Result};
-use crate::estimator::{Adaptive, Roulette};
+use crate::estimator::{Adaptive, Estimator, Roulette};
 use crate::film::part::{self, is_part_path, Part, Split, SplitKind};
 use crate::job::Job;
 use crate::output::{check_extension, OutputId, Outputs};
@@ -17,6 +17,7 @@ use crate::provenance::Provenance;
 use crate::render::{render, render_counted, Progress, Rendered, Stats};
 use crate::sampling::Sampler;
 use crate::scene::SceneSource;
+use crate::settings::Settings;
 use crate::shard::{self, FilmRequest};
 use serde::Serialize;
 use std::path::{Path, PathBuf};
@@ -298,15 +299,15 @@ impl StatsFile {
             lanes: None,
             threads: st.threads,
             isa: crate::kernel::isa(),
-            width: st.width,
-            height: st.height,
-            spp: st.spp,
-            max_depth: st.max_depth,
-            seed: st.seed,
-            russian_roulette: st.russian_roulette,
-            adaptive: st.adaptive,
-            sampler: st.sampler,
-            estimator: st.estimator,
+            width: st.settings.width,
+            height: st.settings.height,
+            spp: st.settings.spp,
+            max_depth: st.settings.max_depth,
+            seed: st.settings.seed,
+            russian_roulette: st.estimator.roulette,
+            adaptive: st.estimator.adaptive,
+            sampler: st.settings.sampler,
+            estimator: st.settings.estimator,
             rejected_samples: st.rejected_samples,
             rejected_non_finite: st.rejected().non_finite(),
             rejected_out_of_range: st.rejected_out_of_range,
@@ -338,15 +339,12 @@ fn json<T: Serialize>(v: &T) -> String {
 pub struct MergeStats {
     pub parts: usize,
     pub split: SplitKind,
-    pub width: u32,
-    pub height: u32,
-    pub spp: u32,
-    pub max_depth: u32,
-    pub seed: u64,
-    pub sampler: Sampler,
-    pub estimator: EstimatorChoice,
-    pub russian_roulette: Option<Roulette>,
-    pub adaptive: Option<Adaptive>,
+    /// The render's settings, as its parts' headers carry them.
+    #[serde(flatten)]
+    pub settings: Settings,
+    /// Its roulette and adaptive sampling.
+    #[serde(flatten)]
+    pub estimator: Estimator,
     /// Worker threads of the merge.
     pub threads: usize,
     pub rays: u64,
@@ -427,15 +425,8 @@ pub fn merge_to_files(
     let mut stats = MergeStats {
         parts: parts.len(),
         split: split_kind,
-        width: h.width,
-        height: h.height,
-        spp: h.spp,
-        max_depth: s.max_depth,
-        seed: s.seed,
-        sampler: s.sampler,
+        settings: s.settings,
         estimator: s.estimator,
-        russian_roulette: s.roulette,
-        adaptive: s.adaptive,
         threads: rayon::current_num_threads(),
         rays: h.counters.rays,
         samples: h.counters.samples,

@@ -8,12 +8,12 @@
 
 use crate::choice::{EstimatorChoice, KernelChoice, Mode};
 use crate::error::{Error, Result};
-use crate::estimator::{Adaptive, Roulette};
+use crate::estimator::{Adaptive, Estimator, Roulette};
 use crate::film::part::{self, PartCounters, Pixel};
 use crate::film::Film;
 use crate::job::{Job, Overrides, RenderOptions};
 use crate::render::{render_pixels, render_portion, Portion, Progress, Rendered};
-use crate::sampling::Sampler;
+use crate::settings::Settings;
 use serde::Serialize;
 use std::path::{Path, PathBuf};
 use std::time::Instant;
@@ -321,20 +321,11 @@ pub struct Verified {
 /// version (which may render differently) cannot be verified.
 fn verification_job(p: &Path, h: &Header, scene: &[u8]) -> Result<Job> {
     let s = RenderSettings::of(h).map_err(|m| Error::Input(format!("{}: {m}", p.display())))?;
-    let overrides = Overrides {
-        width: Some(h.width),
-        height: Some(h.height),
-        spp: Some(h.spp),
-        max_depth: Some(s.max_depth),
-        seed: Some(s.seed),
-        sampler: Some(s.sampler),
-        estimator: Some(s.estimator),
-        book: false,
-    };
+    let overrides = Overrides::from(s.settings);
     let options = RenderOptions {
         kernel: KernelChoice::Scalar,
-        roulette: s.roulette,
-        adaptive: s.adaptive,
+        roulette: s.estimator.roulette,
+        adaptive: s.estimator.adaptive,
         ..Default::default()
     };
     let cannot = |why: String| {
@@ -457,15 +448,14 @@ pub struct Merged {
     pub verified: Verified,
 }
 
-/// The settings a partial film's header carries, as the statistics name them.
+/// The settings a partial film's header carries: the render's [`Settings`]
+/// (its size and sample count are the header's own fields) and its
+/// estimator options.
 pub struct RenderSettings {
-    pub max_depth: u32,
-    pub seed: u64,
-    pub sampler: Sampler,
-    /// `bsdf` where the header names none (the identity leaves the default out).
-    pub estimator: EstimatorChoice,
-    pub roulette: Option<Roulette>,
-    pub adaptive: Option<Adaptive>,
+    /// The estimator is `bsdf` where the header names none (the identity
+    /// leaves the default out).
+    pub settings: Settings,
+    pub estimator: Estimator,
 }
 
 impl RenderSettings {
@@ -474,7 +464,10 @@ impl RenderSettings {
         let bad = |k: &str, v: &str| format!("the header's {k} '{}' is not one rtow writes", part::quoted(v));
         let (d, s, sm, rr, ad) =
             (get("max_depth")?, get("seed")?, get("sampler")?, get("russian_roulette")?, get("adaptive")?);
-        Ok(RenderSettings {
+        let settings = Settings {
+            width: h.width,
+            height: h.height,
+            spp: h.spp,
             max_depth: d.parse().map_err(|_| bad("max_depth", d))?,
             seed: s.parse().map_err(|_| bad("seed", s))?,
             sampler: sm.parse().map_err(|_| bad("sampler", sm))?,
@@ -482,8 +475,11 @@ impl RenderSettings {
                 None => EstimatorChoice::Bsdf,
                 Some(e) => e.parse().map_err(|_| bad("estimator", e))?,
             },
+        };
+        let estimator = Estimator {
             roulette: Roulette::from_description(rr).ok_or_else(|| bad("russian_roulette", rr))?,
             adaptive: Adaptive::from_description(ad).ok_or_else(|| bad("adaptive", ad))?,
-        })
+        };
+        Ok(RenderSettings { settings, estimator })
     }
 }
