@@ -282,42 +282,7 @@ impl Job {
         let requested = *options;
         let (options, mut warnings) = options.effective(&settings);
         let plan = prepare::plan(scene, &flat, &settings, options.accel);
-        if plan.sample_toward > limits::MAX_SAMPLED_SHAPES {
-            return Err(Error::invalid(
-                "estimator",
-                format!(
-                    "the book estimator samples toward at most {} shapes, and this scene has {} lights; list the ones \
-                     to sample toward in the scene's sample_toward, or use --estimator bsdf",
-                    limits::MAX_SAMPLED_SHAPES,
-                    plan.sample_toward
-                ),
-            ));
-        }
-        if plan.nee > limits::MAX_SAMPLED_SHAPES {
-            return Err(Error::invalid(
-                "estimator",
-                format!(
-                    "the nee-mis estimator samples at most {} lights, and this scene has {}; use --estimator book \
-                     with a sample_toward list of the important ones, or --estimator bsdf",
-                    limits::MAX_SAMPLED_SHAPES,
-                    plan.nee
-                ),
-            ));
-        }
-        if settings.estimator == EstimatorChoice::NeeMis && scene.mode == Mode::Path && plan.nee == 0 {
-            warnings.push(Error::invalid(
-                "estimator",
-                "the nee-mis estimator has no light to sample (the scene has no static diffuse_light sphere or \
-                 quad): every direction comes from the materials, as under bsdf",
-            ));
-        }
-        if settings.estimator == EstimatorChoice::Book && scene.mode == Mode::Path && plan.sample_toward == 0 {
-            warnings.push(Error::invalid(
-                "estimator",
-                "the book estimator has nothing to sample toward (the scene has no lights and no sample_toward \
-                 list): every direction comes from the materials, as under bsdf",
-            ));
-        }
+        check_estimator(scene, &settings, &plan, &mut warnings)?;
         let images = match known.images {
             Some(i) => i,
             None => Arc::new(Images::load(scene, origin).map_err(in_file)?),
@@ -477,6 +442,48 @@ impl Job {
     }
 }
 
+/// Refuses an estimator that samples more shapes than it can (the error
+/// names the setting), and warns of one with nothing to sample.
+fn check_estimator(scene: &Scene, settings: &Settings, plan: &Plan, warnings: &mut Vec<Error>) -> Result<()> {
+    if plan.sample_toward > limits::MAX_SAMPLED_SHAPES {
+        return Err(Error::invalid(
+            "estimator",
+            format!(
+                "the book estimator samples toward at most {} shapes, and this scene has {} lights; list the ones \
+                 to sample toward in the scene's sample_toward, or use --estimator bsdf",
+                limits::MAX_SAMPLED_SHAPES,
+                plan.sample_toward
+            ),
+        ));
+    }
+    if plan.nee > limits::MAX_SAMPLED_SHAPES {
+        return Err(Error::invalid(
+            "estimator",
+            format!(
+                "the nee-mis estimator samples at most {} lights, and this scene has {}; use --estimator book \
+                 with a sample_toward list of the important ones, or --estimator bsdf",
+                limits::MAX_SAMPLED_SHAPES,
+                plan.nee
+            ),
+        ));
+    }
+    if settings.estimator == EstimatorChoice::NeeMis && scene.mode == Mode::Path && plan.nee == 0 {
+        warnings.push(Error::invalid(
+            "estimator",
+            "the nee-mis estimator has no light to sample (the scene has no static diffuse_light sphere or \
+             quad): every direction comes from the materials, as under bsdf",
+        ));
+    }
+    if settings.estimator == EstimatorChoice::Book && scene.mode == Mode::Path && plan.sample_toward == 0 {
+        warnings.push(Error::invalid(
+            "estimator",
+            "the book estimator has nothing to sample toward (the scene has no lights and no sample_toward \
+             list): every direction comes from the materials, as under bsdf",
+        ));
+    }
+    Ok(())
+}
+
 #[cfg(test)]
 mod tests {
     use super::*;
@@ -513,7 +520,7 @@ mod tests {
             FLATTENED.with(|n| n.get()) - before
         };
         let small = Overrides { width: Some(16), height: Some(16), spp: Some(1), ..Default::default() };
-        for name in ["nw-cornell-box", "nw-final", "final", "ch05-normals"] {
+        for name in ["nw-cornell-box", "nw-cornell-smoke", "final", "ch05-normals"] {
             let scene = preset(name).unwrap();
             let job = std::cell::OnceCell::new();
             let made = count(&|| {
