@@ -259,14 +259,14 @@ pub struct ConvergeReport {
     /// Renders per measurement (the fastest counts) and worker threads.
     pub repeat: u32,
     pub threads: usize,
-    /// See [`ConvergeConfig::at_spp`].
+    /// See [`ConvergeSpec::at_spp`].
     pub at_spp: Option<u32>,
     /// The reference, when this run rendered it (written out for reuse with `--reference`).
     pub rendered_reference: Option<Image>,
     /// The build, machine, date and command of the run (written to `<scene>.json`).
     pub provenance: crate::provenance::Provenance,
     pub rows: Vec<ConvergeRow>,
-    /// With [`ConvergeConfig::split`]: each variant's error split.
+    /// With [`ConvergeSpec::split`]: each variant's error split.
     pub splits: Vec<Split>,
 }
 
