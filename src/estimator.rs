@@ -28,7 +28,7 @@ use crate::geometry::{Emitters, Lights};
 use crate::real::Real;
 use crate::sampling::Stream;
 use crate::vec3::V3;
-use serde::{Deserialize, Serialize};
+use serde::Serialize;
 
 /// How a diffuse or isotropic vertex chooses its direction: the render's
 /// estimator, decided once from the plan (`Plan::directions`), the one type
@@ -209,12 +209,13 @@ pub const ROULETTE_AFTER_RAYS: u32 = 6;
 /// Russian roulette on the path throughput: from `after_rays` rays on, a
 /// path survives with probability `min(1, max throughput component)` and is
 /// reweighted (unbiased; it changes the noise, not the expected image).
-/// Serialized as the number `after_rays`.
-#[derive(Clone, Copy, Debug, PartialEq, Eq, Serialize, Deserialize)]
+/// Valid by construction ([`Roulette::new`] is the one check). Serialized as
+/// the number `after_rays`.
+#[derive(Clone, Copy, Debug, PartialEq, Eq, Serialize)]
 #[serde(transparent)]
 pub struct Roulette {
     /// Roulette starts once a path has traced this many rays (1: right after the camera ray).
-    pub after_rays: u32,
+    after_rays: u32,
 }
 
 impl Default for Roulette {
@@ -233,6 +234,11 @@ impl Roulette {
             ));
         }
         Ok(Roulette { after_rays })
+    }
+
+    /// Roulette starts once a path has traced this many rays (1: right after the camera ray).
+    pub fn after_rays(&self) -> u32 {
+        self.after_rays
     }
 
     /// How the film identity and `--explain` describe it.
@@ -281,11 +287,12 @@ pub fn roulette_applies(est: &Estimator, rays: u32) -> bool {
 
 /// Adaptive sampling: a pixel stops once its relative standard error is at
 /// most `threshold`. Decisions are taken only after `min_spp`, `2 min_spp`,
-/// `4 min_spp`, ... samples.
-#[derive(Clone, Copy, Debug, PartialEq, Serialize, Deserialize)]
+/// `4 min_spp`, ... samples. Valid by construction ([`Adaptive::new`] is the
+/// one check).
+#[derive(Clone, Copy, Debug, PartialEq, Serialize)]
 pub struct Adaptive {
-    pub threshold: f32,
-    pub min_spp: u32,
+    threshold: f32,
+    min_spp: u32,
 }
 
 /// Default first decision point (samples per pixel). An error estimate from
@@ -303,12 +310,7 @@ impl Adaptive {
     /// A pixel stops once its relative error is at most `threshold`; the
     /// first decision is taken after `min_spp` samples.
     pub fn new(threshold: f32, min_spp: u32) -> Result<Adaptive> {
-        if !(threshold.is_finite() && threshold > 0.0) {
-            return Err(Error::invalid(
-                "adaptive.threshold",
-                format!("the relative error threshold must be a positive number, not {threshold}"),
-            ));
-        }
+        Adaptive::check_threshold(threshold)?;
         if min_spp < 2 {
             return Err(Error::invalid(
                 "adaptive.min_spp",
@@ -316,6 +318,29 @@ impl Adaptive {
             ));
         }
         Ok(Adaptive { threshold, min_spp })
+    }
+
+    /// The threshold's own rule (a positive number), for a caller that
+    /// takes the threshold before the first decision point (`rtow
+    /// converge`'s variants).
+    pub fn check_threshold(threshold: f32) -> Result<()> {
+        if !(threshold.is_finite() && threshold > 0.0) {
+            return Err(Error::invalid(
+                "adaptive.threshold",
+                format!("the relative error threshold must be a positive number, not {threshold}"),
+            ));
+        }
+        Ok(())
+    }
+
+    /// A pixel stops once its relative error is at most this.
+    pub fn threshold(&self) -> f32 {
+        self.threshold
+    }
+
+    /// The first decision is taken after this many samples per pixel.
+    pub fn min_spp(&self) -> u32 {
+        self.min_spp
     }
 
     /// How the film identity describes it.
@@ -399,7 +424,7 @@ mod tests {
 
     #[test]
     fn descriptions_read_back() {
-        for r in [None, Some(Roulette { after_rays: 1 }), Some(Roulette::default())] {
+        for r in [None, Some(Roulette::new(1).unwrap()), Some(Roulette::default())] {
             assert_eq!(Roulette::from_description(&Roulette::describe(r)), Some(r));
         }
         for a in [None, Some(Adaptive::new(0.02, 64).unwrap()), Some(Adaptive::new(1e-7, 2).unwrap())] {

@@ -7,7 +7,7 @@
 
 use crate::choice::{EstimatorChoice, OnRejected};
 use crate::error::{Error, Result};
-use crate::estimator::{Adaptive, Roulette};
+use crate::estimator::{Adaptive, Estimator, Roulette};
 use crate::film::part::{self, is_part_path, Part, Split, SplitKind};
 use crate::job::Job;
 use crate::output::{check_extension, OutputId, Outputs};
@@ -17,6 +17,7 @@ use crate::provenance::Provenance;
 use crate::render::{render, render_counted, Progress, Rendered, Stats};
 use crate::sampling::Sampler;
 use crate::scene::SceneSource;
+use crate::settings::Settings;
 use crate::shard::{self, FilmRequest};
 use serde::Serialize;
 use std::path::{Path, PathBuf};
@@ -120,15 +121,16 @@ pub fn render_to_files(req: &RenderRequest, progress: Option<&(dyn Fn(Progress) 
         Some(p) => Some((p.clone(), Part::read(p)?)),
         None => None,
     };
-    let film = FilmRequest { split: req.split, resume };
-    let partial = files.writes_film() || film.resume.is_some();
-    let mut verified = None;
-    if partial {
-        shard::check(req.job, &film)?;
-        if let Some((p, f)) = &film.resume {
-            verified = Some(shard::verify_film(req.job, p, f, req.verify)?);
-        }
-    }
+    // A partial film (a shard, a resumed render, or a whole render to
+    // resume later) is checked against the job once, here.
+    let film = match files.writes_film() || resume.is_some() {
+        true => Some(FilmRequest::new(req.job, req.split, resume)?),
+        false => None,
+    };
+    let verified = match &film {
+        Some(f) => shard::verify_film(f, req.verify)?,
+        None => None,
+    };
     // The outputs are one transaction: checked now, written only when all
     // of them are ready. The resume film was read whole above, so the
     // output (and only the output) may replace it: a render continued in place.
@@ -141,8 +143,8 @@ pub fn render_to_files(req: &RenderRequest, progress: Option<&(dyn Fn(Progress) 
     }
     let (out_id, float_id, stats_id) = files.add_to(&mut outputs)?;
     let gamma = files.gamma.unwrap_or(req.job.default_gamma());
-    let r = if partial {
-        let (r, part) = shard::render_part(req.job, &film, progress)?;
+    let r = if let Some(film) = &film {
+        let (r, part) = shard::render_part(film, progress)?;
         r.stats.rejected().check(req.on_rejected)?;
         let bytes = if files.writes_film() {
             part.to_bytes()
@@ -297,15 +299,15 @@ impl StatsFile {
             lanes: None,
             threads: st.threads,
             isa: crate::kernel::isa(),
-            width: st.width,
-            height: st.height,
-            spp: st.spp,
-            max_depth: st.max_depth,
-            seed: st.seed,
-            russian_roulette: st.russian_roulette,
-            adaptive: st.adaptive,
-            sampler: st.sampler,
-            estimator: st.estimator,
+            width: st.settings.width,
+            height: st.settings.height,
+            spp: st.settings.spp,
+            max_depth: st.settings.max_depth,
+            seed: st.settings.seed,
+            russian_roulette: st.estimator.roulette,
+            adaptive: st.estimator.adaptive,
+            sampler: st.settings.sampler,
+            estimator: st.settings.estimator,
             rejected_samples: st.rejected_samples,
             rejected_non_finite: st.rejected().non_finite(),
             rejected_out_of_range: st.rejected_out_of_range,
@@ -337,15 +339,12 @@ fn json<T: Serialize>(v: &T) -> String {
 pub struct MergeStats {
     pub parts: usize,
     pub split: SplitKind,
-    pub width: u32,
-    pub height: u32,
-    pub spp: u32,
-    pub max_depth: u32,
-    pub seed: u64,
-    pub sampler: Sampler,
-    pub estimator: EstimatorChoice,
-    pub russian_roulette: Option<Roulette>,
-    pub adaptive: Option<Adaptive>,
+    /// The render's settings, as its parts' headers carry them.
+    #[serde(flatten)]
+    pub settings: Settings,
+    /// Its roulette and adaptive sampling.
+    #[serde(flatten)]
+    pub estimator: Estimator,
     /// Worker threads of the merge.
     pub threads: usize,
     pub rays: u64,
@@ -426,15 +425,8 @@ pub fn merge_to_files(
     let mut stats = MergeStats {
         parts: parts.len(),
         split: split_kind,
-        width: h.width,
-        height: h.height,
-        spp: h.spp,
-        max_depth: s.max_depth,
-        seed: s.seed,
-        sampler: s.sampler,
+        settings: s.settings,
         estimator: s.estimator,
-        russian_roulette: s.roulette,
-        adaptive: s.adaptive,
         threads: rayon::current_num_threads(),
         rays: h.counters.rays,
         samples: h.counters.samples,

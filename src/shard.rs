@@ -8,12 +8,12 @@
 
 use crate::choice::{EstimatorChoice, KernelChoice, Mode};
 use crate::error::{Error, Result};
-use crate::estimator::{Adaptive, Roulette};
+use crate::estimator::{Adaptive, Estimator, Roulette};
 use crate::film::part::{self, PartCounters, Pixel};
 use crate::film::Film;
 use crate::job::{Job, Overrides, RenderOptions};
 use crate::render::{render_pixels, render_portion, Portion, Progress, Rendered};
-use crate::sampling::Sampler;
+use crate::settings::Settings;
 use serde::Serialize;
 use std::path::{Path, PathBuf};
 use std::time::Instant;
@@ -26,34 +26,58 @@ pub fn default_gamma(part: &Part) -> f32 {
     serde_json::from_value::<Mode>(serde_json::Value::String(mode)).unwrap_or_default().default_gamma()
 }
 
-/// A render that writes (or continues) a partial film.
-pub struct FilmRequest {
-    /// Which shard ([`Split::WHOLE`]: all of it).
-    pub split: Split,
-    /// A film of the first samples of this very render, to continue.
-    pub resume: Option<(PathBuf, Part)>,
+/// A render that writes (or continues) a partial film, checked against its
+/// job once, when it is made ([`FilmRequest::new`]): what cannot give the
+/// exact image is refused before any work, and [`render_part`] checks nothing again.
+pub struct FilmRequest<'a> {
+    job: &'a Job,
+    split: Split,
+    resume: Option<(PathBuf, Part)>,
+}
+
+impl<'a> FilmRequest<'a> {
+    /// The shard `split` of `job` ([`Split::WHOLE`]: all of it), continuing
+    /// `resume` (a film of the first samples of this very render, read from
+    /// its path) if given; refuses what cannot give the exact image.
+    pub fn new(job: &'a Job, split: Split, resume: Option<(PathBuf, Part)>) -> Result<FilmRequest<'a>> {
+        check(job, split, resume.as_ref())?;
+        Ok(FilmRequest { job, split, resume })
+    }
+
+    pub fn job(&self) -> &'a Job {
+        self.job
+    }
+
+    pub fn split(&self) -> Split {
+        self.split
+    }
+
+    /// The film continued, and the path it was read from.
+    pub fn resume(&self) -> Option<(&Path, &Part)> {
+        self.resume.as_ref().map(|(p, f)| (p.as_path(), f))
+    }
 }
 
 /// Refuses what cannot give the exact image, before any work.
-pub fn check(job: &Job, req: &FilmRequest) -> Result<()> {
+fn check(job: &Job, split: Split, resume: Option<&(PathBuf, Part)>) -> Result<()> {
     let settings = job.settings();
     let opts = job.options();
-    req.split.check(settings.spp, settings.height)?;
+    split.check(settings.spp, settings.height)?;
     if job.mode() == Mode::Gradient {
         return Err(Error::Input(
             "this scene traces no samples (a gradient): it has no film to split, write or resume".into(),
         ));
     }
-    if opts.adaptive.is_some() && req.split.kind == SplitKind::Samples && req.split.of > 1 {
+    if opts.adaptive.is_some() && split.kind == SplitKind::Samples && split.of > 1 {
         return Err(Error::invalid(
             "split",
             "adaptive sampling decides from every sample a pixel has taken so far, so a shard of later \
              samples cannot know which pixels stopped: split adaptive renders by rows",
         ));
     }
-    let Some((path, film)) = &req.resume else { return Ok(()) };
+    let Some((path, film)) = resume else { return Ok(()) };
     let p = path.display();
-    if req.split.kind != SplitKind::None {
+    if split.kind != SplitKind::None {
         return Err(Error::invalid("resume", "continues a whole render; it cannot be combined with a shard"));
     }
     if opts.adaptive.is_some() {
@@ -93,14 +117,11 @@ pub fn check(job: &Job, req: &FilmRequest) -> Result<()> {
     Ok(())
 }
 
-/// Renders the request's portion of `job` (after [`check`]): the image (of
-/// this run's rows), its statistics, and the partial film to write.
-pub fn render_part(
-    job: &Job,
-    req: &FilmRequest,
-    progress: Option<&(dyn Fn(Progress) + Sync)>,
-) -> Result<(Rendered, Part)> {
-    check(job, req)?;
+/// Renders the request's portion of its job (checked when the request was
+/// made): the image (of this run's rows), its statistics, and the partial
+/// film to write.
+pub fn render_part(req: &FilmRequest, progress: Option<&(dyn Fn(Progress) + Sync)>) -> Result<(Rendered, Part)> {
+    let job = req.job;
     let settings = job.settings();
     let (start, mut counters) = match &req.resume {
         Some((_, p)) => (Some(&p.film), p.header.counters),
@@ -300,20 +321,11 @@ pub struct Verified {
 /// version (which may render differently) cannot be verified.
 fn verification_job(p: &Path, h: &Header, scene: &[u8]) -> Result<Job> {
     let s = RenderSettings::of(h).map_err(|m| Error::Input(format!("{}: {m}", p.display())))?;
-    let overrides = Overrides {
-        width: Some(h.width),
-        height: Some(h.height),
-        spp: Some(h.spp),
-        max_depth: Some(s.max_depth),
-        seed: Some(s.seed),
-        sampler: Some(s.sampler),
-        estimator: Some(s.estimator),
-        book: false,
-    };
+    let overrides = Overrides::from(s.settings);
     let options = RenderOptions {
         kernel: KernelChoice::Scalar,
-        roulette: s.roulette,
-        adaptive: s.adaptive,
+        roulette: s.estimator.roulette,
+        adaptive: s.estimator.adaptive,
         ..Default::default()
     };
     let cannot = |why: String| {
@@ -395,10 +407,12 @@ fn check_pixels(job: &Job, p: &Path, h: &Header, chosen: &[usize], stored: &[Pix
     Ok(())
 }
 
-/// Checks a film to resume (`path`, already checked by [`check`] to be a
-/// whole render of `job`'s image) by recomputation, as a merge checks its
-/// parts ([`Verify`]).
-pub fn verify_film(job: &Job, path: &Path, film: &Part, verify: Verify) -> Result<Verified> {
+/// Checks the film a request resumes (already checked, when the request
+/// was made, to be a whole render of its job's image) by recomputation, as
+/// a merge checks its parts ([`Verify`]); `None` if it resumes none.
+pub fn verify_film(req: &FilmRequest, verify: Verify) -> Result<Option<Verified>> {
+    let Some((path, film)) = req.resume() else { return Ok(None) };
+    let job = req.job;
     verify.check()?;
     let h = &film.header;
     let chosen = verify.choose(h);
@@ -416,12 +430,12 @@ pub fn verify_film(job: &Job, path: &Path, film: &Part, verify: Verify) -> Resul
         debug_assert!(chosen.iter().all(|&i| i < w * (h.rows[1] - h.rows[0]) as usize));
         check_pixels(job, path, h, &chosen, &stored, verify)?;
     }
-    Ok(Verified {
+    Ok(Some(Verified {
         pixels_per_part: verify.pixels,
         seed: verify.seed,
         pixels: chosen.len() as u64,
         seconds: t.elapsed().as_secs_f64(),
-    })
+    }))
 }
 
 /// What [`merge_files`] produced.
@@ -434,15 +448,14 @@ pub struct Merged {
     pub verified: Verified,
 }
 
-/// The settings a partial film's header carries, as the statistics name them.
+/// The settings a partial film's header carries: the render's [`Settings`]
+/// (its size and sample count are the header's own fields) and its
+/// estimator options.
 pub struct RenderSettings {
-    pub max_depth: u32,
-    pub seed: u64,
-    pub sampler: Sampler,
-    /// `bsdf` where the header names none (the identity leaves the default out).
-    pub estimator: EstimatorChoice,
-    pub roulette: Option<Roulette>,
-    pub adaptive: Option<Adaptive>,
+    /// The estimator is `bsdf` where the header names none (the identity
+    /// leaves the default out).
+    pub settings: Settings,
+    pub estimator: Estimator,
 }
 
 impl RenderSettings {
@@ -451,7 +464,10 @@ impl RenderSettings {
         let bad = |k: &str, v: &str| format!("the header's {k} '{}' is not one rtow writes", part::quoted(v));
         let (d, s, sm, rr, ad) =
             (get("max_depth")?, get("seed")?, get("sampler")?, get("russian_roulette")?, get("adaptive")?);
-        Ok(RenderSettings {
+        let settings = Settings {
+            width: h.width,
+            height: h.height,
+            spp: h.spp,
             max_depth: d.parse().map_err(|_| bad("max_depth", d))?,
             seed: s.parse().map_err(|_| bad("seed", s))?,
             sampler: sm.parse().map_err(|_| bad("sampler", sm))?,
@@ -459,8 +475,11 @@ impl RenderSettings {
                 None => EstimatorChoice::Bsdf,
                 Some(e) => e.parse().map_err(|_| bad("estimator", e))?,
             },
+        };
+        let estimator = Estimator {
             roulette: Roulette::from_description(rr).ok_or_else(|| bad("russian_roulette", rr))?,
             adaptive: Adaptive::from_description(ad).ok_or_else(|| bad("adaptive", ad))?,
-        })
+        };
+        Ok(RenderSettings { settings, estimator })
     }
 }

@@ -371,13 +371,8 @@ fn baseline_corpus() -> (Vec<u8>, rtow::instruments::bench::BenchReport, rtow::S
     let scene = scene::preset("ch08-fuzz").unwrap();
     let o = Overrides { width: Some(12), height: Some(7), spp: Some(2), max_depth: Some(5), ..Default::default() };
     let job = Job::new(&scene, &o, &RenderOptions { threads: Some(1), ..Default::default() }).unwrap();
-    let cfg = BenchConfig {
-        kernels: vec![KernelChoice::Scalar, KernelChoice::Simd8],
-        repeat: 2,
-        tolerance: 5.0,
-        gate: Gate::Time,
-    };
-    let report = bench::run(&job, "ch08-fuzz", &cfg, |_, _, _| {}).unwrap();
+    let cfg = BenchConfig::new(&job, &[KernelChoice::Scalar, KernelChoice::Simd8], 2, 5.0, Gate::Time).unwrap();
+    let report = bench::run(&cfg, "ch08-fuzz", |_, _, _| {}).unwrap();
     (report.to_json().into_bytes(), report, *job.settings(), job.threads())
 }
 
@@ -465,7 +460,7 @@ fn film_corpus() -> Films {
         |spp| Overrides { width: Some(8), height: Some(6), spp: Some(spp), max_depth: Some(6), ..Default::default() };
     let opts = RenderOptions { threads: Some(1), ..Default::default() };
     let job = Job::new(&scene, &o(4), &opts).unwrap();
-    let film = |split| shard::render_part(&job, &FilmRequest { split, resume: None }, None).unwrap().1.to_bytes();
+    let film = |split| shard::render_part(&FilmRequest::new(&job, split, None).unwrap(), None).unwrap().1.to_bytes();
     let parts = vec![
         ("s1.rtfilm", film(Split { kind: SplitKind::Samples, shard: 1, of: 2 })),
         ("s2.rtfilm", film(Split { kind: SplitKind::Samples, shard: 2, of: 2 })),

@@ -56,7 +56,7 @@ fn merge_memory_does_not_grow_with_the_number_of_parts() {
         let v: Vec<String> = (1..=n)
             .map(|k| {
                 let split = Split { kind: SplitKind::Samples, shard: k, of: n };
-                let (_, p) = shard::render_part(&j, &FilmRequest { split, resume: None }, None).unwrap();
+                let (_, p) = shard::render_part(&FilmRequest::new(&j, split, None).unwrap(), None).unwrap();
                 let name = format!("n{n}-{k}.rtfilm");
                 p.write(&d.join(&name)).unwrap();
                 name

@@ -80,7 +80,6 @@ pub fn run(a: BenchArgs) -> Result<bool> {
     let source = SceneSource::open(&a.scene)?;
     let job = Job::from_source(&source, &a.image.overrides(), &a.run.options(KernelChoice::Simd))?;
     let name = &source.name;
-    let cfg = BenchConfig { kernels: a.kernels.clone(), repeat: a.repeat, tolerance: a.tolerance, gate: a.gate };
     if a.instructions_child {
         // The process `--instructions` counts: one render of one kernel, no output file.
         let kernel = a.kernels.first().copied().unwrap_or(KernelChoice::Simd);
@@ -89,7 +88,7 @@ pub fn run(a: BenchArgs) -> Result<bool> {
         return Ok(true);
     }
     // Everything is checked before anything is measured.
-    cfg.validate(&job)?;
+    let cfg = BenchConfig::new(&job, &a.kernels, a.repeat, a.tolerance, a.gate)?;
     if a.instructions {
         return count_instructions(&a, &source, &job);
     }
@@ -99,7 +98,7 @@ pub fn run(a: BenchArgs) -> Result<bool> {
     }
     let (outputs, ids) = outputs(&a, &source)?;
     if a.by_depth {
-        for (kernel, rows) in bench::work_by_depth_per_kernel(&job, &cfg)? {
+        for (kernel, rows) in bench::work_by_depth_per_kernel(&cfg)? {
             say!("{}:", kernel.name());
             say!("{}", bench::depth_table(&rows).trim_end());
         }
@@ -118,7 +117,7 @@ pub fn run(a: BenchArgs) -> Result<bool> {
         a.repeat,
         rtow::isa()
     );
-    let report = bench::run(&job, name, &cfg, |k, i, st| {
+    let report = bench::run(&cfg, name, |k, i, st| {
         tell!("  {} run {}: {:.3} s, {:.2} Mrays/s", k.name(), i + 1, st.seconds, st.mrays_per_s)
     })?;
     write_report(&report.table(), &report.to_json(), outputs, ids)?;
@@ -270,7 +269,7 @@ fn print_instructions_comparison(report: &InstructionsReport, b: &InstructionsBa
 /// Prints the verdict of each kernel against the baseline; false on a regression.
 fn print_comparison(report: &bench::BenchReport, b: &Baseline, cfg: &BenchConfig) -> bool {
     let mut ok = true;
-    for c in bench::compare(report, b, cfg.tolerance, cfg.gate) {
+    for c in bench::compare(report, b, cfg.tolerance(), cfg.gate()) {
         let work = match c.work_change_percent {
             None => "work: not in the baseline".to_string(),
             Some(0.0) => "work identical".to_string(),
@@ -290,10 +289,10 @@ fn print_comparison(report: &bench::BenchReport, b: &Baseline, cfg: &BenchConfig
             if c.image_same { "identical" } else { "CHANGED" },
             if c.regressed { "REGRESSION" } else { "ok" },
             match c.verdict {
-                BaselineVerdict::Same => format!(" (within the {}% tolerance)", cfg.tolerance),
+                BaselineVerdict::Same => format!(" (within the {}% tolerance)", cfg.tolerance()),
                 BaselineVerdict::WithinNoise =>
                     " (within noise: the runs cannot tell this change from the machine's noise)".into(),
-                BaselineVerdict::TimingOnly if cfg.gate == Gate::Work =>
+                BaselineVerdict::TimingOnly if cfg.gate() == Gate::Work =>
                     format!(" (timing only, {timing}: same image and work; not gated with --gate work)"),
                 BaselineVerdict::TimingOnly => format!(" (timing only, {timing}: same image and work)"),
                 BaselineVerdict::Work => " (the algorithm's work changed)".into(),

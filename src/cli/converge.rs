@@ -3,7 +3,7 @@
 use super::args::{kernel_parser, RunArgs, SizeArgs};
 use super::say;
 use clap::Args;
-use rtow::instruments::converge::{self, ConvergeConfig, Event, Reference, ReportFiles, Variant};
+use rtow::instruments::converge::{self, ConvergeConfig, ConvergeSpec, Event, Reference, ReportFiles, Variant};
 use rtow::output::check_extension;
 use rtow::{Error, Job, KernelChoice, Result, Sampler, SceneSource, ADAPTIVE_MIN_SPP};
 use std::path::PathBuf;
@@ -94,7 +94,7 @@ pub fn run(a: ConvergeArgs) -> Result<()> {
         (None, Some(n)) => Reference::Spp(n),
         (None, None) => Reference::default_for(&a.spp_list)?,
     };
-    let cfg = ConvergeConfig {
+    let cfg = ConvergeConfig::new(ConvergeSpec {
         kernels: a.kernels.clone(),
         variants,
         spp_list: a.spp_list.clone(),
@@ -104,8 +104,7 @@ pub fn run(a: ConvergeArgs) -> Result<()> {
         at_spp: a.at_spp,
         split: a.split,
         split_seeds: a.split_seeds,
-    };
-    cfg.validate()?;
+    })?;
     // Every file the run writes is checked now, before any rendering, and
     // written together at the end.
     let mut inputs: Vec<(&std::path::Path, &str)> = Vec::new();

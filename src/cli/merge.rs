@@ -39,9 +39,9 @@ pub fn run(a: MergeArgs) -> Result<()> {
             "merged {} part(s) ({}x{}, {} spp, split by {}) -> {}: {} rays, {} samples, image hash {}, in {:.3} s \
              (read {:.3} s, merge {:.3} s, write {:.3} s); {}",
             st.parts,
-            st.width,
-            st.height,
-            st.spp,
+            st.settings.width,
+            st.settings.height,
+            st.settings.spp,
             st.split.name(),
             a.output.display(),
             st.rays,

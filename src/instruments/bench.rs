@@ -59,39 +59,61 @@ impl std::str::FromStr for Gate {
     }
 }
 
-/// What to measure: each of `kernels` on a job's scene, settings and options.
-#[derive(Clone, Debug)]
+/// What to measure: each of some kernels on a job's scene, settings and
+/// options; checked once, when it is made ([`BenchConfig::new`]).
+#[derive(Debug)]
 pub struct BenchConfig {
-    pub kernels: Vec<KernelChoice>,
-    /// Timed renders per kernel; the median one is reported.
-    pub repeat: usize,
-    /// Allowed throughput drop against a baseline, in percent.
-    pub tolerance: f64,
-    /// What a comparison with a baseline fails on.
-    pub gate: Gate,
+    /// The job with each kernel, in order (at least one; they share the
+    /// job's prepared scene).
+    jobs: Vec<Job>,
+    repeat: usize,
+    tolerance: f64,
+    gate: Gate,
 }
 
 impl BenchConfig {
-    /// Checks everything before any render (the job's own values were checked when it was made).
-    pub fn validate(&self, job: &Job) -> Result<()> {
-        if self.repeat == 0 {
+    /// `job` with each of `kernels`, `repeat` timed renders each, compared
+    /// with a baseline at `tolerance` percent and failing on `gate`; checks
+    /// everything before any render (the job's own values were checked when
+    /// it was made).
+    pub fn new(job: &Job, kernels: &[KernelChoice], repeat: usize, tolerance: f64, gate: Gate) -> Result<BenchConfig> {
+        if repeat == 0 {
             return Err(Error::invalid("repeat", "must be at least 1"));
         }
-        if self.kernels.is_empty() {
+        if kernels.is_empty() {
             return Err(Error::invalid("kernels", "name at least one kernel"));
         }
-        if !(self.tolerance >= 0.0 && self.tolerance.is_finite()) {
-            return Err(Error::invalid("tolerance", format!("must be a percentage >= 0, got {}", self.tolerance)));
+        if !(tolerance >= 0.0 && tolerance.is_finite()) {
+            return Err(Error::invalid("tolerance", format!("must be a percentage >= 0, got {tolerance}")));
         }
         if job.options().tile != DEFAULT_TILE {
             return Err(Error::invalid("tile", format!("benchmarks use the default tile size, {DEFAULT_TILE}")));
         }
-        Ok(())
+        let jobs = kernels
+            .iter()
+            .map(|&kernel| job.with_options(&RenderOptions { kernel, ..*job.options() }))
+            .collect::<Result<_>>()?;
+        Ok(BenchConfig { jobs, repeat, tolerance, gate })
     }
 
-    /// `job` with each kernel.
-    pub(crate) fn jobs(&self, job: &Job) -> Result<Vec<Job>> {
-        self.kernels.iter().map(|&kernel| job.with_options(&RenderOptions { kernel, ..*job.options() })).collect()
+    /// The job with each kernel, in order.
+    pub fn jobs(&self) -> &[Job] {
+        &self.jobs
+    }
+
+    /// Timed renders per kernel; the median one is reported.
+    pub fn repeat(&self) -> usize {
+        self.repeat
+    }
+
+    /// Allowed throughput drop against a baseline, in percent.
+    pub fn tolerance(&self) -> f64 {
+        self.tolerance
+    }
+
+    /// What a comparison with a baseline fails on.
+    pub fn gate(&self) -> Gate {
+        self.gate
     }
 }
 
@@ -156,27 +178,21 @@ pub struct BenchReport {
     pub provenance: Provenance,
 }
 
-/// Renders `job`'s scene `repeat` times with each kernel (median kept), then
-/// once more with the work counters on.
-pub fn run(
-    job: &Job,
-    name: &str,
-    cfg: &BenchConfig,
-    mut on_run: impl FnMut(Kernel, usize, &Stats),
-) -> Result<BenchReport> {
-    cfg.validate(job)?;
+/// Renders the configuration's job `repeat` times with each kernel (median
+/// kept), then once more with the work counters on; `name` names its scene.
+pub fn run(cfg: &BenchConfig, name: &str, mut on_run: impl FnMut(Kernel, usize, &Stats)) -> Result<BenchReport> {
     let provenance = Provenance::collect();
     let mut entries = Vec::new();
-    for job in cfg.jobs(job)? {
+    for job in &cfg.jobs {
         let kernel = job.kernel();
         let mut runs = Vec::new();
         for i in 0..cfg.repeat {
-            let r = render(&job, None)?;
+            let r = render(job, None)?;
             r.stats.check_finite()?;
             on_run(kernel, i, &r.stats);
             runs.push(r.stats);
         }
-        let counted = render_counted(&job, None)?.stats;
+        let counted = render_counted(job, None)?.stats;
         let runs_seconds: Vec<f64> = runs.iter().map(|s| s.seconds).collect();
         for s in runs.iter().chain([&counted]) {
             if s.image_hash != runs[0].image_hash || s.rays != runs[0].rays {
@@ -202,7 +218,8 @@ pub fn run(
             e.speedup = Some(e.stats.mrays_per_s / base);
         }
     }
-    let threads = entries.first().map_or_else(|| job.threads(), |e| e.stats.threads);
+    // At least one kernel, by construction.
+    let threads = entries[0].stats.threads;
     Ok(BenchReport {
         schema: BENCH_SCHEMA,
         scene: name.to_string(),
@@ -597,9 +614,8 @@ pub struct DepthRow {
 }
 
 /// [`work_by_depth`] for each of the configuration's kernels.
-pub fn work_by_depth_per_kernel(job: &Job, cfg: &BenchConfig) -> Result<Vec<(Kernel, Vec<DepthRow>)>> {
-    cfg.validate(job)?;
-    cfg.jobs(job)?.iter().map(|j| Ok((j.kernel(), work_by_depth(j)?))).collect()
+pub fn work_by_depth_per_kernel(cfg: &BenchConfig) -> Result<Vec<(Kernel, Vec<DepthRow>)>> {
+    cfg.jobs.iter().map(|j| Ok((j.kernel(), work_by_depth(j)?))).collect()
 }
 
 /// The work at each ray depth of one render of `job` (how coherence is lost bounce by bounce).

@@ -61,8 +61,9 @@ impl Overrides {
     /// The settings of `scene` (its render table), with these overrides on
     /// top: an override wins over `--book`, which wins over the table, which
     /// wins over rtow's defaults (the estimator's default is the scene's,
-    /// [`Scene::default_estimator`]).
-    pub fn resolve(&self, scene: &Scene) -> Settings {
+    /// [`Scene::default_estimator`], read from `flat`, the scene's
+    /// [`Scene::flatten`]).
+    pub fn resolve(&self, scene: &Scene, flat: &Flat) -> Settings {
         let table = &scene.render;
         let d = Settings::default();
         let mut s = Settings {
@@ -74,7 +75,7 @@ impl Overrides {
             sampler: table.sampler.unwrap_or(d.sampler),
             estimator: match (self.estimator, table.estimator) {
                 (Some(e), _) | (None, Some(e)) => e,
-                (None, None) => scene.default_estimator(),
+                (None, None) => scene.default_estimator(flat),
             },
         };
         if self.book {
@@ -140,7 +141,8 @@ impl Default for RenderOptions {
 }
 
 impl RenderOptions {
-    /// Every option in range; the error names it.
+    /// Every option in range; the error names it (roulette and adaptive
+    /// sampling are valid by construction).
     fn validate(&self) -> Result<()> {
         limits::check_threads(self.threads)?;
         if !(1..=MAX_TILE).contains(&self.tile) {
@@ -151,12 +153,6 @@ impl RenderOptions {
                     self.tile
                 ),
             ));
-        }
-        if let Some(a) = self.adaptive {
-            Adaptive::new(a.threshold, a.min_spp)?;
-        }
-        if let Some(r) = self.roulette {
-            Roulette::new(r.after_rays)?;
         }
         Ok(())
     }
@@ -169,14 +165,16 @@ impl RenderOptions {
         let mut run = *self;
         let mut warnings = Vec::new();
         if let Some(a) = self.adaptive {
-            if settings.spp <= a.min_spp {
+            if settings.spp <= a.min_spp() {
                 run.adaptive = None;
                 warnings.push(Error::invalid(
                     "adaptive.min_spp",
                     format!(
                         "adaptive sampling decides first after {} samples per pixel, but this render takes only {}: \
                          it is off (the image is the one without it); ask for more than {} samples or decide earlier",
-                        a.min_spp, settings.spp, a.min_spp
+                        a.min_spp(),
+                        settings.spp,
+                        a.min_spp()
                     ),
                 ));
             }
@@ -275,49 +273,16 @@ impl Job {
         if scene.mode != Mode::Gradient {
             PreparedCamera::check(&view).map_err(in_file)?;
         }
-        let settings = overrides.resolve(scene);
+        // The one flattening of the scene: the default estimator, the plan
+        // and the layout for the kernels all read it.
+        let flat = known.flat.unwrap_or_else(|| Arc::new(scene.flatten()));
+        let settings = overrides.resolve(scene, &flat);
         settings.validate()?;
         options.validate()?;
         let requested = *options;
         let (options, mut warnings) = options.effective(&settings);
-        let flat = known.flat.unwrap_or_else(|| Arc::new(scene.flatten()));
         let plan = prepare::plan(scene, &flat, &settings, options.accel);
-        if plan.sample_toward > limits::MAX_SAMPLED_SHAPES {
-            return Err(Error::invalid(
-                "estimator",
-                format!(
-                    "the book estimator samples toward at most {} shapes, and this scene has {} lights; list the ones \
-                     to sample toward in the scene's sample_toward, or use --estimator bsdf",
-                    limits::MAX_SAMPLED_SHAPES,
-                    plan.sample_toward
-                ),
-            ));
-        }
-        if plan.nee > limits::MAX_SAMPLED_SHAPES {
-            return Err(Error::invalid(
-                "estimator",
-                format!(
-                    "the nee-mis estimator samples at most {} lights, and this scene has {}; use --estimator book \
-                     with a sample_toward list of the important ones, or --estimator bsdf",
-                    limits::MAX_SAMPLED_SHAPES,
-                    plan.nee
-                ),
-            ));
-        }
-        if settings.estimator == EstimatorChoice::NeeMis && scene.mode == Mode::Path && plan.nee == 0 {
-            warnings.push(Error::invalid(
-                "estimator",
-                "the nee-mis estimator has no light to sample (the scene has no static diffuse_light sphere or \
-                 quad): every direction comes from the materials, as under bsdf",
-            ));
-        }
-        if settings.estimator == EstimatorChoice::Book && scene.mode == Mode::Path && plan.sample_toward == 0 {
-            warnings.push(Error::invalid(
-                "estimator",
-                "the book estimator has nothing to sample toward (the scene has no lights and no sample_toward \
-                 list): every direction comes from the materials, as under bsdf",
-            ));
-        }
+        check_estimator(scene, &settings, &plan, &mut warnings)?;
         let images = match known.images {
             Some(i) => i,
             None => Arc::new(Images::load(scene, origin).map_err(in_file)?),
@@ -477,6 +442,48 @@ impl Job {
     }
 }
 
+/// Refuses an estimator that samples more shapes than it can (the error
+/// names the setting), and warns of one with nothing to sample.
+fn check_estimator(scene: &Scene, settings: &Settings, plan: &Plan, warnings: &mut Vec<Error>) -> Result<()> {
+    if plan.sample_toward > limits::MAX_SAMPLED_SHAPES {
+        return Err(Error::invalid(
+            "estimator",
+            format!(
+                "the book estimator samples toward at most {} shapes, and this scene has {} lights; list the ones \
+                 to sample toward in the scene's sample_toward, or use --estimator bsdf",
+                limits::MAX_SAMPLED_SHAPES,
+                plan.sample_toward
+            ),
+        ));
+    }
+    if plan.nee > limits::MAX_SAMPLED_SHAPES {
+        return Err(Error::invalid(
+            "estimator",
+            format!(
+                "the nee-mis estimator samples at most {} lights, and this scene has {}; use --estimator book \
+                 with a sample_toward list of the important ones, or --estimator bsdf",
+                limits::MAX_SAMPLED_SHAPES,
+                plan.nee
+            ),
+        ));
+    }
+    if settings.estimator == EstimatorChoice::NeeMis && scene.mode == Mode::Path && plan.nee == 0 {
+        warnings.push(Error::invalid(
+            "estimator",
+            "the nee-mis estimator has no light to sample (the scene has no static diffuse_light sphere or \
+             quad): every direction comes from the materials, as under bsdf",
+        ));
+    }
+    if settings.estimator == EstimatorChoice::Book && scene.mode == Mode::Path && plan.sample_toward == 0 {
+        warnings.push(Error::invalid(
+            "estimator",
+            "the book estimator has nothing to sample toward (the scene has no lights and no sample_toward \
+             list): every direction comes from the materials, as under bsdf",
+        ));
+    }
+    Ok(())
+}
+
 #[cfg(test)]
 mod tests {
     use super::*;
@@ -501,19 +508,53 @@ mod tests {
         assert!(rr.prepared().estimator.roulette.is_some());
     }
 
+    /// A job flattens its scene once, whatever reads the flattened scene
+    /// (the default estimator, the plan, the layout); a derived job and its
+    /// layout flatten nothing.
+    #[test]
+    fn a_job_flattens_its_scene_once() {
+        use crate::scene::FLATTENED;
+        let count = |f: &dyn Fn()| {
+            let before = FLATTENED.with(|n| n.get());
+            f();
+            FLATTENED.with(|n| n.get()) - before
+        };
+        let small = Overrides { width: Some(16), height: Some(16), spp: Some(1), ..Default::default() };
+        for name in ["nw-cornell-box", "nw-cornell-smoke", "final", "ch05-normals"] {
+            let scene = preset(name).unwrap();
+            let job = std::cell::OnceCell::new();
+            let made = count(&|| {
+                let j = Job::new(&scene, &small, &RenderOptions::default()).unwrap();
+                let _ = j.prepared();
+                job.set(j).unwrap();
+            });
+            assert_eq!(made, 1, "{name}: one flattening per job");
+            let job = job.get().unwrap();
+            let derived = count(&|| {
+                let wider = job.with(&Overrides { width: Some(24), ..small }, &RenderOptions::default()).unwrap();
+                let _ = wider.prepared();
+                let scalar = RenderOptions { kernel: KernelChoice::Scalar, ..Default::default() };
+                let _ = job.with_options(&scalar).unwrap().prepared();
+            });
+            assert_eq!(derived, 0, "{name}: derived jobs share the flattened scene");
+        }
+    }
+
     #[test]
     fn flags_win_over_the_book_which_wins_over_the_scene() {
         let render = RenderTable { width: Some(100), samples_per_pixel: Some(7), ..Default::default() };
         let scene = Scene { render, ..preset("ch07-diffuse").unwrap() };
-        let s = Overrides::default().resolve(&scene);
+        let flat = scene.flatten();
+        let s = Overrides::default().resolve(&scene, &flat);
         assert_eq!((s.width, s.height, s.spp, s.max_depth, s.seed), (100, 225, 7, 50, 0));
-        let s = Overrides { book: true, spp: Some(3), ..Default::default() }.resolve(&scene);
+        let s = Overrides { book: true, spp: Some(3), ..Default::default() }.resolve(&scene, &flat);
         assert_eq!((s.width, s.height, s.spp, s.max_depth), (1200, 675, 3, 50));
     }
 
     #[test]
     fn scenes_with_lights_take_the_nee_mis_estimator_unless_told_otherwise() {
-        let est = |name: &str, o: &Overrides| o.resolve(&preset(name).unwrap()).estimator;
+        let resolve = |o: &Overrides, scene: &Scene| o.resolve(scene, &scene.flatten()).estimator;
+        let est = |name: &str, o: &Overrides| resolve(o, &preset(name).unwrap());
         let none = Overrides::default();
         for lit in ["nw-cornell-box", "nw-simple-light", "nw-cornell-smoke", "rol-cornell-box"] {
             assert_eq!(est(lit, &none), EstimatorChoice::NeeMis, "{lit}");
@@ -523,7 +564,7 @@ mod tests {
         // A sample_toward list and no light: book.
         let mut listed = preset("ch07-diffuse").unwrap();
         listed.sample_toward = vec![crate::scene::Shape::Sphere { center: [0.0, 0.0, -1.0], radius: 0.5 }];
-        assert_eq!(none.resolve(&listed).estimator, EstimatorChoice::Book);
+        assert_eq!(resolve(&none, &listed), EstimatorChoice::Book);
         for unlit in ["final", "ch07-diffuse", "nw-quads", "nw-earth", "ch05-normals"] {
             assert_eq!(est(unlit, &none), EstimatorChoice::Bsdf, "{unlit}");
         }
@@ -531,12 +572,12 @@ mod tests {
         assert_eq!(est("nw-cornell-box", &bsdf), EstimatorChoice::Bsdf);
         let mut table_says = preset("nw-cornell-box").unwrap();
         table_says.render.estimator = Some(EstimatorChoice::Bsdf);
-        assert_eq!(none.resolve(&table_says).estimator, EstimatorChoice::Bsdf);
+        assert_eq!(resolve(&none, &table_says), EstimatorChoice::Bsdf);
         // More lights than the mixture takes: bsdf, not an error.
         let mut many = preset("nw-cornell-box-empty").unwrap();
         let light = many.quads[2].clone();
         many.quads.extend(std::iter::repeat_n(light, limits::MAX_SAMPLED_SHAPES));
-        assert_eq!(none.resolve(&many).estimator, EstimatorChoice::Bsdf);
+        assert_eq!(resolve(&none, &many), EstimatorChoice::Bsdf);
     }
 
     #[test]
@@ -559,8 +600,6 @@ mod tests {
         let scene = preset("ch04-sphere").unwrap();
         let refuse = |o: RenderOptions| Job::new(&scene, &Overrides::default(), &o).unwrap_err().to_string();
         assert!(refuse(RenderOptions { tile: 0, ..Default::default() }).starts_with("tile:"));
-        let rr = Some(Roulette { after_rays: 0 });
-        assert!(refuse(RenderOptions { roulette: rr, ..Default::default() }).starts_with("roulette.after_rays:"));
         assert!(refuse(RenderOptions { threads: Some(0), ..Default::default() }).starts_with("threads:"));
     }
 

@@ -192,6 +192,12 @@ impl Flat {
     }
 }
 
+#[cfg(test)]
+thread_local! {
+    /// How many times this thread flattened a scene (tests count a job's flattenings).
+    pub(crate) static FLATTENED: std::cell::Cell<usize> = const { std::cell::Cell::new(0) };
+}
+
 /// One group's members in world space.
 pub(super) fn group(g: &Group) -> Flat {
     let mut flat = Flat::default();
@@ -234,16 +240,17 @@ impl Scene {
     /// scenes with lights measured (docs/sampling.md; `nw-final`, the fifth,
     /// names `book` in its render table); `book` for one with a
     /// `sample_toward` list and no lights to sample; `bsdf` for the others
-    /// (book one's scenes, lit by the sky, keep their images).
-    pub fn default_estimator(&self) -> EstimatorChoice {
+    /// (book one's scenes, lit by the sky, keep their images). `flat` is
+    /// this scene's [`Scene::flatten`], which the caller made once for
+    /// everything it reads.
+    pub fn default_estimator(&self, flat: &Flat) -> EstimatorChoice {
         if self.mode != Mode::Path {
             return EstimatorChoice::Bsdf;
         }
-        let flat = self.flatten();
         let fits = |n: usize| n > 0 && n <= crate::limits::MAX_SAMPLED_SHAPES;
-        if fits(Scene::emitter_shapes(&flat).len()) {
+        if fits(Scene::emitter_shapes(flat).len()) {
             EstimatorChoice::NeeMis
-        } else if fits(self.sampled_shapes(&flat).len()) {
+        } else if fits(self.sampled_shapes(flat).len()) {
             EstimatorChoice::Book
         } else {
             EstimatorChoice::Bsdf
@@ -253,6 +260,8 @@ impl Scene {
     /// The scene's primitives in world space (see [`Flat`]); a scene without
     /// quads, boxes or groups gives back its spheres unchanged.
     pub fn flatten(&self) -> Flat {
+        #[cfg(test)]
+        FLATTENED.with(|n| n.set(n.get() + 1));
         let mut flat = Flat::default();
         flat.add(&Transform::IDENTITY, &self.spheres, &self.quads, &self.boxes);
         for g in &self.groups {

@@ -17,6 +17,8 @@ mod validate;
 
 pub use crate::choice::Mode;
 pub use file::{load_scene, save_scene, scene_from_bytes, scene_from_str, scene_to_string, Format};
+#[cfg(test)]
+pub(crate) use flatten::FLATTENED;
 pub use flatten::{box_quads, Flat, FlatBoundary, FlatMedium};
 pub use presets::{final_scene, preset, presets, Preset, PresetGroup};
 pub use render_table::{BookTable, RenderTable};

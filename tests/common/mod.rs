@@ -158,7 +158,7 @@ pub fn listing(dir: &Path) -> Vec<String> {
 
 /// The settings a scene asks for (its render table, else rtow's defaults).
 pub fn scene_settings(scene: &Scene) -> Settings {
-    Overrides::default().resolve(scene)
+    Overrides::default().resolve(scene, &scene.flatten())
 }
 
 /// A scene file's text read and checked as a render of it is: parsed, then

@@ -179,8 +179,8 @@ fn the_verdict_knows_the_noise_of_the_runs() {
     let o = rtow::Overrides { width: Some(32), height: Some(18), spp: Some(2), ..Default::default() };
     let opts = rtow::RenderOptions { threads: Some(1), ..Default::default() };
     let job = rtow::Job::new(&scene, &o, &opts).unwrap();
-    let cfg = BenchConfig { kernels: vec![rtow::KernelChoice::Simd8], repeat: 5, tolerance: 0.0, gate: Gate::Time };
-    let mut report = bench::run(&job, "ch07-diffuse", &cfg, |_, _, _| {}).unwrap();
+    let cfg = BenchConfig::new(&job, &[rtow::KernelChoice::Simd8], 5, 0.0, Gate::Time).unwrap();
+    let mut report = bench::run(&cfg, "ch07-diffuse", |_, _, _| {}).unwrap();
     assert_eq!(report.kernels[0].runs_seconds.len(), 5);
     // Runs spread by 30% around the measured median: noise, as on a busy machine.
     let median = report.kernels[0].stats.seconds;

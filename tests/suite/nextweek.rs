@@ -605,7 +605,8 @@ proptest! {
 #[test]
 fn book_settings_follow_the_scene() {
     let book = |name: &str, o: Overrides| {
-        let s = o.resolve(&scene::preset(name).unwrap());
+        let scene = scene::preset(name).unwrap();
+        let s = o.resolve(&scene, &scene.flatten());
         (s.width, s.height, s.spp, s.max_depth)
     };
     let on = Overrides { book: true, ..Default::default() };

@@ -21,7 +21,7 @@ fn run(
     threads: usize,
     tile: u32,
 ) -> Rendered {
-    let roulette = rr.then_some(Roulette { after_rays: 2 });
+    let roulette = rr.then_some(Roulette::new(2).unwrap());
     let opts = RenderOptions { kernel, threads: Some(threads), tile, roulette, ..Default::default() };
     render(&job(sc, Settings { sampler, ..s }, opts), None).expect("render")
 }

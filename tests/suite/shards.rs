@@ -10,7 +10,7 @@ use common::{job, rtow, Run};
 use rtow::film::part;
 use rtow::scene::{preset, Scene};
 use rtow::shard::{self, FilmRequest, Part, Split, SplitKind};
-use rtow::{render, Adaptive, EstimatorChoice, KernelChoice, RenderOptions, Settings};
+use rtow::{render, Adaptive, EstimatorChoice, Job, KernelChoice, RenderOptions, Settings};
 use std::path::{Path, PathBuf};
 
 fn kernels() -> Vec<KernelChoice> {
@@ -29,10 +29,16 @@ fn settings(spp: u32) -> Settings {
     common::settings(37, 21, spp, 12, 3)
 }
 
+/// The whole of `job` into a partial film, resuming `resume` (named by its path) if given.
+fn whole(job: &Job, resume: Option<(&str, Part)>) -> rtow::Result<(rtow::Rendered, Part)> {
+    let resume = resume.map(|(p, f)| (PathBuf::from(p), f));
+    shard::render_part(&FilmRequest::new(job, Split::WHOLE, resume)?, None)
+}
+
 /// Renders shard `k` of `n` and passes it through its file bytes.
 fn shard_part(scene: &Scene, s: Settings, o: RenderOptions, split: Split) -> (PathBuf, Part) {
-    let req = FilmRequest { split, resume: None };
-    let (_, p) = shard::render_part(&job(scene, s, o), &req, None).expect("shard renders");
+    let job = job(scene, s, o);
+    let (_, p) = shard::render_part(&FilmRequest::new(&job, split, None).unwrap(), None).expect("shard renders");
     let name = PathBuf::from(format!("part-{}.rtfilm", split.shard));
     let back = Part::from_bytes(&p.to_bytes(), &name).expect("reads back");
     assert_eq!(back, p);
@@ -92,11 +98,9 @@ fn a_resumed_render_is_the_render_with_more_samples() {
         let o = opts(kernel, 2, 16);
         let full = render(&job(&scene, settings(13), o), None).unwrap();
         for first in [2, 4, 13] {
-            let req = FilmRequest { split: Split::WHOLE, resume: None };
-            let (_, done) = shard::render_part(&job(&scene, settings(first), o), &req, None).unwrap();
+            let (_, done) = whole(&job(&scene, settings(first), o), None).unwrap();
             let done = Part::from_bytes(&done.to_bytes(), Path::new("done.rtfilm")).unwrap();
-            let req = FilmRequest { split: Split::WHOLE, resume: Some((PathBuf::from("done.rtfilm"), done)) };
-            let (r, film) = shard::render_part(&job(&scene, settings(13), o), &req, None).unwrap();
+            let (r, film) = whole(&job(&scene, settings(13), o), Some(("done.rtfilm", done))).unwrap();
             assert_eq!(r.image, full.image, "{kernel:?}: resumed from {first} spp");
             assert_eq!(film.header.counters.rays, full.stats.rays);
             assert_eq!(film.header.samples, [0, 13]);
@@ -104,10 +108,10 @@ fn a_resumed_render_is_the_render_with_more_samples() {
     }
     // One sample per pixel goes through pixel centres, so it is not the start
     // of a jittered render: resuming it is refused.
-    let req = FilmRequest { split: Split::WHOLE, resume: None };
-    let (_, one) = shard::render_part(&job(&scene, settings(1), opts(KernelChoice::Simd, 2, 16)), &req, None).unwrap();
-    let req = FilmRequest { split: Split::WHOLE, resume: Some((PathBuf::from("one.rtfilm"), one)) };
-    let e = shard::check(&job(&scene, settings(8), opts(KernelChoice::Simd, 2, 16)), &req).unwrap_err().to_string();
+    let (_, one) = whole(&job(&scene, settings(1), opts(KernelChoice::Simd, 2, 16)), None).unwrap();
+    let eight = job(&scene, settings(8), opts(KernelChoice::Simd, 2, 16));
+    let resume = Some((PathBuf::from("one.rtfilm"), one));
+    let e = FilmRequest::new(&eight, Split::WHOLE, resume).map(|_| ()).unwrap_err().to_string();
     assert!(e.contains("one.rtfilm") && e.contains("pixel_jitter"), "{e}");
 }
 
@@ -138,11 +142,8 @@ fn every_estimator_shards_merges_and_resumes_exactly() {
                 }
             }
             // Resumed from 3 samples, the 7-sample render.
-            let req = FilmRequest { split: Split::WHOLE, resume: None };
-            let (_, done) =
-                shard::render_part(&job(&scene, with(3, estimator), opts(kernel, 2, 16)), &req, None).unwrap();
-            let req = FilmRequest { split: Split::WHOLE, resume: Some((PathBuf::from("done.rtfilm"), done)) };
-            let (r, _) = shard::render_part(&job(&scene, s, opts(kernel, 2, 16)), &req, None).unwrap();
+            let (_, done) = whole(&job(&scene, with(3, estimator), opts(kernel, 2, 16)), None).unwrap();
+            let (r, _) = whole(&job(&scene, s, opts(kernel, 2, 16)), Some(("done.rtfilm", done))).unwrap();
             assert_eq!(r.image, one.image, "{estimator:?} {kernel:?}: resumed");
         }
     }
@@ -169,8 +170,8 @@ fn adaptive_renders_split_by_rows_exactly_and_refuse_sample_splits() {
     let merged = part::merge(&parts).unwrap();
     assert_eq!(merged.film.image(), one.image);
     assert_eq!(merged.header.counters.samples, one.stats.samples);
-    let req = FilmRequest { split: Split { kind: SplitKind::Samples, shard: 1, of: 2 }, resume: None };
-    let e = shard::check(&job(&scene, s, o), &req).unwrap_err().to_string();
+    let halves = Split { kind: SplitKind::Samples, shard: 1, of: 2 };
+    let e = FilmRequest::new(&job(&scene, s, o), halves, None).map(|_| ()).unwrap_err().to_string();
     assert!(e.starts_with("split:") && e.contains("split adaptive renders by rows"), "{e}");
 }
 

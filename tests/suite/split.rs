@@ -6,7 +6,7 @@
 use crate::common;
 
 use common::{job, rtow, settings, Run};
-use rtow::instruments::converge::{self, ConvergeConfig, Reference, Split, Variant, LENGTHS};
+use rtow::instruments::converge::{self, ConvergeConfig, ConvergeSpec, Reference, Split, Variant, LENGTHS};
 use rtow::instruments::probe::Strategy;
 use rtow::scene::preset;
 use rtow::{KernelChoice, RenderOptions};
@@ -19,7 +19,7 @@ fn splits() -> Vec<Split> {
         settings(24, 24, 16, 12, 5),
         RenderOptions { kernel: KernelChoice::Simd, threads: Some(2), ..Default::default() },
     );
-    let cfg = ConvergeConfig {
+    let cfg = ConvergeConfig::new(ConvergeSpec {
         kernels: vec![KernelChoice::Simd],
         variants: ["bsdf+sobol", "book+sobol", "nee-mis+sobol"].map(|v| Variant::parse(v).unwrap()).to_vec(),
         spp_list: vec![4, 16],
@@ -29,7 +29,8 @@ fn splits() -> Vec<Split> {
         at_spp: None,
         split: Some(16),
         split_seeds: 3,
-    };
+    })
+    .unwrap();
     let report = converge::run(&j, "rol-cornell-box", &cfg, |_| {}).unwrap();
     assert!(report.markdown().contains("## Where the error lives: 16 spp, 3 seeds"));
     assert_eq!(report.split_csv().lines().next().unwrap().split(',').count(), 10);

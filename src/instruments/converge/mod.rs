@@ -49,11 +49,12 @@ pub enum Reference {
     Spp(u32),
 }
 
-/// What `rtow converge` measures, on a job's scene, image size, depth, seed,
-/// threads and tile size (its sample count, sampler and estimator options are
-/// the variants' and the sample list's).
+/// What `rtow converge` is asked to measure, on a job's scene, image size,
+/// depth, seed, threads and tile size (its sample count, sampler and
+/// estimator options are the variants' and the sample list's); unchecked
+/// until it makes a [`ConvergeConfig`].
 #[derive(Clone, Debug)]
-pub struct ConvergeConfig {
+pub struct ConvergeSpec {
     pub kernels: Vec<KernelChoice>,
     pub variants: Vec<Variant>,
     pub spp_list: Vec<u32>,
@@ -69,6 +70,22 @@ pub struct ConvergeConfig {
     /// `spp_list`) by path length and strategy ([`Split`]), over `split_seeds` renders.
     pub split: Option<u32>,
     pub split_seeds: u32,
+}
+
+/// A [`ConvergeSpec`] checked, once ([`ConvergeConfig::new`]): what a run
+/// measures. It reads as its spec.
+#[derive(Clone, Debug)]
+pub struct ConvergeConfig {
+    spec: ConvergeSpec,
+    /// Each variant's adaptive sampling, with the spec's first decision point.
+    adaptive: Vec<Option<Adaptive>>,
+}
+
+impl std::ops::Deref for ConvergeConfig {
+    type Target = ConvergeSpec;
+    fn deref(&self) -> &ConvergeSpec {
+        &self.spec
+    }
 }
 
 /// The renders of a split when none is given.
@@ -97,9 +114,34 @@ impl Reference {
 }
 
 impl ConvergeConfig {
-    /// The configuration's own values (lists, repeat, reference); the renders'
-    /// settings are checked when the run resolves their jobs.
-    pub fn validate(&self) -> Result<()> {
+    /// Checks the spec's own values (lists, repeat, reference, the adaptive
+    /// variants' thresholds and first decision point); the renders' settings
+    /// are checked when the run resolves their jobs.
+    pub fn new(spec: ConvergeSpec) -> Result<ConvergeConfig> {
+        spec.validate()?;
+        // Each adaptive variant's options, made once: a bad threshold is the
+        // variant's, a bad first decision point the spec's.
+        let adaptive = spec
+            .variants
+            .iter()
+            .map(|v| {
+                let made = v.adaptive.map(|t| Adaptive::new(t, spec.adaptive_min)).transpose();
+                made.map_err(|e| match e {
+                    Error::Invalid { field, message } if field == "adaptive.min_spp" => {
+                        Error::invalid("adaptive_min", message)
+                    }
+                    Error::Invalid { message, .. } => Error::invalid("variants", message),
+                    e => e,
+                })
+            })
+            .collect::<Result<Vec<_>>>()?;
+        Ok(ConvergeConfig { spec, adaptive })
+    }
+}
+
+impl ConvergeSpec {
+    /// The spec's values other than adaptive sampling's (see [`ConvergeConfig::new`]).
+    fn validate(&self) -> Result<()> {
         if self.kernels.is_empty() {
             return Err(Error::invalid("kernels", "name at least one kernel (scalar, simd)"));
         }
@@ -150,29 +192,18 @@ impl ConvergeConfig {
         if let Reference::Spp(0) = self.reference {
             return Err(Error::invalid("reference_spp", "must be at least 1"));
         }
-        if self.variants.iter().any(|v| v.adaptive.is_some()) {
-            Adaptive::new(DEFAULT_ADAPTIVE_THRESHOLD, self.adaptive_min).map_err(|e| match e {
-                Error::Invalid { message, .. } => Error::invalid("adaptive_min", message),
-                e => e,
-            })?;
-        }
         Ok(())
     }
+}
 
+impl ConvergeConfig {
     /// Every measurement's job (checked, not yet rendered), in run order:
     /// kernels, then variants, then sample counts.
     fn measurements(&self, job: &Job) -> Result<Vec<Measurement>> {
         let mut out = Vec::new();
         for &kernel in &self.kernels {
-            for &variant in &self.variants {
+            for (&variant, &adaptive) in self.variants.iter().zip(&self.adaptive) {
                 for &spp in &self.spp_list {
-                    let adaptive = match variant.adaptive {
-                        Some(t) => Some(Adaptive::new(t, self.adaptive_min).map_err(|e| match e {
-                            Error::Invalid { message, .. } => Error::invalid("variants", message),
-                            e => e,
-                        })?),
-                        None => None,
-                    };
                     let opts = RenderOptions { kernel, roulette: variant.rr, adaptive, ..*job.options() };
                     let o = Overrides {
                         spp: Some(spp),
@@ -228,14 +259,14 @@ pub struct ConvergeReport {
     /// Renders per measurement (the fastest counts) and worker threads.
     pub repeat: u32,
     pub threads: usize,
-    /// See [`ConvergeConfig::at_spp`].
+    /// See [`ConvergeSpec::at_spp`].
     pub at_spp: Option<u32>,
     /// The reference, when this run rendered it (written out for reuse with `--reference`).
     pub rendered_reference: Option<Image>,
     /// The build, machine, date and command of the run (written to `<scene>.json`).
     pub provenance: crate::provenance::Provenance,
     pub rows: Vec<ConvergeRow>,
-    /// With [`ConvergeConfig::split`]: each variant's error split.
+    /// With [`ConvergeSpec::split`]: each variant's error split.
     pub splits: Vec<Split>,
 }
 
@@ -282,7 +313,6 @@ fn load_reference(path: &std::path::Path, width: u32, height: u32) -> Result<Ima
 /// Renders (or loads) the reference, then measures every kernel, variant and
 /// sample count of `cfg` on `job`'s scene and settings, in that order.
 pub fn run(job: &Job, name: &str, cfg: &ConvergeConfig, mut on: impl FnMut(Event)) -> Result<ConvergeReport> {
-    cfg.validate()?;
     let s = *job.settings();
     if cfg.split.is_some() {
         split::check(s.width, s.height, cfg.split_seeds)?;
@@ -416,7 +446,7 @@ mod tests {
         assert_eq!(v.name(), "sobol-lens+rr+adaptive:0.05");
         assert_eq!(Variant::parse(&v.name()).unwrap(), v);
         let v = Variant::parse("adaptive:0.1+rr:3").unwrap();
-        assert_eq!((v.rr, v.adaptive), (Some(Roulette { after_rays: 3 }), Some(0.1)));
+        assert_eq!((v.rr, v.adaptive), (Some(Roulette::new(3).unwrap()), Some(0.1)));
         assert_eq!(v.name(), "rr:3+adaptive:0.1");
         assert_eq!(Variant::parse(&v.name()).unwrap(), v);
         let v = Variant::parse("sobol+book").unwrap();
@@ -560,7 +590,7 @@ mod tests {
 
     #[test]
     fn bad_configs_name_their_setting() {
-        let good = ConvergeConfig {
+        let good = ConvergeSpec {
             kernels: vec![KernelChoice::Simd],
             variants: vec![Variant::PLAIN],
             spp_list: vec![1, 2],
@@ -571,8 +601,8 @@ mod tests {
             split: None,
             split_seeds: DEFAULT_SPLIT_SEEDS,
         };
-        good.validate().unwrap();
-        type Break = Box<dyn Fn(&mut ConvergeConfig)>;
+        ConvergeConfig::new(good.clone()).unwrap();
+        type Break = Box<dyn Fn(&mut ConvergeSpec)>;
         let cases: Vec<(&str, Break)> = vec![
             ("kernels", Box::new(|c| c.kernels.clear())),
             ("kernels", Box::new(|c| c.kernels = vec![KernelChoice::Simd, KernelChoice::Simd])),
@@ -599,6 +629,7 @@ mod tests {
                     c.split_seeds = 1;
                 }),
             ),
+            ("variants", Box::new(|c| c.variants = vec![Variant { adaptive: Some(-1.0), ..Variant::PLAIN }])),
             (
                 "adaptive_min",
                 Box::new(|c| {
@@ -610,7 +641,7 @@ mod tests {
         for (field, f) in cases {
             let mut c = good.clone();
             f(&mut c);
-            let e = c.validate().unwrap_err().to_string();
+            let e = ConvergeConfig::new(c).unwrap_err().to_string();
             assert!(e.starts_with(&format!("{field}:")), "{field}: {e}");
         }
     }

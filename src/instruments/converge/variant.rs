@@ -4,7 +4,7 @@
 
 use crate::choice::EstimatorChoice;
 use crate::error::{Error, Result};
-use crate::estimator::{Roulette, ROULETTE_AFTER_RAYS};
+use crate::estimator::{Adaptive, Roulette, ROULETTE_AFTER_RAYS};
 use crate::sampling::Sampler;
 
 /// The threshold of the `adaptive` variant when none is given (`adaptive:T`).
@@ -44,18 +44,12 @@ impl Variant {
             };
             match name {
                 "rr" if v.rr.is_none() => {
-                    let n = match value {
-                        None => ROULETTE_AFTER_RAYS,
-                        Some(x) => match x.parse::<u32>() {
-                            Ok(n) if n >= 1 => n,
-                            _ => {
-                                return Err(bad(format!(
-                                    "'{text}': '{x}' is not a number of rays of at least 1 (rr:N)"
-                                )))
-                            }
-                        },
-                    };
-                    v.rr = Some(Roulette { after_rays: n });
+                    v.rr = Some(match value {
+                        None => Roulette::default(),
+                        Some(x) => x.parse::<u32>().ok().and_then(|n| Roulette::new(n).ok()).ok_or_else(|| {
+                            bad(format!("'{text}': '{x}' is not a number of rays of at least 1 (rr:N)"))
+                        })?,
+                    });
                 }
                 name if value.is_none() && v.sampler == Sampler::Independent && name.starts_with("sobol") => {
                     v.sampler = Sampler::parse(name).ok_or_else(|| {
@@ -70,7 +64,7 @@ impl Variant {
                         None => DEFAULT_ADAPTIVE_THRESHOLD,
                         Some(x) => x.parse::<f32>().unwrap_or(f32::NAN),
                     };
-                    if !(t.is_finite() && t > 0.0) {
+                    if Adaptive::check_threshold(t).is_err() {
                         return Err(bad(format!(
                             "'{text}': the adaptive threshold must be a positive number (adaptive:THRESHOLD)"
                         )));
@@ -89,8 +83,8 @@ impl Variant {
 
     pub fn name(&self) -> String {
         let rr = match self.rr {
-            Some(r) if r.after_rays == ROULETTE_AFTER_RAYS => "rr".to_string(),
-            Some(r) => format!("rr:{}", r.after_rays),
+            Some(r) if r.after_rays() == ROULETTE_AFTER_RAYS => "rr".to_string(),
+            Some(r) => format!("rr:{}", r.after_rays()),
             None => String::new(),
         };
         let mut parts: Vec<String> = Vec::new();
