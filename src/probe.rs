@@ -129,6 +129,9 @@ pub struct WorkCounters {
     /// Cuboid tests (absent from parts written before cuboids: 0).
     #[serde(default)]
     pub cuboid_tests: u64,
+    /// Triangle tests (absent from parts written before meshes: 0).
+    #[serde(default)]
+    pub triangle_tests: u64,
     pub isect_active: u64,
     pub isect_lanes: u64,
     pub scatter_active: u64,
@@ -143,6 +146,7 @@ impl WorkCounters {
         self.roots += o.roots;
         self.quad_tests += o.quad_tests;
         self.cuboid_tests += o.cuboid_tests;
+        self.triangle_tests += o.triangle_tests;
         self.isect_active += o.isect_active;
         self.isect_lanes += o.isect_lanes;
         self.scatter_active += o.scatter_active;
@@ -168,6 +172,7 @@ impl Counter for WorkCounters {
             Work::Root => &mut self.roots,
             Work::Quad => &mut self.quad_tests,
             Work::Cuboid => &mut self.cuboid_tests,
+            Work::Triangle => &mut self.triangle_tests,
         };
         *c += n as u64;
     }

@@ -42,7 +42,7 @@
 //!   pruned only when its entry exceeds `best * (1 + 2^-20)`.
 
 use super::hit::{Closest, MISS};
-use super::primitive::{Leaf, Primitive};
+use super::primitive::{Leaf, OneRay, Primitive};
 use super::slab::{slab, slab_ray, Aabb, EXIT_SCALE, PAD, PRUNE_SCALE};
 use super::spheres::{sphere_disc, sphere_t, LeafSphere, Spheres};
 use super::work::{Counter, Work, WorkTally};
@@ -92,12 +92,14 @@ impl Node8 {
 /// leaf records in leaf order; for spheres also their SoA in leaf order,
 /// padded by 8 for whole loads (the one-ray walk's 8-wide leaf test).
 #[derive(Clone, Debug)]
-pub struct Bvh<L> {
+pub struct Bvh<L: Leaf> {
     nodes: Vec<Node8>,
     leaf: Vec<L>,
     /// The walk the tree was built for.
     walk: Walk,
     lanes: SphereLanes,
+    /// The leaf records as lanes, for one-ray walks ([`Leaf::Lanes`]).
+    wide: L::Lanes,
 }
 
 /// The spheres of a sphere tree in leaf order, as SoA (empty for other kinds).
@@ -173,32 +175,56 @@ impl SahCost {
 struct Builder<'a> {
     cost: SahCost,
     boxes: &'a [Aabb],
-    centroid: Vec<[f32; 3]>,
-    order: Vec<u32>,
+    centroid: &'a [[f32; 3]],
     nodes: Vec<BNode>,
 }
 
-impl Builder<'_> {
-    fn bounds(&self, lo: usize, hi: usize) -> Aabb {
+/// Subtrees of at least this many primitives build their two halves in
+/// parallel (each into nodes of its own, adopted after): the same tree,
+/// node for node, as one thread builds.
+const PARALLEL_BUILD: usize = 1 << 14;
+
+impl<'a> Builder<'a> {
+    fn bounds(&self, order: &[u32]) -> Aabb {
         let mut b = Aabb::EMPTY;
-        for &i in &self.order[lo..hi] {
+        for &i in order {
             b.grow(&self.boxes[i as usize]);
         }
         b
     }
 
-    /// Builds the subtree over `order[lo..hi]`; returns its node index.
-    fn build(&mut self, lo: usize, hi: usize, depth: usize) -> u32 {
-        let bounds = self.bounds(lo, hi);
-        let n = hi - lo;
+    /// A builder of a subtree, with nodes of its own.
+    fn fork(&self) -> Builder<'a> {
+        Builder { cost: self.cost, boxes: self.boxes, centroid: self.centroid, nodes: Vec::new() }
+    }
+
+    /// Appends a forked builder's nodes (its subtree's root `root`);
+    /// returns the root's index here.
+    fn adopt(&mut self, nodes: Vec<BNode>, root: u32) -> u32 {
+        let offset = self.nodes.len() as u32;
+        for mut node in nodes {
+            if node.count == 0 {
+                node.left += offset;
+                node.right += offset;
+            }
+            self.nodes.push(node);
+        }
+        root + offset
+    }
+
+    /// Builds the subtree over `order` (the primitives at `base..base +
+    /// order.len()` of the build order); returns its node index.
+    fn build(&mut self, order: &mut [u32], base: usize, depth: usize) -> u32 {
+        let bounds = self.bounds(order);
+        let n = order.len();
         let id = self.nodes.len() as u32;
-        self.nodes.push(BNode { bounds, left: 0, right: 0, start: lo as u32, count: n as u32 });
+        self.nodes.push(BNode { bounds, left: 0, right: 0, start: base as u32, count: n as u32 });
         let leaf_cost = self.cost.leaf(n);
         if n <= 1 {
             return id;
         }
         let mut cb = Aabb::EMPTY;
-        for &i in &self.order[lo..hi] {
+        for &i in order.iter() {
             let c = self.centroid[i as usize];
             cb.grow(&Aabb { min: c, max: c });
         }
@@ -213,7 +239,7 @@ impl Builder<'_> {
             let bin_of = |c: f32| (((c - lo_c) * scale) as usize).min(BINS - 1);
             let mut bin_box = [Aabb::EMPTY; BINS];
             let mut bin_n = [0usize; BINS];
-            for &i in &self.order[lo..hi] {
+            for &i in order.iter() {
                 let b = bin_of(self.centroid[i as usize][axis]);
                 bin_box[b].grow(&self.boxes[i as usize]);
                 bin_n[b] += 1;
@@ -241,8 +267,8 @@ impl Builder<'_> {
         let mid = match best {
             _ if depth >= MAX_SAH_DEPTH && n > 8 => n / 2,
             Some((cost, axis, pos)) if n > 8 || cost < leaf_cost => {
-                let cent = &self.centroid;
-                let slice = &mut self.order[lo..hi];
+                let cent = self.centroid;
+                let slice = &mut *order;
                 let mut m = 0;
                 for k in 0..slice.len() {
                     if cent[slice[k] as usize][axis] < pos {
@@ -260,8 +286,14 @@ impl Builder<'_> {
             None if n > 8 => n / 2,
             _ => return id,
         };
-        let left = self.build(lo, lo + mid, depth + 1);
-        let right = self.build(lo + mid, hi, depth + 1);
+        let (a, b) = order.split_at_mut(mid);
+        let (left, right) = if n >= PARALLEL_BUILD {
+            let (mut lb, mut rb) = (self.fork(), self.fork());
+            let (l, r) = rayon::join(|| lb.build(a, base, depth + 1), || rb.build(b, base + mid, depth + 1));
+            (self.adopt(lb.nodes, l), self.adopt(rb.nodes, r))
+        } else {
+            (self.build(a, base, depth + 1), self.build(b, base + mid, depth + 1))
+        };
         let node = &mut self.nodes[id as usize];
         node.left = left;
         node.right = right;
@@ -274,11 +306,12 @@ impl Builder<'_> {
 /// its nodes and the primitives' order in its leaves.
 fn build_binary(boxes: &[Aabb], centroid: Vec<[f32; 3]>, walk: Walk) -> (Vec<BNode>, Vec<u32>) {
     let n = boxes.len();
-    let mut b = Builder { cost: SahCost::of(walk), boxes, centroid, order: (0..n as u32).collect(), nodes: Vec::new() };
+    let mut order: Vec<u32> = (0..n as u32).collect();
+    let mut b = Builder { cost: SahCost::of(walk), boxes, centroid: &centroid, nodes: Vec::new() };
     if n > 0 {
-        b.build(0, n, 0);
+        b.build(&mut order, 0, 0);
     }
-    (b.nodes, b.order)
+    (b.nodes, order)
 }
 
 impl<L: Leaf> Bvh<L> {
@@ -286,14 +319,16 @@ impl<L: Leaf> Bvh<L> {
     /// |coordinates| of every ray origin (the camera and its lens), from
     /// which the kind's [`Primitive::extent`] pads the boxes by
     /// `2 extent 2^-19` on every side (see the module's bounds).
-    pub fn build<K: Primitive<Leaf = L>>(prims: &K, extent: f32, walk: Walk) -> Bvh<L> {
+    pub fn build<K: Primitive<Leaf = L> + Sync>(prims: &K, extent: f32, walk: Walk) -> Bvh<L> {
+        use rayon::prelude::*;
         let pad = 2.0 * prims.extent(extent) * PAD;
         let n = prims.count();
-        let boxes: Vec<Aabb> = (0..n).map(|k| prims.bounds(k, pad)).collect();
-        let centroid = (0..n).map(|k| prims.centroid(k, pad)).collect();
+        let boxes: Vec<Aabb> = (0..n).into_par_iter().map(|k| prims.bounds(k, pad)).collect();
+        let centroid = (0..n).into_par_iter().map(|k| prims.centroid(k, pad)).collect();
         let (bnodes, order) = build_binary(&boxes, centroid, walk);
         let leaf = order.iter().map(|&k| prims.leaf(k as usize)).collect();
-        let mut bvh = Bvh { nodes: vec![Node8::EMPTY], leaf, walk, lanes: SphereLanes::default() };
+        let mut bvh =
+            Bvh { nodes: vec![Node8::EMPTY], leaf, walk, lanes: SphereLanes::default(), wide: L::Lanes::default() };
         if n > 0 {
             bvh.collapse(&bnodes, 0, 0);
         }
@@ -305,6 +340,7 @@ impl<L: Leaf> Bvh<L> {
                 }
             }
         }
+        bvh.wide = L::lanes(&bvh.leaf);
         bvh
     }
 
@@ -369,6 +405,7 @@ impl<L: Leaf> Bvh<L> {
     ) -> Closest<R> {
         let mut tally = WorkTally::<C>::new();
         let (inv, noi) = slab_ray(o, d);
+        let setup = L::setup(o, d);
         let mut stack = Stack::new((0u32, R::root()));
         let exit = R::constant(EXIT_SCALE);
         let zero = R::constant(0.0);
@@ -392,7 +429,7 @@ impl<L: Leaf> Bvh<L> {
                     0 => stack.push((node.child[k], R::entry(near))),
                     count => {
                         let (start, count) = (node.child[k] as usize, count as usize);
-                        L::test_leaf(&self.leaf[start..start + count], o, d, time, &mut best, &mut tally);
+                        L::test_leaf(&self.leaf[start..start + count], o, d, time, &setup, &mut best, &mut tally);
                         if ANY && best.leave_found() {
                             tally.flush(counter);
                             return best;
@@ -440,6 +477,17 @@ pub trait Walker: Real {
         best: &mut Closest<Self>,
         counter: &mut C,
     );
+    /// A tree whose kind is walked one ray at a time
+    /// ([`Primitive::WALK_ONE_RAY`]): [`Bvh::walk_one_wide`] for one ray,
+    /// for each live lane of a packet (from the lane's closest hit so far).
+    fn walk_one_ray<L: Leaf, C: Counter, const ANY: bool>(
+        bvh: &Bvh<L>,
+        o: V3<Self>,
+        d: V3<Self>,
+        time: Self,
+        best: &mut Closest<Self>,
+        counter: &mut C,
+    );
 }
 
 impl Walker for f32 {
@@ -474,6 +522,17 @@ impl Walker for f32 {
     ) {
         *best = bvh.walk::<f32, C, false>(o, d, 0.0, *best, counter);
     }
+    #[inline(always)]
+    fn walk_one_ray<L: Leaf, C: Counter, const ANY: bool>(
+        bvh: &Bvh<L>,
+        o: V3<f32>,
+        d: V3<f32>,
+        time: f32,
+        best: &mut Closest<f32>,
+        counter: &mut C,
+    ) {
+        *best = bvh.walk_one_wide::<C, ANY>(o, d, time, *best, counter);
+    }
 }
 
 impl<W: Wide> Walker for W {
@@ -502,6 +561,96 @@ impl<W: Wide> Walker for W {
         let live = W::mask_bits(best.t.gt(W::splat(f32::NEG_INFINITY)));
         let (index, t) = bvh.closest_hits_one_by_one(o, d, live, counter);
         best.offer(W::mask_from_bits(live), t, index);
+    }
+    #[inline(always)]
+    fn walk_one_ray<L: Leaf, C: Counter, const ANY: bool>(
+        bvh: &Bvh<L>,
+        o: V3<W>,
+        d: V3<W>,
+        time: W,
+        best: &mut Closest<W>,
+        counter: &mut C,
+    ) {
+        let mut m = W::mask_bits(best.t.gt(W::splat(f32::NEG_INFINITY)));
+        let (mut index, mut t) = ([MISS; MAX_LANES], [0.0f32; MAX_LANES]);
+        for k in 0..W::LANES {
+            (index[k], t[k]) = (W::lane_u(best.index, k), best.t.lane(k));
+        }
+        while m != 0 {
+            let k = m.trailing_zeros() as usize & (MAX_LANES - 1);
+            m &= m - 1;
+            let lane = |v: V3<W>| V3::new(v.x.lane(k), v.y.lane(k), v.z.lane(k));
+            let from = Closest { t: t[k], index: index[k] };
+            let b = bvh.walk_one_wide::<C, ANY>(lane(o), lane(d), time.lane(k), from, counter);
+            (index[k], t[k]) = (b.index, b.t);
+        }
+        *best = Closest { t: W::from_fn(|k| t[k]), index: W::u_from_fn(|k| index[k]) };
+    }
+}
+
+impl<L: Leaf> Bvh<L> {
+    /// One ray's walk with 8 child boxes per `f32x8` test, the leaves by
+    /// the kind's own test (one primitive at a time): for big trees and
+    /// incoherent rays (meshes), where a packet's walk enters the union of
+    /// its rays' boxes. From `best`, improving it; with `ANY`, stopping at
+    /// the first hit below `best.t`. The same answer as [`Bvh::walk`] and
+    /// brute force, bit for bit: only which primitives are tested differs.
+    #[inline(always)]
+    pub fn walk_one_wide<C: Counter, const ANY: bool>(
+        &self,
+        o: V3<f32>,
+        d: V3<f32>,
+        time: f32,
+        mut best: Closest<f32>,
+        counter: &mut C,
+    ) -> Closest<f32> {
+        let mut tally = WorkTally::<C>::new();
+        let (inv, noi) = slab_ray(o, d);
+        let ray = OneRay::<L>::new(o, d, time);
+        let (inv8, noi8) = (splat3(inv), splat3(noi));
+        let mut stack = Stack::new((0, 0.0));
+        while let Some((ni, entry)) = stack.pop() {
+            if entry > best.t * PRUNE_SCALE {
+                continue;
+            }
+            tally.work(Work::Node, 1);
+            tally.work(Work::Box, 8);
+            let node = &self.nodes[ni as usize];
+            let bmin = V3::new(f32x8::new(node.min[0]), f32x8::new(node.min[1]), f32x8::new(node.min[2]));
+            let bmax = V3::new(f32x8::new(node.max[0]), f32x8::new(node.max[1]), f32x8::new(node.max[2]));
+            let (near, far) = slab(bmin, bmax, inv8, noi8, f32x8::splat(0.0));
+            let ok = near.le(far * f32x8::splat(EXIT_SCALE)) & near.le(f32x8::splat(best.t * PRUNE_SCALE));
+            // The empty slots (the last ones) hold zero boxes that a ray may enter.
+            let mut mask = ok.to_bitmask() & ((1u32 << node.kids()) - 1);
+            let near = near.to_array();
+            // Leaves first (they tighten `best.t`), inner nodes pushed far-to-near.
+            let mut inner: [(u32, f32); 8] = [(0, 0.0); 8];
+            let mut ninner = 0;
+            while mask != 0 {
+                let k = mask.trailing_zeros() as usize;
+                mask &= mask - 1;
+                match node.count[k] {
+                    0 => {
+                        inner[ninner] = (node.child[k], near[k]);
+                        ninner += 1;
+                    }
+                    cnt => {
+                        let start = node.child[k] as usize;
+                        L::test_lanes(&self.wide, &self.leaf, start, cnt as usize, &ray, &mut best, &mut tally);
+                        if ANY && best.index != MISS {
+                            tally.flush(counter);
+                            return best;
+                        }
+                    }
+                }
+            }
+            inner[..ninner].sort_unstable_by(|a, b| b.1.total_cmp(&a.1));
+            for &e in &inner[..ninner] {
+                stack.push(e);
+            }
+        }
+        tally.flush(counter);
+        best
     }
 }
 

@@ -132,8 +132,21 @@ pub struct LeafCuboid {
 }
 
 impl Leaf for LeafCuboid {
+    type Setup<R: Real> = ();
+    type Lanes = ();
     #[inline(always)]
-    fn test<R: Real, C: Counter>(&self, o: V3<R>, d: V3<R>, _time: R, best: &mut Closest<R>, counter: &mut C) {
+    fn setup<R: Real>(_o: V3<R>, _d: V3<R>) {}
+
+    #[inline(always)]
+    fn test<R: Real, C: Counter>(
+        &self,
+        o: V3<R>,
+        d: V3<R>,
+        _time: R,
+        _setup: &(),
+        best: &mut Closest<R>,
+        counter: &mut C,
+    ) {
         test_cuboid(best, o, d, &self.rec, counter);
     }
 }

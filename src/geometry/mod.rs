@@ -14,7 +14,9 @@
 //!   normal lies along an axis or that stand upright about one), [`cuboids`]
 //!   (a box, six quads after the search, tested whole by one slab test in
 //!   its own frame), [`moving`] (spheres whose centre moves over the
-//!   shutter interval, tested at each path's time). A primitive carries its
+//!   shutter interval, tested at each path's time), [`triangles`] (meshes'
+//!   triangles in world space, a watertight test; their shading records
+//!   are planar records among the quads'). A primitive carries its
 //!   material's handle (`handle::Kind` and a row) and nothing else of
 //!   materials: the tables it indexes, and the shading, live above.
 //! - [`bvh`]: an 8-wide SAH tree over any kind, its one walk written once for
@@ -37,6 +39,7 @@ pub mod shapes;
 pub mod slab;
 pub mod spheres;
 pub mod surface;
+pub mod triangles;
 pub mod work;
 
 pub use bvh::{Bvh, SahCost, Walk, Walker};
@@ -50,4 +53,5 @@ pub use quads::{quad_hit, quad_hit_axis, quad_hit_general, quad_hit_upright, qua
 pub use shapes::{Shapes, TreeChoice, Trees};
 pub use spheres::{sphere_disc, sphere_t, surface, LeafSphere, Shade, Spheres};
 pub use surface::{spawn, Surface, OFFSET_ULPS};
+pub use triangles::{triangle_hit, LeafTriangle, Projection, Triangles};
 pub use work::{Counter, Work, WorkTally};

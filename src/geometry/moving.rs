@@ -110,9 +110,22 @@ pub struct LeafMoving {
 }
 
 impl Leaf for LeafMoving {
+    type Setup<R: Real> = ();
+    type Lanes = ();
+    #[inline(always)]
+    fn setup<R: Real>(_o: V3<R>, _d: V3<R>) {}
+
     /// The centre at each lane's time ([`centre_at`]), then the static sphere test.
     #[inline(always)]
-    fn test<R: Real, C: Counter>(&self, o: V3<R>, d: V3<R>, time: R, best: &mut Closest<R>, counter: &mut C) {
+    fn test<R: Real, C: Counter>(
+        &self,
+        o: V3<R>,
+        d: V3<R>,
+        time: R,
+        _setup: &(),
+        best: &mut Closest<R>,
+        counter: &mut C,
+    ) {
         let c = centre_at(V3::splat3(self.c0), V3::splat3(self.v), time);
         test_sphere(best, o, d, c, R::splat(self.r2), self.index, counter);
     }

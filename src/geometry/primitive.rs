@@ -13,15 +13,54 @@ use super::slab::Aabb;
 use super::work::{Counter, WorkTally};
 use crate::real::Real;
 use crate::vec3::V3;
+use wide::f32x8;
+
+/// One ray as a one-ray walk ([`super::Bvh::walk_one_wide`]) hands it to a
+/// leaf: the ray, its [`Leaf::Setup`], and both again splat over 8 lanes
+/// (for [`Leaf::test_lanes`]).
+pub struct OneRay<L: Leaf> {
+    pub o: V3<f32>,
+    pub d: V3<f32>,
+    pub time: f32,
+    pub setup: L::Setup<f32>,
+    pub o8: V3<f32x8>,
+    pub d8: V3<f32x8>,
+    pub setup8: L::Setup<f32x8>,
+}
+
+impl<L: Leaf> OneRay<L> {
+    #[inline(always)]
+    pub fn new(o: V3<f32>, d: V3<f32>, time: f32) -> Self {
+        let splat = |v: V3<f32>| V3::new(f32x8::splat(v.x), f32x8::splat(v.y), f32x8::splat(v.z));
+        let (o8, d8) = (splat(o), splat(d));
+        OneRay { o, d, time, setup: L::setup(o, d), o8, d8, setup8: L::setup(o8, d8) }
+    }
+}
 
 /// One primitive as a tree's leaf stores it: everything its test reads, its
 /// hit index included, in one record (a leaf is one slice, bounds-checked
 /// once).
 pub trait Leaf: Copy + std::fmt::Debug {
+    /// What the test reads of the rays beyond `o`, `d` and `time`, computed
+    /// once per search ([`Leaf::setup`]), not once per primitive: the
+    /// triangles' projection along each ray; `()` for the other kinds.
+    type Setup<R: Real>: Copy;
+
+    /// The rays' [`Leaf::Setup`].
+    fn setup<R: Real>(o: V3<R>, d: V3<R>) -> Self::Setup<R>;
+
     /// The primitive against the rays `o + t d` at times `time` (only moving
     /// primitives read it), improving the closest hit (the tie rule is
     /// [`Closest::offer`]'s).
-    fn test<R: Real, C: Counter>(&self, o: V3<R>, d: V3<R>, time: R, best: &mut Closest<R>, counter: &mut C);
+    fn test<R: Real, C: Counter>(
+        &self,
+        o: V3<R>,
+        d: V3<R>,
+        time: R,
+        setup: &Self::Setup<R>,
+        best: &mut Closest<R>,
+        counter: &mut C,
+    );
 
     /// The primitives of one leaf, each tested in turn.
     #[inline(always)]
@@ -30,17 +69,45 @@ pub trait Leaf: Copy + std::fmt::Debug {
         o: V3<R>,
         d: V3<R>,
         time: R,
+        setup: &Self::Setup<R>,
         best: &mut Closest<R>,
         counter: &mut C,
     ) {
         for p in leaf {
-            p.test(o, d, time, best, counter);
+            p.test(o, d, time, setup, best, counter);
         }
     }
 
     /// Sorts a leaf after the build (the quads: into runs of one form of
     /// the test). Nothing by default.
     fn arrange(_leaf: &mut [Self]) {}
+
+    /// A tree's leaf records again as lanes (structure of arrays in leaf
+    /// order, padded for whole 8-lane loads) for [`Leaf::test_lanes`]; `()`
+    /// for a kind whose one-ray walk tests one primitive at a time.
+    type Lanes: Clone + std::fmt::Debug + Default;
+
+    /// The lanes of a tree's leaf records ([`Leaf::Lanes`]).
+    fn lanes(_leaf: &[Self]) -> Self::Lanes {
+        Self::Lanes::default()
+    }
+
+    /// One ray against the primitives `start..start + count` of a tree's
+    /// leaf records (`lanes` their [`Leaf::Lanes`]), improving `best`: by
+    /// default one primitive at a time ([`Leaf::test_leaf`]); a kind with
+    /// lanes tests 8 at once (the same bits per primitive).
+    #[inline(always)]
+    fn test_lanes<C: Counter>(
+        _lanes: &Self::Lanes,
+        leaf: &[Self],
+        start: usize,
+        count: usize,
+        ray: &OneRay<Self>,
+        best: &mut Closest<f32>,
+        counter: &mut C,
+    ) {
+        Self::test_leaf(&leaf[start..start + count], ray.o, ray.d, ray.time, &ray.setup, best, counter);
+    }
 }
 
 /// A primitive kind as the searches see it.
@@ -51,6 +118,12 @@ pub trait Primitive {
     /// The primitives move: their test reads each ray's time, and a scene
     /// without motion skips them at compile time.
     const TIMED: bool = false;
+
+    /// The kind's tree is walked one ray at a time, 8 child boxes per test
+    /// ([`super::Bvh::walk_one_wide`]), in the packet kernels too: for big
+    /// trees under incoherent rays (meshes), where a packet's walk enters
+    /// every box any of its rays enters.
+    const WALK_ONE_RAY: bool = false;
 
     /// The primitives a search covers (padding excluded).
     fn count(&self) -> usize;
@@ -86,7 +159,10 @@ pub trait Primitive {
         best: &mut Closest<R>,
         counter: &mut C,
     ) {
-        brute::<R, C, ANY>(self.count(), best, counter, |k, best, tally| self.leaf(k).test(o, d, time, best, tally));
+        let setup = Self::Leaf::setup(o, d);
+        brute::<R, C, ANY>(self.count(), best, counter, |k, best, tally| {
+            self.leaf(k).test(o, d, time, &setup, best, tally)
+        });
     }
 }
 

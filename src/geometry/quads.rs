@@ -148,17 +148,26 @@ pub(super) fn next_down(x: f64) -> f32 {
 
 /// Quads, structure of arrays, padded to a power of two (at least 8) with
 /// quads no ray can hit, so a quad index masked with `len - 1` is in bounds.
+///
+/// The shading side (`kind`, `row`, `shade`) holds every **planar record**:
+/// the quads' (rows `0..len`), then the triangles' (rows `len..planes`,
+/// [`Quads::push_plane`]), each a flat surface of hit index `QUAD_BASE +
+/// row`; the quads' own records (`rec`, `loose`) hold the quads alone.
 #[derive(Clone, Debug, Default)]
 pub struct Quads {
     pub rec: Vec<QuadRec>,
-    /// Each quad's material, as a handle (`crate::handle`): its kind and row.
+    /// Each planar record's material, as a handle (`crate::handle`): its
+    /// kind and row.
     pub kind: Vec<Kind>,
     pub row: Vec<u32>,
-    /// The unit normal `u x v / |u x v|` and `n^ . q`, per quad, for the
-    /// surface ([`quad_surface`]), in the shading record's first four slots.
+    /// The unit normal (a quad's `u x v / |u x v|`) and its product with a
+    /// point of the plane, per planar record, for the surface
+    /// ([`quad_surface`]), in the shading record's first four slots.
     pub shade: Vec<Shade>,
     /// Number of real quads (the arrays are longer: padding).
     pub len: usize,
+    /// Number of real planar records: the quads, then the triangles.
+    pub planes: usize,
     /// The quads the quad searches test (brute force, the quad tree): all but
     /// the faces of cuboids ([`super::Cuboids`]), which are tested whole.
     pub loose: Vec<u32>,
@@ -232,8 +241,22 @@ impl Quads {
         self.kind.push(kind);
         self.row.push(row);
         self.shade.push(Shade([unit[0], unit[1], unit[2], dn as f32, 0.0, 0.0, 0.0, 0.0]));
+        debug_assert_eq!(self.len, self.planes, "the quads come before the triangles' records");
         self.loose.push(self.len as u32);
         self.len += 1;
+        self.planes += 1;
+    }
+
+    /// Appends a triangle's planar record: its plane's unit normal `n` and
+    /// `dn = n.p` ([`super::triangles::plane`]) and its material's handle;
+    /// returns the triangle's hit index (`QUAD_BASE + row`). After every
+    /// quad.
+    pub fn push_plane(&mut self, n: [f32; 3], dn: f32, kind: Kind, row: u32) -> u32 {
+        self.kind.push(kind);
+        self.row.push(row);
+        self.shade.push(Shade([n[0], n[1], n[2], dn, 0.0, 0.0, 0.0, 0.0]));
+        self.planes += 1;
+        QUAD_BASE + self.planes as u32 - 1
     }
 
     /// For each `first`, quads `first..first + 6` are a cuboid's faces: the
@@ -270,14 +293,18 @@ impl Quads {
                 w: [0.0, 1.0, 0.0],
                 ..QuadRec::default()
             });
+        }
+        let target = self.kind.len().max(8).next_power_of_two();
+        while self.kind.len() < target {
             self.kind.push(Kind::Lambertian);
             self.row.push(0);
             self.shade.push(Shade::default());
         }
     }
 
+    /// No planar record: no quad and no triangle.
     pub fn is_empty(&self) -> bool {
-        self.len == 0
+        self.planes == 0
     }
 }
 
@@ -488,8 +515,21 @@ fn form_order(axis: u32) -> u32 {
 }
 
 impl Leaf for LeafQuad {
+    type Setup<R: Real> = ();
+    type Lanes = ();
     #[inline(always)]
-    fn test<R: Real, C: Counter>(&self, o: V3<R>, d: V3<R>, _time: R, best: &mut Closest<R>, counter: &mut C) {
+    fn setup<R: Real>(_o: V3<R>, _d: V3<R>) {}
+
+    #[inline(always)]
+    fn test<R: Real, C: Counter>(
+        &self,
+        o: V3<R>,
+        d: V3<R>,
+        _time: R,
+        _setup: &(),
+        best: &mut Closest<R>,
+        counter: &mut C,
+    ) {
         counter.work(Work::Quad, 1);
         let (hit, t) = quad_hit(o, d, &self.rec);
         best.offer(hit, t, R::u_splat(self.index));
@@ -503,6 +543,7 @@ impl Leaf for LeafQuad {
         o: V3<R>,
         d: V3<R>,
         _time: R,
+        _setup: &(),
         best: &mut Closest<R>,
         counter: &mut C,
     ) {

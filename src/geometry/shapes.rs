@@ -18,6 +18,7 @@ use super::moving::{LeafMoving, MovingSpheres};
 use super::primitive::Primitive;
 use super::quads::{LeafQuad, Quads};
 use super::spheres::{LeafSphere, Spheres};
+use super::triangles::{LeafTriangle, Triangles};
 use super::work::Counter;
 use crate::vec3::V3;
 
@@ -31,6 +32,8 @@ pub struct Shapes {
     pub cuboids: Cuboids,
     /// Spheres whose centre moves over the shutter interval.
     pub moving: MovingSpheres,
+    /// The meshes' triangles (world space).
+    pub triangles: Triangles,
     /// Each kind's tree, where the plan chose one (else brute force).
     pub trees: Trees,
     /// Some kind beyond the spheres has primitives to search.
@@ -44,6 +47,7 @@ pub struct Trees {
     pub quads: Option<Bvh<LeafQuad>>,
     pub cuboids: Option<Bvh<LeafCuboid>>,
     pub moving: Option<Bvh<LeafMoving>>,
+    pub triangles: Option<Bvh<LeafTriangle>>,
 }
 
 /// The kinds after the spheres, in their search order: `$body` once per
@@ -62,6 +66,10 @@ macro_rules! for_each_kind_after_spheres {
             let ($prims, $tree) = (&$shapes.moving, $shapes.trees.moving.as_ref());
             $body;
         }
+        {
+            let ($prims, $tree) = (&$shapes.triangles, $shapes.trees.triangles.as_ref());
+            $body;
+        }
     }};
 }
 
@@ -73,19 +81,27 @@ pub struct TreeChoice {
     pub quads: bool,
     pub cuboids: bool,
     pub moving: bool,
+    pub triangles: bool,
 }
 
 impl Shapes {
     /// The aggregate over the primitives (padded, as the kernels read
     /// them), without trees; `cuboids` must have their faces' boxes
     /// ([`Cuboids::bound_faces`]) before a tree is built over them.
-    pub fn new(spheres: Spheres, quads: Quads, cuboids: Cuboids, moving: MovingSpheres) -> Shapes {
-        let others = quads.count() > 0 || cuboids.count() > 0 || moving.count() > 0;
-        Shapes { spheres, quads, cuboids, moving, trees: Trees::default(), others }
+    pub fn new(
+        spheres: Spheres,
+        quads: Quads,
+        cuboids: Cuboids,
+        moving: MovingSpheres,
+        triangles: Triangles,
+    ) -> Shapes {
+        let others = quads.count() > 0 || cuboids.count() > 0 || moving.count() > 0 || triangles.count() > 0;
+        Shapes { spheres, quads, cuboids, moving, triangles, trees: Trees::default(), others }
     }
 
     /// Builds the trees `choice` asks for; `extent` bounds every ray origin
-    /// (see [`Bvh::build`]).
+    /// (see [`Bvh::build`]). The triangles' records are then held by their
+    /// tree alone ([`Triangles::release`]).
     pub fn build_trees(&mut self, choice: TreeChoice, extent: f32) {
         let one = Walk::OneByOne;
         self.trees = Trees {
@@ -93,7 +109,12 @@ impl Shapes {
             quads: choice.quads.then(|| Bvh::build(&self.quads, extent, one)),
             cuboids: choice.cuboids.then(|| Bvh::build(&self.cuboids, extent, one)),
             moving: choice.moving.then(|| Bvh::build(&self.moving, extent, one)),
+            // Walked one ray at a time, 8 boxes and 8 triangles a test.
+            triangles: choice.triangles.then(|| Bvh::build(&self.triangles, extent, Walk::Wide8)),
         };
+        if self.trees.triangles.is_some() {
+            self.triangles.release();
+        }
     }
 
     /// The closest hits of the rays `o + t d` (one ray, or a packet; the
@@ -176,6 +197,7 @@ fn search<K: Primitive, R: Walker, C: Counter, const M: bool, const ANY: bool>(
         return;
     }
     match tree {
+        Some(b) if K::WALK_ONE_RAY => R::walk_one_ray::<K::Leaf, C, ANY>(b, o, d, time, best, counter),
         Some(b) => *best = b.walk::<R, C, ANY>(o, d, time, *best, counter),
         None => prims.brute::<R, C, ANY>(o, d, time, best, counter),
     }

@@ -227,8 +227,21 @@ pub struct LeafSphere {
 }
 
 impl Leaf for LeafSphere {
+    type Setup<R: Real> = ();
+    type Lanes = ();
     #[inline(always)]
-    fn test<R: Real, C: Counter>(&self, o: V3<R>, d: V3<R>, _time: R, best: &mut Closest<R>, counter: &mut C) {
+    fn setup<R: Real>(_o: V3<R>, _d: V3<R>) {}
+
+    #[inline(always)]
+    fn test<R: Real, C: Counter>(
+        &self,
+        o: V3<R>,
+        d: V3<R>,
+        _time: R,
+        _setup: &(),
+        best: &mut Closest<R>,
+        counter: &mut C,
+    ) {
         let c = V3::new(R::splat(self.c[0]), R::splat(self.c[1]), R::splat(self.c[2]));
         test_sphere(best, o, d, c, R::splat(self.r2), self.index, counter);
     }

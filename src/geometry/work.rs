@@ -21,10 +21,13 @@ pub enum Work {
     Quad,
     /// A cuboid tested (a box's six faces, by one slab test).
     Cuboid,
+    /// A triangle tested (a mesh's).
+    Triangle,
 }
 
 impl Work {
-    pub const ALL: [Work; 6] = [Work::Node, Work::Box, Work::Sphere, Work::Root, Work::Quad, Work::Cuboid];
+    pub const ALL: [Work; 7] =
+        [Work::Node, Work::Box, Work::Sphere, Work::Root, Work::Quad, Work::Cuboid, Work::Triangle];
 }
 
 /// Receives traversal work. Every method has an empty inlined default, so a
@@ -46,14 +49,14 @@ impl Counter for () {}
 /// cost about 9% of the render (measured; docs/performance.md). Nothing is
 /// counted, and nothing is left in the code, unless `C::WORK`.
 pub struct WorkTally<C> {
-    n: [u32; 6],
+    n: [u32; 7],
     _counter: std::marker::PhantomData<fn(&mut C)>,
 }
 
 impl<C: Counter> WorkTally<C> {
     #[inline(always)]
     pub fn new() -> Self {
-        WorkTally { n: [0; 6], _counter: std::marker::PhantomData }
+        WorkTally { n: [0; 7], _counter: std::marker::PhantomData }
     }
 
     #[inline(always)]

@@ -130,6 +130,9 @@ pub struct PerRay {
     /// Cuboid tests (absent from baselines of scenes without boxes).
     #[serde(default, skip_serializing_if = "is_zero")]
     pub cuboid_tests: f64,
+    /// Triangle tests (absent from baselines of scenes without meshes).
+    #[serde(default, skip_serializing_if = "is_zero")]
+    pub triangle_tests: f64,
 }
 
 fn is_zero(x: &f64) -> bool {
@@ -146,6 +149,7 @@ impl PerRay {
             roots: w.roots as f64 / r,
             quad_tests: w.quad_tests as f64 / r,
             cuboid_tests: w.cuboid_tests as f64 / r,
+            triangle_tests: w.triangle_tests as f64 / r,
         }
     }
 }
@@ -284,6 +288,14 @@ impl BenchReport {
             let per: Vec<String> =
                 self.kernels.iter().map(|e| format!("{} {:.2}", e.stats.kernel, e.work_per_ray.cuboid_tests)).collect();
             t += &format!("cuboid tests per ray: {}\n", per.join(", "));
+        }
+        if self.kernels.iter().any(|e| e.work_per_ray.triangle_tests > 0.0) {
+            let per: Vec<String> = self
+                .kernels
+                .iter()
+                .map(|e| format!("{} {:.2}", e.stats.kernel, e.work_per_ray.triangle_tests))
+                .collect();
+            t += &format!("triangle tests per ray: {}\n", per.join(", "));
         }
         t += &format!(
             "(seconds and Mrays/s: the median of {} run(s); CI: a distribution-free confidence interval for the median \
@@ -539,7 +551,7 @@ pub struct BaselineComparison {
 }
 
 fn total(w: &WorkCounters) -> u64 {
-    w.nodes + w.box_tests + w.sphere_tests + w.roots + w.quad_tests + w.cuboid_tests
+    w.nodes + w.box_tests + w.sphere_tests + w.roots + w.quad_tests + w.cuboid_tests + w.triangle_tests
 }
 
 /// Compares a fresh report with a baseline (checked with [`Baseline::check`]).

@@ -1,0 +1,317 @@
+//! Triangles (meshes, in world space) as records a tree's leaf holds, their
+//! watertight hit test over [`Real`] (one formula for the scalar kernel and
+//! every lane width), closest hit and any hit.
+//!
+//! A triangle's shading record (its plane's unit normal and offset, and its
+//! material) is a planar record among the quads' ([`super::Quads`]): its
+//! hit index is `QUAD_BASE + i` with `i` past the last quad, so every pass
+//! after the closest-hit search treats a triangle's hit as a flat surface,
+//! with the quads' surface and its offset rule ([`super::quad_surface`]).
+//! Only the search differs.
+//!
+//! # The test: inside by edge functions, `t` by the plane
+//!
+//! **Inside or outside** is decided as in Woop, Benthin and Wald (2013),
+//! "Watertight ray/triangle intersection". Per ray, once per search
+//! ([`Leaf::setup`]): the axis `kz` along which `|d|` is largest, the two
+//! others `kx`, `ky` in cyclic order, and the shear `sx = d_kx / d_kz`,
+//! `sy = d_ky / d_kz`. Per vertex `v`: `a = v - o`, projected along the ray
+//! to `(a_kx - sx a_kz, a_ky - sy a_kz)`. The ray passes through the
+//! projected triangle's inside when the three edge functions
+//! `e(P, Q) = Q.x P.y - Q.y P.x` of its edges have one sign (zero counting as
+//! either). Every operation is a single IEEE operation, no fused
+//! multiply-add (so every build computes the same bits):
+//!
+//! * **A vertex is projected the same way in every triangle** that holds it
+//!   (the same operations on the same floats), so two triangles that share
+//!   an edge see the same two projected points.
+//! * **An edge's function is exactly negated** in the triangle on its other
+//!   side (`e(Q, P) = -e(P, Q)`: the two products commute exactly, and
+//!   `x - y = -(y - x)` in IEEE arithmetic).
+//! * **Its sign is right or zero**: rounding is monotonic, so
+//!   `fl(a b) - fl(c d)` never has the sign opposite to `a b - c d`'s.
+//!
+//! So a ray through the inside of a closed mesh's surface, an edge or a
+//! vertex passes the test of at least one triangle there: the mesh does not
+//! leak (where the exact sign was lost to a zero both neighbours take the
+//! ray, and the closest-hit rule decides). A ray in the triangle's plane
+//! (`e` sums to 0) misses it.
+//!
+//! **The distance** is Woop's too: `t = (u a_kz + v b_kz + w c_kz) / ((u + v
+//! + w) d_kz)` with `u, v, w` the edge functions (the hit's barycentric
+//! weights, times their sum) and `a_kz, b_kz, c_kz` the vertices' unprojected
+//! coordinates along `kz`: a weighted mean of the distances at which the ray
+//! reaches the vertices' `kz` coordinates, so the hit lies in the triangle's
+//! box up to a few units of roundoff of the vertices' distances, far inside
+//! the tree's padding (brute force and the tree agree bit for bit). A hit
+//! needs `0 < t < inf`.
+//!
+//! **Self-hits** are prevented by the plane, as for a quad: a hit also needs
+//! the origin in front of the plane the ray goes toward, `(dn - n.o) (n.d) >
+//! 0`, with the unit normal `n` and `dn = n.v0` computed in f64 and rounded
+//! once. A new ray leaving the surface starts off the plane by the quads'
+//! offset (`32u (|p|_inf + |dn|)`), far above the error of `dn - n.o` (about
+//! `3u (|o| + |dn|)`), so it cannot find the triangle it leaves, however
+//! large the triangle (the error of `t` grows with the triangle's size; the
+//! plane's sign does not).
+
+use super::hit::{Closest, MISS, QUAD_BASE};
+use super::primitive::{Leaf, OneRay, Primitive};
+use super::slab::Aabb;
+use super::work::{Counter, Work};
+use crate::real::Real;
+use crate::vec3::V3;
+use wide::f32x8;
+
+/// One triangle as a leaf holds it: its vertices (world space), its plane
+/// (unit normal, `n.v0`) and its hit index.
+#[derive(Clone, Copy, Debug, Default, PartialEq)]
+#[repr(C)]
+pub struct LeafTriangle {
+    pub v: [[f32; 3]; 3],
+    pub n: [f32; 3],
+    pub dn: f32,
+    pub index: u32,
+}
+
+/// The scene's triangles, in hit-index order. After a tree is built over
+/// them, the tree holds the records ([`Triangles::release`]).
+#[derive(Clone, Debug, Default)]
+pub struct Triangles {
+    rec: Vec<LeafTriangle>,
+    len: usize,
+}
+
+impl Triangles {
+    pub fn len(&self) -> usize {
+        self.len
+    }
+    pub fn is_empty(&self) -> bool {
+        self.len == 0
+    }
+
+    /// Appends the triangle `v` whose hit index is `index` (`QUAD_BASE + i`,
+    /// `i` its planar record's row); its plane is computed from the f32
+    /// vertices in f64 ([`plane`]). A degenerate triangle (zero area) has no
+    /// normal and is never hit.
+    pub fn push(&mut self, v: [[f32; 3]; 3], index: u32) {
+        debug_assert!(index >= QUAD_BASE);
+        let (n, dn) = plane(v);
+        self.rec.push(LeafTriangle { v, n, dn, index });
+        self.len += 1;
+    }
+
+    /// Drops the records once a tree holds them (the tree is then the only
+    /// search: brute force needs them). Memory: a triangle's record is 56
+    /// bytes.
+    pub fn release(&mut self) {
+        self.rec = Vec::new();
+    }
+
+    /// The records (empty after [`Triangles::release`]).
+    pub fn records(&self) -> &[LeafTriangle] {
+        &self.rec
+    }
+}
+
+/// The plane of the triangle `v`: its unit normal `unit((v1 - v0) x (v2 -
+/// v0))` and `n.v0`, in f64 from the f32 vertices, each rounded once; zeros
+/// for a degenerate triangle (no normal: every ray misses it, its surface
+/// is never computed).
+pub fn plane(v: [[f32; 3]; 3]) -> ([f32; 3], f32) {
+    let d = |a: [f32; 3]| glam::DVec3::from_array(a.map(f64::from));
+    let (v0, v1, v2) = (d(v[0]), d(v[1]), d(v[2]));
+    let c = (v1 - v0).cross(v2 - v0);
+    let len = c.length();
+    if !(len > 0.0) || !len.is_finite() {
+        return ([0.0; 3], 0.0);
+    }
+    let n = c / len;
+    (n.to_array().map(|x| x as f32), n.dot(v0) as f32)
+}
+
+/// The rays' projection ([`Leaf::setup`]): which axis is `kz`, and the
+/// shear.
+#[derive(Clone, Copy, Debug)]
+pub struct Projection<R: Real> {
+    /// `kz` is x (then `kx`, `ky` are y, z).
+    along_x: R::Mask,
+    /// `kz` is y (then z, x); neither: `kz` is z (then x, y).
+    along_y: R::Mask,
+    sx: R,
+    sy: R,
+    /// `d_kz`.
+    dz: R,
+}
+
+/// `(a_kx, a_ky, a_kz)` of `a` for the rays' axes.
+#[inline(always)]
+fn permute<R: Real>(along_x: R::Mask, along_y: R::Mask, a: V3<R>) -> (R, R, R) {
+    let kx = R::select(along_x, a.y, R::select(along_y, a.z, a.x));
+    let ky = R::select(along_x, a.z, R::select(along_y, a.x, a.y));
+    let kz = R::select(along_x, a.x, R::select(along_y, a.y, a.z));
+    (kx, ky, kz)
+}
+
+impl<R: Real> Projection<R> {
+    /// The projection along `d` (a zero or NaN direction gives NaN shears:
+    /// every test misses).
+    #[inline(always)]
+    pub fn new(d: V3<R>) -> Self {
+        let (ax, ay, az) = (d.x.abs(), d.y.abs(), d.z.abs());
+        let along_x = ax.ge(ay) & ax.ge(az);
+        let along_y = !along_x & ay.ge(az);
+        let (dx, dy, dz) = permute(along_x, along_y, d);
+        Projection { along_x, along_y, sx: dx / dz, sy: dy / dz, dz }
+    }
+
+    /// Vertex `v` relative to the origins `o`, projected along the rays, and
+    /// its coordinate along `kz`.
+    #[inline(always)]
+    fn point(&self, v: V3<R>, o: V3<R>) -> ((R, R), R) {
+        let (x, y, z) = permute(self.along_x, self.along_y, v - o);
+        ((x - self.sx * z, y - self.sy * z), z)
+    }
+}
+
+/// The edge function of the projected edge from `p` to `q`.
+#[inline(always)]
+fn edge<R: Real>(p: (R, R), q: (R, R)) -> R {
+    q.0 * p.1 - q.1 * p.0
+}
+
+/// The triangle test: the hit mask and `t` of the rays `o + t d` (with
+/// their projection `pr`) against `tri`, as the module describes.
+#[inline(always)]
+pub fn triangle_hit<R: Real>(o: V3<R>, d: V3<R>, pr: &Projection<R>, tri: &LeafTriangle) -> (R::Mask, R) {
+    let [v0, v1, v2] = tri.v.map(V3::splat3);
+    hit(o, d, pr, [v0, v1, v2], V3::splat3(tri.n), R::splat(tri.dn))
+}
+
+/// The test of [`triangle_hit`] with the triangle's values as lanes (one
+/// triangle broadcast to a packet's rays, or a leaf's triangles, one a lane,
+/// against one ray broadcast): the same operations, so the same bits.
+#[inline(always)]
+fn hit<R: Real>(o: V3<R>, d: V3<R>, pr: &Projection<R>, v: [V3<R>; 3], n: V3<R>, dn: R) -> (R::Mask, R) {
+    let ((a, az), (b, bz), (c, cz)) = (pr.point(v[0], o), pr.point(v[1], o), pr.point(v[2], o));
+    let (u, v, w) = (edge(b, c), edge(c, a), edge(a, b));
+    let zero = R::splat(0.0);
+    let inside = (u.ge(zero) & v.ge(zero) & w.ge(zero)) | (u.le(zero) & v.le(zero) & w.le(zero));
+    let det = u + v + w;
+    let t = (u * az + v * bz + w * cz) / (det * pr.dz);
+    let ahead = ((dn - n.dot(o)) * n.dot(d)).gt(zero);
+    let hit = inside & ahead & t.gt(zero) & t.lt(R::splat(f32::INFINITY));
+    (hit, t)
+}
+
+/// A tree's triangles as lanes, in leaf order, padded by 8 triangles no
+/// ray hits (no normal), for the one-ray walk's test of a leaf's triangles
+/// at once ([`Leaf::test_lanes`]).
+#[derive(Clone, Debug, Default)]
+pub struct TriangleLanes {
+    /// Vertex `k`'s coordinate `i`: `v[k][i][j]` of triangle `j`.
+    v: [[Vec<f32>; 3]; 3],
+    n: [Vec<f32>; 3],
+    dn: Vec<f32>,
+    index: Vec<u32>,
+}
+
+impl Leaf for LeafTriangle {
+    type Setup<R: Real> = Projection<R>;
+    type Lanes = TriangleLanes;
+
+    fn lanes(leaf: &[Self]) -> TriangleLanes {
+        let mut l = TriangleLanes::default();
+        let pad = LeafTriangle { index: MISS, ..LeafTriangle::default() };
+        for t in leaf.iter().chain(std::iter::repeat_n(&pad, 8)) {
+            for k in 0..3 {
+                for i in 0..3 {
+                    l.v[k][i].push(t.v[k][i]);
+                }
+                l.n[k].push(t.n[k]);
+            }
+            l.dn.push(t.dn);
+            l.index.push(t.index);
+        }
+        l
+    }
+
+    /// The leaf's triangles 8 at a time, the ray broadcast; hits offered in
+    /// lane order (the tie rule does not depend on it).
+    #[inline(always)]
+    fn test_lanes<C: Counter>(
+        lanes: &TriangleLanes,
+        _leaf: &[Self],
+        start: usize,
+        count: usize,
+        ray: &OneRay<Self>,
+        best: &mut Closest<f32>,
+        counter: &mut C,
+    ) {
+        counter.work(Work::Triangle, count as u32);
+        let ld = |v: &[f32]| f32x8::new(v[start..start + 8].try_into().expect("8 lanes: the lanes are padded"));
+        let v = |k: usize| V3::new(ld(&lanes.v[k][0]), ld(&lanes.v[k][1]), ld(&lanes.v[k][2]));
+        let n = V3::new(ld(&lanes.n[0]), ld(&lanes.n[1]), ld(&lanes.n[2]));
+        let (hit, t) = hit(ray.o8, ray.d8, &ray.setup8, [v(0), v(1), v(2)], n, ld(&lanes.dn));
+        let mut m = hit.to_bitmask() & ((1u32 << count) - 1);
+        if m == 0 {
+            return;
+        }
+        let t = t.to_array();
+        while m != 0 {
+            let k = m.trailing_zeros() as usize;
+            m &= m - 1;
+            best.offer(true, t[k], lanes.index[start + k]);
+        }
+    }
+
+    #[inline(always)]
+    fn setup<R: Real>(_o: V3<R>, d: V3<R>) -> Projection<R> {
+        Projection::new(d)
+    }
+
+    #[inline(always)]
+    fn test<R: Real, C: Counter>(
+        &self,
+        o: V3<R>,
+        d: V3<R>,
+        _time: R,
+        setup: &Projection<R>,
+        best: &mut Closest<R>,
+        counter: &mut C,
+    ) {
+        counter.work(Work::Triangle, 1);
+        let (hit, t) = triangle_hit(o, d, setup, self);
+        best.offer(hit, t, R::u_splat(self.index));
+    }
+}
+
+impl Primitive for Triangles {
+    type Leaf = LeafTriangle;
+    const WALK_ONE_RAY: bool = true;
+
+    fn count(&self) -> usize {
+        self.len
+    }
+
+    #[inline(always)]
+    fn leaf(&self, k: usize) -> LeafTriangle {
+        self.rec[k]
+    }
+
+    /// The vertices' box, padded: a flat triangle's box gets the padding's
+    /// thickness, far above the rounding of the plane's `t` (the hit point
+    /// lies within a few units of roundoff of the plane), so brute force and
+    /// the tree agree bit for bit.
+    fn bounds(&self, k: usize, pad: f32) -> Aabb {
+        let v = &self.rec[k].v;
+        let min = std::array::from_fn(|a| v[0][a].min(v[1][a]).min(v[2][a]));
+        let max = std::array::from_fn(|a| v[0][a].max(v[1][a]).max(v[2][a]));
+        Aabb::padded(min, max, pad)
+    }
+
+    /// The triangles' own extent too: the largest vertex coordinate.
+    fn extent(&self, extent: f32) -> f32 {
+        self.rec.iter().flat_map(|r| r.v.iter().flatten()).fold(extent.abs(), |m, x| m.max(x.abs()))
+    }
+}
