@@ -66,6 +66,7 @@ mod kernel;
 pub mod limits;
 mod material;
 mod math;
+pub mod mesh;
 pub mod output;
 mod plan;
 mod probe;

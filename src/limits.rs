@@ -61,6 +61,18 @@ pub const MAX_GROUPS: usize = 1 << 16;
 /// costs every ray of the scene a chord test and a draw per bounce (media
 /// are not in a BVH), and takes its own sampler dimensions.
 pub const MAX_MEDIA: usize = 64;
+/// The most meshes a scene file may list (its own and each group's, each
+/// list bounded while it is read); their triangles are bounded by
+/// [`MAX_SCENE_TRIANGLES`].
+pub const MAX_MESHES: usize = 1 << 16;
+/// The most triangles a scene may hold once flattened (every mesh, each
+/// group's copy included): 2^24, about 1.6 GB prepared (56 bytes a
+/// triangle in the tree's leaves, 37 in its shading record and material
+/// handle, and the tree's nodes), checked before any is made. Also bounds
+/// the planar hit indices (quads and triangles below 2^29).
+pub const MAX_SCENE_TRIANGLES: u64 = 1 << 24;
+/// The finest icosphere a scene may ask for: level 7, 327,680 triangles.
+pub const MAX_ICOSPHERE_LEVEL: u32 = 7;
 /// Shapes the `book` estimator samples toward, at most (its `sample_toward`
 /// list, or the lights it takes by default), and lights the `nee-mis`
 /// estimator samples: every diffuse vertex evaluates the density of each.

@@ -116,6 +116,11 @@ pub struct Plan {
     /// A scene without moving spheres draws no time and pays nothing.
     #[serde(skip_serializing_if = "Option::is_none")]
     pub moving: Option<Accel>,
+    /// The closest-hit search over the meshes' triangles, when the scene
+    /// has any (searched last; a hit is a planar record's, shaded as a
+    /// quad's surface).
+    #[serde(skip_serializing_if = "Option::is_none")]
+    pub triangles: Option<Accel>,
     /// The `book` estimator's shapes (its `sample_toward` list, else the
     /// scene's lights), when it runs and has any: each diffuse vertex then
     /// mixes the material's density with directions toward them. 0: the
@@ -182,6 +187,11 @@ impl Plan {
             Some(_) => "; moving spheres: their own bvh8 over the shutter interval, tested at each path's time",
             None => "",
         };
+        let triangles = match self.triangles {
+            Some(Accel::Brute) => "; triangles: brute force, watertight test",
+            Some(_) => "; triangles: their own bvh8, watertight test",
+            None => "",
+        };
         let textures: Vec<&str> = self.textures.iter().map(|t| t.name()).collect();
         let textures =
             if textures.is_empty() { String::new() } else { format!("; texture passes: {}", textures.join(", ")) };
@@ -211,7 +221,7 @@ impl Plan {
             ),
         };
         format!(
-            "plan: mode {:?}; material passes: {kinds}{textures}; camera: {} rays, {}; closest hit: {}{quads}{cuboids}{moving}{media}{toward}; paths stop at zero throughput{film}",
+            "plan: mode {:?}; material passes: {kinds}{textures}; camera: {} rays, {}; closest hit: {}{quads}{cuboids}{moving}{triangles}{media}{toward}; paths stop at zero throughput{film}",
             self.mode,
             if self.lens { "thin-lens" } else { "pinhole" },
             if self.jitter { "jittered in the pixel" } else { "through pixel centres" },

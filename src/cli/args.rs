@@ -5,7 +5,7 @@ use clap::builder::{PossibleValuesParser, TypedValueParser};
 use clap::Args;
 use rtow::{
     AccelChoice, Adaptive, EstimatorChoice, KernelChoice, Mode, OnRejected, Overrides, RenderOptions, Result, Roulette,
-    Sampler, Settings, ADAPTIVE_MIN_SPP, DEFAULT_TILE, ROULETTE_AFTER_RAYS,
+    Sampler, SceneSource, Settings, ADAPTIVE_MIN_SPP, DEFAULT_TILE, ROULETTE_AFTER_RAYS,
 };
 use std::path::PathBuf;
 use std::str::FromStr;
@@ -58,6 +58,21 @@ pub struct ImageArgs {
     /// the power heuristic) [default: the scene's render.estimator, else by the scene]
     #[arg(long, value_parser = choice::<EstimatorChoice>(EstimatorChoice::NAMES))]
     pub estimator: Option<EstimatorChoice>,
+    /// Render every static sphere as a closed icosphere triangle mesh of level N (20*4^N triangles a
+    /// sphere, 0 to 7), with the sphere's material
+    #[arg(long, value_name = "N")]
+    pub tessellate: Option<u32>,
+}
+
+impl ImageArgs {
+    /// The scene `spec` names (a preset or a scene file), tessellated if asked.
+    pub fn open(&self, spec: &str) -> Result<SceneSource> {
+        let mut source = SceneSource::open(spec)?;
+        if let Some(level) = self.tessellate {
+            source.scene = source.scene.tessellate(level)?;
+        }
+        Ok(source)
+    }
 }
 
 /// `--depth`'s help, naming the library's default.

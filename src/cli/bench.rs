@@ -77,7 +77,7 @@ pub struct BenchArgs {
 
 /// Ok(false): a regression against the baseline (exit status 1).
 pub fn run(a: BenchArgs) -> Result<bool> {
-    let source = SceneSource::open(&a.scene)?;
+    let source = a.image.open(&a.scene)?;
     let job = Job::from_source(&source, &a.image.overrides(), &a.run.options(KernelChoice::Simd))?;
     let name = &source.name;
     if a.instructions_child {
@@ -164,7 +164,7 @@ fn count_instructions(a: &BenchArgs, source: &SceneSource, job: &Job) -> Result<
     }
     let (outputs, ids) = outputs(a, source)?;
     let program = std::env::current_exe().map_err(|e| Error::System(format!("cannot find this executable: {e}")))?;
-    let child_args = |job: &Job| counted_command(&a.scene, job);
+    let child_args = |job: &Job| counted_command(&a.scene, a.image.tessellate, job);
     rtow::instruments::callgrind::valgrind_version()?;
     rtow::instruments::callgrind::check_countable_build()?;
     let s = job.settings();
@@ -192,7 +192,7 @@ fn count_instructions(a: &BenchArgs, source: &SceneSource, job: &Job) -> Result<
 
 /// The process `--instructions` counts: this very command line's job (the
 /// scene `scene`), one kernel, rendered once.
-fn counted_command(scene: &str, job: &Job) -> Vec<OsString> {
+fn counted_command(scene: &str, tessellate: Option<u32>, job: &Job) -> Vec<OsString> {
     let s = job.settings();
     let mut v: Vec<String> = vec!["bench".into(), scene.to_string()];
     for (flag, value) in [
@@ -209,6 +209,10 @@ fn counted_command(scene: &str, job: &Job) -> Vec<OsString> {
     ] {
         v.push(flag.into());
         v.push(value);
+    }
+    if let Some(level) = tessellate {
+        v.push("--tessellate".into());
+        v.push(level.to_string());
     }
     v.push("--instructions-child".into());
     v.into_iter().map(OsString::from).collect()

@@ -8,7 +8,7 @@ use clap::Args;
 use indicatif::{ProgressBar, ProgressStyle};
 use rtow::files::{self, RenderRequest};
 use rtow::shard::{Split, SplitKind};
-use rtow::{Job, KernelChoice, Progress, Result, SceneSource, Stats};
+use rtow::{Job, KernelChoice, Progress, Result, Stats};
 use std::io::IsTerminal;
 use std::path::PathBuf;
 use std::time::Instant;
@@ -92,7 +92,7 @@ pub fn with_progress<T>(quiet: bool, work: impl FnOnce(Option<&(dyn Fn(Progress)
 }
 
 pub fn run(a: RenderArgs) -> Result<()> {
-    let source = SceneSource::open(&a.scene)?;
+    let source = a.image.open(&a.scene)?;
     let options = a.estimator.options(a.run.options(a.kernel))?;
     let job = Job::from_source(&source, &a.image.overrides(), &options)?;
     for w in job.warnings() {

@@ -9,9 +9,10 @@ use crate::camera::{PreparedCamera, View};
 use crate::choice::{AccelChoice, EstimatorChoice, Mode};
 use crate::estimator::Estimator;
 use crate::film::accum::Scale;
+use crate::geometry::triangles::plane;
 use crate::geometry::{
     Boundary, Cuboids, Emitters, LightQuad, LightSphere, Lights, Media, MovingSpheres, Quads, Shade, Shapes, Spheres,
-    TreeChoice, Walk,
+    TreeChoice, Triangles, Walk,
 };
 use crate::handle::Kind;
 use crate::material::MaterialTables;
@@ -84,19 +85,14 @@ pub(super) fn plan(scene: &Scene, flat: &Flat, settings: &Settings, accel: Accel
     let kinds: KindSet = match scene.mode {
         Mode::Path => {
             let media = (!flat.media.is_empty()).then_some(Kind::Isotropic);
-            flat.spheres
-                .iter()
-                .map(|s| kind(&s.material))
-                .chain(flat.quads.iter().map(|q| kind(&q.material)))
-                .chain(media)
-                .collect()
+            flat.materials().map(kind).chain(media).collect()
         }
         Mode::Gradient | Mode::Flat | Mode::Normals => KindSet::default(),
     };
     // Texture passes run for path tracing only (the debug modes shade flat colours).
     let mut textures = TexSet::default();
     if scene.mode == Mode::Path {
-        for m in flat.spheres.iter().map(|s| &s.material).chain(flat.quads.iter().map(|q| &q.material)) {
+        for m in flat.materials() {
             if let Material::Lambertian { albedo } = m {
                 if tex_kind(albedo) != TexKind::Solid {
                     textures.insert(tex_kind(albedo));
@@ -114,6 +110,7 @@ pub(super) fn plan(scene: &Scene, flat: &Flat, settings: &Settings, accel: Accel
         quads: choose_quad_accel(accel, flat.quads.len() - 6 * flat.cuboids.len(), scene.mode),
         cuboids: choose_quad_accel(accel, flat.cuboids.len(), scene.mode),
         moving: choose_quad_accel(accel, flat.spheres.iter().filter(|s| s.center1.is_some()).count(), scene.mode),
+        triangles: choose_quad_accel(accel, flat.triangle_count(), scene.mode),
         sample_toward,
         nee,
         film_exponent: Scale::for_brightness(brightest(scene, flat) as f64).exponent(),
@@ -135,7 +132,7 @@ pub(crate) fn brightest(scene: &Scene, flat: &Flat) -> f32 {
         Background::Sky => max3(scene.sky.horizon).max(max3(scene.sky.zenith)),
         Background::Constant(c) => max3(c),
     };
-    let materials = || flat.spheres.iter().map(|s| &s.material).chain(flat.quads.iter().map(|q| &q.material));
+    let materials = || flat.materials();
     let surfaces = match scene.mode {
         Mode::Gradient => return 0.0,
         Mode::Normals => 1.0,
@@ -184,10 +181,11 @@ pub(super) fn prepare(
     let extent = extent(scene, flat, &view, &plan);
     let mut tables = Tables { images, materials: MaterialTables::default(), textures: TextureTables::default() };
     let (spheres, moving) = spheres(flat, &mut tables);
-    let (quads, cuboids) = quads(flat, extent, &mut tables);
+    let (mut quads, cuboids) = quads(flat, extent, &mut tables);
+    let triangles = triangles(flat, &mut quads, &mut tables);
     let Tables { materials, textures, .. } = tables;
     let media = if plan.kinds.contains(Kind::Isotropic) { media(flat) } else { Media::default() };
-    let shapes = shapes(spheres, quads, cuboids, moving, &materials, &plan, extent);
+    let shapes = shapes(Kinds { spheres, quads, cuboids, moving, triangles }, &materials, &plan, extent);
     let camera =
         PreparedCamera { lens: plan.lens, ..PreparedCamera::new(&view, settings.width, settings.height, plan.jitter) };
     let mut lights = Lights::default();
@@ -295,6 +293,9 @@ fn extent(scene: &Scene, flat: &Flat, view: &View, plan: &Plan) -> f32 {
             }
         }
     }
+    for m in &flat.meshes {
+        extent = m.positions.iter().fold(extent, |e, p| e.max(inf(p)));
+    }
     extent
 }
 
@@ -325,6 +326,22 @@ fn quads(flat: &Flat, extent: f32, tables: &mut Tables) -> (Quads, Cuboids) {
     (quads, cuboids)
 }
 
+/// The meshes' triangles, in mesh order, each with its planar record among
+/// the quads' (after every quad: [`Quads::push_plane`]) and its mesh's
+/// material row.
+fn triangles(flat: &Flat, quads: &mut Quads, tables: &mut Tables) -> Triangles {
+    let mut triangles = Triangles::default();
+    for m in &flat.meshes {
+        let (kind, row) = (kind(&m.material), tables.row_of(&m.material));
+        for k in 0..m.triangles.len() {
+            let v = m.triangle(k);
+            let (n, dn) = plane(v);
+            triangles.push(v, quads.push_plane(n, dn, kind, row));
+        }
+    }
+    triangles
+}
+
 /// The constant media (where paths are traced).
 fn media(flat: &Flat) -> Media {
     let mut media = Media::default();
@@ -348,26 +365,19 @@ fn media(flat: &Flat) -> Media {
 /// within the camera's lens of the eye, or on a primitive (`extent`; the
 /// spheres' tree pads by their own extent too); the spheres' tree is shaped
 /// for the walk that uses it (`geometry::bvh::SahCost`).
-fn shapes(
-    mut spheres: Spheres,
-    mut quads: Quads,
-    cuboids: Cuboids,
-    mut moving: MovingSpheres,
-    materials: &MaterialTables,
-    plan: &Plan,
-    extent: f32,
-) -> Shapes {
+fn shapes(kinds: Kinds, materials: &MaterialTables, plan: &Plan, extent: f32) -> Shapes {
+    let Kinds { mut spheres, mut quads, cuboids, mut moving, triangles } = kinds;
     spheres.pad();
     quads.pad();
     moving.pad();
     // The wavefront's per-primitive shading records (geometry::Shade).
     shade_spheres(&mut spheres, materials);
     shade_spheres(&mut moving.s, materials);
-    for i in 0..quads.len {
+    for i in 0..quads.planes {
         let (albedo, param) = materials.record(quads.kind[i], quads.row[i]);
         quads.shade[i].0[4..].copy_from_slice(&[albedo[0], albedo[1], albedo[2], param]);
     }
-    let mut shapes = Shapes::new(spheres, quads, cuboids, moving);
+    let mut shapes = Shapes::new(spheres, quads, cuboids, moving, triangles);
     let tree = |a: Option<Accel>| a.is_some_and(|a| a != Accel::Brute);
     let choice = TreeChoice {
         spheres: match plan.accel {
@@ -378,9 +388,19 @@ fn shapes(
         quads: tree(plan.quads),
         cuboids: tree(plan.cuboids),
         moving: tree(plan.moving),
+        triangles: tree(plan.triangles),
     };
     shapes.build_trees(choice, extent);
     shapes
+}
+
+/// Every kind's primitives, before padding and trees.
+struct Kinds {
+    spheres: Spheres,
+    quads: Quads,
+    cuboids: Cuboids,
+    moving: MovingSpheres,
+    triangles: Triangles,
 }
 
 /// Fills the spheres' shading records ([`Spheres::shade`], after

@@ -149,8 +149,9 @@ fn surface_uv<R: Real>(prep: &Prepared, p: V3<R>, hit: impl Fn(usize) -> u32) ->
     let of_kind = |k: usize, kind: HitKind| Some(Hit::of(hit(k))).filter(|h| h.kind == kind).map(|h| h.index);
     let sphere = |k: usize| of_kind(k, HitKind::Sphere);
     // Image textures are on static spheres and quads only (`Scene::validate`
-    // refuses them on moving spheres): any other lane reads zeros.
-    let quad = |k: usize| of_kind(k, HitKind::Quad).map(|i| &qs.rec[i]);
+    // refuses them on moving spheres and meshes, whose planar records follow
+    // the quads'): any other lane reads zeros.
+    let quad = |k: usize| of_kind(k, HitKind::Quad).filter(|&i| i < qs.len).map(|i| &qs.rec[i]);
     let is_sphere = R::from_fn(|k| if sphere(k).is_some() { 1.0 } else { 0.0 }).gt(R::splat(0.5));
     let (su, sv) = if sp.len > 0 {
         let at = |a: &[f32], dflt: f32| R::from_fn(|k| sphere(k).map_or(dflt, |i| a[i]));

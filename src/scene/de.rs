@@ -7,7 +7,7 @@
 //! sphere list stops at [`MAX_SPHERES`] while it is read (memory is bounded
 //! by the limit, not by the file).
 
-use crate::limits::{MAX_GROUPS, MAX_MEDIA, MAX_QUADS, MAX_SAMPLED_SHAPES, MAX_SPHERES};
+use crate::limits::{MAX_GROUPS, MAX_MEDIA, MAX_MESHES, MAX_QUADS, MAX_SAMPLED_SHAPES, MAX_SPHERES};
 use serde::de::{self, Deserializer, IgnoredAny, MapAccess, SeqAccess, Unexpected, Visitor};
 use std::fmt;
 use std::marker::PhantomData;
@@ -283,6 +283,11 @@ pub fn groups<'de, D: Deserializer<'de>>(d: D) -> Result<Vec<super::Group>, D::E
 /// A media list, refused beyond [`MAX_MEDIA`].
 pub fn media<'de, D: Deserializer<'de>>(d: D) -> Result<Vec<super::Medium>, D::Error> {
     bounded(d, MAX_MEDIA, "media", "limits::MAX_MEDIA")
+}
+
+/// A mesh list, refused beyond [`MAX_MESHES`].
+pub fn meshes<'de, D: Deserializer<'de>>(d: D) -> Result<Vec<super::Mesh>, D::Error> {
+    bounded(d, MAX_MESHES, "meshes", "limits::MAX_MESHES")
 }
 
 /// The `sample_toward` list, refused beyond [`MAX_SAMPLED_SHAPES`].

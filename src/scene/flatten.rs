@@ -10,8 +10,10 @@
 //! bounding box of a rotated box is that of its world-space quads, each
 //! covering its four corners (#749, #1402).
 
-use super::{Group, Material, Medium, MediumBoundary, Mode, Quad, QuadBox, Scene, Shape, Sphere};
+use super::{Group, Material, Medium, MediumBoundary, Mesh, MeshShape, Mode, Quad, QuadBox, Scene, Shape, Sphere};
 use crate::choice::EstimatorChoice;
+use std::collections::HashMap;
+use std::sync::Arc;
 
 /// A scene's primitives in world space, in the one global order the
 /// closest-hit tie rule uses: spheres (the scene's, then each group's), then
@@ -26,6 +28,26 @@ pub struct Flat {
     /// The boxes, each in its own frame, with the index of its first face in
     /// `quads` (its six faces follow, in [`box_quads`]'s order).
     pub cuboids: Vec<FlatCuboid>,
+    /// The meshes (the scene's, then each group's), their vertices in world
+    /// space; their triangles come after every quad in the tie order.
+    pub meshes: Vec<FlatMesh>,
+}
+
+/// A mesh in world space: its vertices (each rounded once to f32 from f64),
+/// its triangles (vertex indices; shared by the meshes of one topology, an
+/// icosphere level's) and its material.
+#[derive(Clone, Debug, PartialEq)]
+pub struct FlatMesh {
+    pub positions: Vec<[f32; 3]>,
+    pub triangles: Arc<Vec<[u32; 3]>>,
+    pub material: Material,
+}
+
+impl FlatMesh {
+    /// Triangle `k`'s vertices.
+    pub fn triangle(&self, k: usize) -> [[f32; 3]; 3] {
+        self.triangles[k].map(|i| self.positions[i as usize])
+    }
 }
 
 /// A box in world space: its centre, its three unit axes (the box's x, y and
@@ -158,9 +180,63 @@ fn medium(t: &Transform, m: &Medium) -> FlatMedium {
     FlatMedium { boundary, density: m.density, albedo: m.albedo }
 }
 
+/// A unit icosphere: its vertices (f64) and its triangles (shared by every
+/// mesh placed from it).
+struct UnitIcosphere {
+    unit: Vec<[f64; 3]>,
+    triangles: Arc<Vec<[u32; 3]>>,
+}
+
+/// The unit icospheres of the levels a scene uses, each made once.
+#[derive(Default)]
+struct Icospheres(HashMap<u32, UnitIcosphere>);
+
+impl Icospheres {
+    fn of(&mut self, level: u32) -> &UnitIcosphere {
+        self.0.entry(level).or_insert_with(|| {
+            let (unit, t) = crate::mesh::icosphere::unit_icosphere(level)
+                .expect("a scene's icosphere levels are validated before it is flattened");
+            UnitIcosphere { unit, triangles: Arc::new(t) }
+        })
+    }
+}
+
+/// A mesh under transform `t` (`None`: the identity, the vertices as the
+/// mesh's own definition rounds them).
+fn mesh(t: Option<&Transform>, m: &Mesh, icospheres: &mut Icospheres) -> FlatMesh {
+    match m.shape {
+        MeshShape::Icosphere { center, radius, level } => {
+            let UnitIcosphere { unit, triangles } = icospheres.of(level);
+            let positions = match t {
+                None => crate::mesh::icosphere::place(unit, center, radius),
+                Some(t) => {
+                    let (c, r) = (f64s(center), radius as f64);
+                    unit.iter().map(|u| f32s(t.point(std::array::from_fn(|i| c[i] + r * u[i])))).collect()
+                }
+            };
+            FlatMesh { positions, triangles: triangles.clone(), material: m.material.clone() }
+        }
+    }
+}
+
 impl Flat {
     fn add_media(&mut self, t: &Transform, media: &[Medium]) {
         self.media.extend(media.iter().map(|m| medium(t, m)));
+    }
+
+    fn add_meshes(&mut self, t: Option<&Transform>, meshes: &[Mesh], icospheres: &mut Icospheres) {
+        self.meshes.extend(meshes.iter().map(|m| mesh(t, m, icospheres)));
+    }
+
+    /// Every primitive's material: the spheres', the quads', the meshes'.
+    pub fn materials(&self) -> impl Iterator<Item = &Material> {
+        let spheres = self.spheres.iter().map(|s| &s.material);
+        spheres.chain(self.quads.iter().map(|q| &q.material)).chain(self.meshes.iter().map(|m| &m.material))
+    }
+
+    /// The number of triangles.
+    pub fn triangle_count(&self) -> usize {
+        self.meshes.iter().map(|m| m.triangles.len()).sum()
     }
 
     fn add(&mut self, t: &Transform, spheres: &[Sphere], quads: &[Quad], boxes: &[QuadBox]) {
@@ -198,12 +274,24 @@ thread_local! {
     pub(crate) static FLATTENED: std::cell::Cell<usize> = const { std::cell::Cell::new(0) };
 }
 
-/// One group's members in world space.
+/// One group's members in world space, but its meshes ([`mesh_reach`]
+/// bounds them).
 pub(super) fn group(g: &Group) -> Flat {
     let mut flat = Flat::default();
     flat.add(&Transform::of(g), &g.spheres, &g.quads, &g.boxes);
     flat.add_media(&Transform::of(g), &g.media);
     flat
+}
+
+/// The largest absolute coordinate a mesh of group `g` reaches once moved
+/// (at most; its vertices are not made).
+pub(super) fn mesh_reach(g: &Group, m: &Mesh) -> f64 {
+    match m.shape {
+        MeshShape::Icosphere { center, radius, .. } => {
+            let c = Transform::of(g).point(f64s(center));
+            c.iter().fold(0.0f64, |m, x| m.max(x.abs())) + (radius as f64).abs()
+        }
+    }
 }
 
 impl Scene {
@@ -271,7 +359,18 @@ impl Scene {
         for g in &self.groups {
             flat.add_media(&Transform::of(g), &g.media);
         }
+        let mut icospheres = Icospheres::default();
+        flat.add_meshes(None, &self.meshes, &mut icospheres);
+        for g in &self.groups {
+            flat.add_meshes(Some(&Transform::of(g)), &g.meshes, &mut icospheres);
+        }
         flat
+    }
+
+    /// The number of triangles [`Scene::flatten`] gives (without flattening).
+    pub fn triangle_count(&self) -> u64 {
+        let meshes = self.meshes.iter().chain(self.groups.iter().flat_map(|g| &g.meshes));
+        meshes.map(|m| m.shape.triangle_count()).sum()
     }
 
     /// The image files the scene's textures name, each once, in the order

@@ -13,13 +13,14 @@ mod flatten;
 mod presets;
 mod render_table;
 mod source;
+mod tessellate;
 mod validate;
 
 pub use crate::choice::Mode;
 pub use file::{load_scene, save_scene, scene_from_bytes, scene_from_str, scene_to_string, Format};
 #[cfg(test)]
 pub(crate) use flatten::FLATTENED;
-pub use flatten::{box_quads, Flat, FlatBoundary, FlatMedium};
+pub use flatten::{box_quads, Flat, FlatBoundary, FlatMedium, FlatMesh};
 pub use presets::{final_scene, preset, presets, Preset, PresetGroup};
 pub use render_table::{BookTable, RenderTable};
 pub use source::{nearest_preset, SceneSource};
@@ -426,6 +427,42 @@ impl TryFrom<BoundaryFields> for MediumBoundary {
     }
 }
 
+/// A triangle mesh (past the books), with one material: `{"shape":
+/// {"icosphere": {"center": [x, y, z], "radius": r, "level": n}},
+/// "material": ..}`.
+#[derive(Serialize, Deserialize, Clone, Debug, PartialEq)]
+#[serde(deny_unknown_fields)]
+pub struct Mesh {
+    pub shape: MeshShape,
+    pub material: Material,
+}
+
+/// Where a mesh's triangles come from.
+#[derive(Serialize, Deserialize, Clone, Copy, Debug, PartialEq)]
+#[serde(rename_all = "lowercase", deny_unknown_fields)]
+pub enum MeshShape {
+    /// The sphere `(center, radius)` as a closed icosphere of `20 4^level`
+    /// triangles (`crate::mesh::icosphere`), its vertices on the sphere,
+    /// wound outwards (inwards for a negative radius: the book's hollow
+    /// sphere). Level 0 to [`crate::limits::MAX_ICOSPHERE_LEVEL`].
+    Icosphere {
+        #[serde(deserialize_with = "de::vec3")]
+        center: [f32; 3],
+        #[serde(deserialize_with = "de::f32")]
+        radius: f32,
+        level: u32,
+    },
+}
+
+impl MeshShape {
+    /// The number of triangles.
+    pub fn triangle_count(&self) -> u64 {
+        match *self {
+            MeshShape::Icosphere { level, .. } => 20u64 << (2 * level.min(31) as u64),
+        }
+    }
+}
+
 /// Primitives under one transform, the book's instance order: first
 /// `rotate_y` (degrees, about the y axis through the origin), then
 /// `translate`. Flattened into world-space primitives when a render job is
@@ -446,6 +483,9 @@ pub struct Group {
     /// Constant media, their boundaries turned and moved with the group.
     #[serde(default, skip_serializing_if = "Vec::is_empty", deserialize_with = "de::media")]
     pub media: Vec<Medium>,
+    /// Triangle meshes, turned and moved with the group.
+    #[serde(default, skip_serializing_if = "Vec::is_empty", deserialize_with = "de::meshes")]
+    pub meshes: Vec<Mesh>,
 }
 
 fn is_zero(x: &f32) -> bool {
@@ -586,6 +626,9 @@ pub struct Scene {
     /// The Next Week's constant media (world space).
     #[serde(default, skip_serializing_if = "Vec::is_empty", deserialize_with = "de::media")]
     pub media: Vec<Medium>,
+    /// Triangle meshes (world space).
+    #[serde(default, skip_serializing_if = "Vec::is_empty", deserialize_with = "de::meshes")]
+    pub meshes: Vec<Mesh>,
     #[serde(default)]
     pub sky: Sky,
     /// What rays that leave the scene see (default: the sky gradient).

@@ -29,14 +29,21 @@ pub enum PresetGroup {
     NextWeek,
     /// *Ray Tracing: The Rest of Your Life* (names `rol-...`).
     RestOfYourLife,
+    /// Past the books: triangle meshes (names `...-mesh`).
+    Meshes,
     /// Numerical stress scenes (`rtow stress`), not images of a book.
     Stress,
 }
 
 impl PresetGroup {
     /// Every group, in the order `rtow scenes` lists them.
-    pub const ALL: &'static [PresetGroup] =
-        &[PresetGroup::Weekend, PresetGroup::NextWeek, PresetGroup::RestOfYourLife, PresetGroup::Stress];
+    pub const ALL: &'static [PresetGroup] = &[
+        PresetGroup::Weekend,
+        PresetGroup::NextWeek,
+        PresetGroup::RestOfYourLife,
+        PresetGroup::Meshes,
+        PresetGroup::Stress,
+    ];
 
     /// The heading `rtow scenes` gives the group.
     pub fn title(self) -> &'static str {
@@ -44,6 +51,7 @@ impl PresetGroup {
             PresetGroup::Weekend => "Ray Tracing in One Weekend",
             PresetGroup::NextWeek => "Ray Tracing: The Next Week (v4)",
             PresetGroup::RestOfYourLife => "Ray Tracing: The Rest of Your Life (v4)",
+            PresetGroup::Meshes => "Past the books: triangle meshes",
             PresetGroup::Stress => "Stress scenes (numerical robustness, for rtow stress)",
         }
     }
@@ -93,6 +101,7 @@ fn scene(mode: Mode, camera: Camera, spheres: Vec<Sphere>, render: RenderTable) 
         boxes: vec![],
         groups: vec![],
         media: vec![],
+        meshes: vec![],
         sky: Sky::default(),
         background: Background::Sky,
         sample_toward: vec![],
@@ -776,6 +785,18 @@ static PRESETS: &[Preset] = &[
         description: "The Rest of Your Life: the Cornell box with an aluminium box, sampled toward the light (its image 3.12)",
         group: PresetGroup::RestOfYourLife,
         build: rol_cornell_box_aluminium,
+    },
+    Preset {
+        name: "final-mesh",
+        description: "book one's final scene with every sphere an icosphere of level 3 (1,280 triangles a sphere)",
+        group: PresetGroup::Meshes,
+        build: || final_scene().tessellate(3).expect("level 3 is a valid level"),
+    },
+    Preset {
+        name: "cornell-box-mesh",
+        description: "The Rest of Your Life's Cornell box with its glass sphere an icosphere of level 4 (5,120 triangles)",
+        group: PresetGroup::Meshes,
+        build: || rol_cornell_box().tessellate(4).expect("level 4 is a valid level"),
     },
     Preset {
         name: "stress-final-small",

@@ -4,10 +4,11 @@
 //! computable at every image size) is the job module's, which runs both once.
 
 use super::{
-    Background, Camera, Group, Material, Medium, MediumBoundary, Mode, Quad, QuadBox, Scene, Shape, Sphere, Texture,
+    Background, Camera, Group, Material, Medium, MediumBoundary, Mesh, MeshShape, Mode, Quad, QuadBox, Scene, Shape,
+    Sphere, Texture,
 };
 use crate::error::{Error, Result};
-use crate::limits::{self, MAX_MEDIA, MAX_QUADS, MAX_SPHERES};
+use crate::limits::{self, MAX_ICOSPHERE_LEVEL, MAX_MEDIA, MAX_QUADS, MAX_SCENE_TRIANGLES, MAX_SPHERES};
 
 /// What a non-finite value is: a number that overflowed f32 reads as an
 /// infinity (JSON has no infinity literal, so there it always is one).
@@ -91,7 +92,17 @@ impl Scene {
         if media > MAX_MEDIA {
             return Err(Error::invalid("media", format!("at most {MAX_MEDIA} media (groups' included), got {media}")));
         }
+        let triangles = self.triangle_count();
+        if triangles > MAX_SCENE_TRIANGLES {
+            return Err(Error::invalid(
+                "meshes",
+                format!("at most {MAX_SCENE_TRIANGLES} triangles (every mesh, groups' included), got {triangles}"),
+            ));
+        }
         members("", &self.spheres, &self.quads, &self.boxes)?;
+        for (i, m) in self.meshes.iter().enumerate() {
+            m.validate(&|name: &str| format!("meshes[{i}].{name}"))?;
+        }
         for (i, m) in self.media.iter().enumerate() {
             m.validate(&|name: &str| format!("media[{i}].{name}"))?;
         }
@@ -141,6 +152,20 @@ impl Group {
         members(&format!("{field}."), &self.spheres, &self.quads, &self.boxes)?;
         for (i, m) in self.media.iter().enumerate() {
             m.validate(&|name: &str| format!("{field}.media[{i}].{name}"))?;
+        }
+        for (i, m) in self.meshes.iter().enumerate() {
+            m.validate(&|name: &str| format!("{field}.meshes[{i}].{name}"))?;
+            let reach = super::flatten::mesh_reach(self, m);
+            if reach > limits::MAX_COORD as f64 {
+                return Err(Error::invalid(
+                    format!("{field}.translate"),
+                    format!(
+                        "meshes[{i}] once moved reaches {reach:e}, outside [-{m:e}, {m:e}] (the range rtow's f32 \
+                         kernels are verified in)",
+                        m = limits::MAX_COORD
+                    ),
+                ));
+            }
         }
         let flat = super::flatten::group(self);
         for s in &flat.spheres {
@@ -385,6 +410,41 @@ impl Camera {
             ));
         }
         Ok(())
+    }
+}
+
+impl Mesh {
+    /// The mesh's shape and material; `field` names one of them
+    /// (`meshes[i].<name>`). An icosphere is held to a sphere's limits.
+    fn validate(&self, field: &dyn Fn(&str) -> String) -> Result<()> {
+        if let Material::Lambertian { albedo: Texture::Image { .. } } = self.material {
+            return Err(Error::invalid(
+                field("material.albedo"),
+                "an image texture on a mesh is not supported (meshes carry no texture coordinates yet); give the \
+                 mesh another albedo",
+            ));
+        }
+        match self.shape {
+            MeshShape::Icosphere { center, radius, level } => {
+                if level > MAX_ICOSPHERE_LEVEL {
+                    return Err(Error::invalid(
+                        field("shape.icosphere.level"),
+                        format!(
+                            "must be at most {MAX_ICOSPHERE_LEVEL} ({} triangles), got {level}",
+                            20u64 << (2 * MAX_ICOSPHERE_LEVEL)
+                        ),
+                    ));
+                }
+                let sphere = Sphere { center, center1: None, radius, material: self.material.clone() };
+                sphere.validate(&|name: &str| {
+                    if name.starts_with("material") {
+                        field(name)
+                    } else {
+                        field(&format!("shape.icosphere.{name}"))
+                    }
+                })
+            }
+        }
     }
 }
 

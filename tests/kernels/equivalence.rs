@@ -100,6 +100,7 @@ fn arb_scene() -> impl Strategy<Value = Scene> {
             let mut camera = Camera::looking(from, [0.0, 0.0, 0.0], vfov);
             camera.defocus_angle_deg = defocus;
             Scene {
+                meshes: vec![],
                 mode,
                 camera,
                 spheres,
@@ -172,6 +173,7 @@ fn arb_group() -> impl Strategy<Value = Group> {
         prop::collection::vec(arb_sphere(), 0..3),
     )
         .prop_map(|(rotate_y, translate, boxes, spheres)| Group {
+            meshes: vec![],
             rotate_y,
             translate,
             boxes,
@@ -197,6 +199,7 @@ fn arb_mixed_scene() -> impl Strategy<Value = Scene> {
             from.iter().map(|x| x * x).sum::<f32>() > 0.5
         })
         .prop_map(|(spheres, quads, groups, from, background, mode)| Scene {
+            meshes: vec![],
             mode,
             camera: Camera::looking(from, [0.0, 0.0, 0.0], 70.0),
             spheres,

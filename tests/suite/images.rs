@@ -158,6 +158,7 @@ fn grid_pixel(i: u32, j: u32) -> [u8; 3] {
 /// the background's 1, exactly (the bounce cannot hit the plane again).
 fn square_scene(file: &str) -> Scene {
     Scene {
+        meshes: vec![],
         mode: Mode::Path,
         camera: Camera::looking([0.5, 0.5, 2.0], [0.5, 0.5, 0.0], 26.0),
         spheres: vec![],
@@ -216,6 +217,7 @@ fn mixed_scene(file: &str) -> Scene {
     let img = || Material::Lambertian { albedo: Texture::Image { file: file.into() } };
     let sph = |center: [f32; 3], radius: f32, material: Material| Sphere { center, center1: None, radius, material };
     Scene {
+        meshes: vec![],
         mode: Mode::Path,
         camera: Camera::looking([13.0, 2.0, 3.0], [0.0, 0.0, 0.0], 30.0),
         spheres: vec![

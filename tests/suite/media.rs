@@ -12,6 +12,7 @@ use rtow::{Image, Sampler, Settings};
 
 fn empty_scene(camera: Camera) -> Scene {
     Scene {
+        meshes: vec![],
         mode: Mode::Path,
         camera,
         spheres: vec![],

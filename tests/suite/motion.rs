@@ -203,6 +203,7 @@ fn time_zero_and_zero_motion_are_the_static_sphere() {
 #[test]
 fn scattered_rays_keep_their_paths_time() {
     let mut sc = Scene {
+        meshes: vec![],
         mode: Mode::Path,
         camera: Camera::looking([0.5, 0.0, 0.0], [0.5, 0.0, -1.0], 90.0),
         spheres: vec![Sphere {

@@ -20,6 +20,7 @@ use std::path::Path;
 
 fn empty_scene(camera: Camera, background: [f32; 3]) -> Scene {
     Scene {
+        meshes: vec![],
         mode: Mode::Path,
         camera,
         spheres: vec![],

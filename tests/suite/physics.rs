@@ -10,6 +10,7 @@ const KERNELS: [KernelChoice; 2] = [Scalar, Simd];
 
 fn one_sphere(material: Material, sky: Sky) -> Scene {
     Scene {
+        meshes: vec![],
         mode: Mode::Path,
         camera: Camera::looking([0.0, 0.0, 3.0], [0.0, 0.0, 0.0], 40.0),
         spheres: vec![Sphere { center: [0.0, 0.0, 0.0], center1: None, radius: 1.0, material }],

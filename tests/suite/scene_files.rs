@@ -191,6 +191,7 @@ fn scene_strategy() -> impl Strategy<Value = Scene> {
         (prop::option::of(1u32..4096), prop::option::of(any::<u64>())),
     )
         .prop_map(|((x, y, z), vfov_deg, aperture, focus_dist, spheres, (horizon, zenith), (w, seed))| Scene {
+            meshes: vec![],
             mode: Default::default(),
             camera: Camera {
                 look_from: [x, y, z],

@@ -44,6 +44,8 @@ fn scene_around(section: &str, inner: &str) -> Option<String> {
         "boundary" => format!(r#""media": [{{"boundary": {{{inner}}}}}]"#),
         "boundary.sphere" => format!(r#""media": [{{"boundary": {{"sphere": {{{inner}}}}}}}]"#),
         "boundary.box" => format!(r#""media": [{{"boundary": {{"box": {{{inner}}}}}}}]"#),
+        "mesh" => format!(r#""meshes": [{{{inner}}}]"#),
+        "mesh.icosphere" => format!(r#""meshes": [{{"shape": {{"icosphere": {{{inner}}}}}}}]"#),
         "material" => format!(r#""spheres": [{{"center": [0, 0, -2], "radius": 1, "material": {{{inner}}}}}]"#),
         "texture" => format!(
             r#""spheres": [{{"center": [0, 0, -2], "radius": 1, "material": {{"type": "lambertian", "albedo": {{{inner}}}}}}}]"#
@@ -69,6 +71,8 @@ const FIELD_SECTIONS: &[&str] = &[
     "boundary",
     "boundary.sphere",
     "boundary.box",
+    "mesh",
+    "mesh.icosphere",
     "material",
     "texture",
     "sky",

@@ -215,6 +215,7 @@ fn checker_tex(scale: f32) -> Texture {
 fn textured_scene() -> Scene {
     let sph = |center: [f32; 3], radius: f32, material: Material| Sphere { center, center1: None, radius, material };
     Scene {
+        meshes: vec![],
         mode: Mode::Path,
         camera: Camera::looking([13.0, 2.0, 3.0], [0.0, 0.0, 0.0], 30.0),
         spheres: vec![

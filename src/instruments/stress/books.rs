@@ -49,6 +49,7 @@ fn scene(camera: Camera, background: [f32; 3]) -> Scene {
         boxes: vec![],
         groups: vec![],
         media: vec![],
+        meshes: vec![],
         sky: Sky::default(),
         background: Background::Constant(background),
         sample_toward: vec![],
