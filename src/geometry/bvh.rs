@@ -212,17 +212,10 @@ impl<'a> Builder<'a> {
         root + offset
     }
 
-    /// Builds the subtree over `order` (the primitives at `base..base +
-    /// order.len()` of the build order); returns its node index.
-    fn build(&mut self, order: &mut [u32], base: usize, depth: usize) -> u32 {
-        let bounds = self.bounds(order);
-        let n = order.len();
-        let id = self.nodes.len() as u32;
-        self.nodes.push(BNode { bounds, left: 0, right: 0, start: base as u32, count: n as u32 });
-        let leaf_cost = self.cost.leaf(n);
-        if n <= 1 {
-            return id;
-        }
+    /// The binned SAH's cheapest split of `order` (within `bounds`):
+    /// `(cost, axis, split position)`, or `None` when every centroid
+    /// coincides.
+    fn best_split(&self, order: &[u32], bounds: &Aabb) -> Option<(f32, usize, f32)> {
         let mut cb = Aabb::EMPTY;
         for &i in order.iter() {
             let c = self.centroid[i as usize];
@@ -264,6 +257,21 @@ impl<'a> Builder<'a> {
                 }
             }
         }
+        best
+    }
+
+    /// Builds the subtree over `order` (the primitives at `base..base +
+    /// order.len()` of the build order); returns its node index.
+    fn build(&mut self, order: &mut [u32], base: usize, depth: usize) -> u32 {
+        let bounds = self.bounds(order);
+        let n = order.len();
+        let id = self.nodes.len() as u32;
+        self.nodes.push(BNode { bounds, left: 0, right: 0, start: base as u32, count: n as u32 });
+        let leaf_cost = self.cost.leaf(n);
+        if n <= 1 {
+            return id;
+        }
+        let best = self.best_split(order, &bounds);
         let mid = match best {
             _ if depth >= MAX_SAH_DEPTH && n > 8 => n / 2,
             Some((cost, axis, pos)) if n > 8 || cost < leaf_cost => {
@@ -342,6 +350,14 @@ impl<L: Leaf> Bvh<L> {
         }
         bvh.wide = L::lanes(&bvh.leaf);
         bvh
+    }
+
+    /// Drops the leaf records of a kind that has lanes ([`Leaf::Lanes`]):
+    /// its one-ray walk ([`Bvh::walk_one_wide`]) reads the lanes alone, and
+    /// is then the only walk the tree takes (the meshes' triangles keep 56
+    /// bytes a triangle fewer).
+    pub fn keep_lanes_only(&mut self) {
+        self.leaf = Vec::new();
     }
 
     /// The walk the tree was built for.

@@ -112,7 +112,10 @@ impl Shapes {
             // Walked one ray at a time, 8 boxes and 8 triangles a test.
             triangles: choice.triangles.then(|| Bvh::build(&self.triangles, extent, Walk::Wide8)),
         };
-        if self.trees.triangles.is_some() {
+        if let Some(tree) = &mut self.trees.triangles {
+            // Walked one ray at a time (`Primitive::WALK_ONE_RAY`), from the
+            // tree's lanes alone.
+            tree.keep_lanes_only();
             self.triangles.release();
         }
     }
