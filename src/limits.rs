@@ -66,6 +66,16 @@ pub const MAX_MEDIA: usize = 64;
 /// estimator samples: every diffuse vertex evaluates the density of each.
 pub const MAX_SAMPLED_SHAPES: usize = 64;
 
+/// Most triangles a triangle mesh may have (`mesh::TriMesh::check`), after
+/// its polygons are split into triangles. A triangle takes 12 bytes.
+pub const MAX_TRIANGLES: usize = 1 << 24;
+/// Most vertices a triangle mesh may have (12 bytes each, 24 with normals).
+pub const MAX_MESH_VERTICES: usize = 1 << 24;
+/// Finest icosphere (`mesh::icosphere`): level 7, 327,680 triangles and
+/// 163,842 vertices a sphere; each level has four times the triangles of the
+/// one before.
+pub const MAX_ICOSPHERE_LEVEL: u32 = 7;
+
 /// The longest image file name a scene may give (bytes).
 pub const MAX_PATH_BYTES: usize = 4096;
 /// The most distinct image files a scene may name.
