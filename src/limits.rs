@@ -66,10 +66,19 @@ pub const MAX_MEDIA: usize = 64;
 /// estimator samples: every diffuse vertex evaluates the density of each.
 pub const MAX_SAMPLED_SHAPES: usize = 64;
 
+/// Largest triangle mesh file read (bytes, a Wavefront OBJ: `mesh::obj`),
+/// refused by its size before it is read. The file is held whole while it is
+/// scanned and parsed.
+pub const MAX_MESH_FILE_BYTES: u64 = 256 << 20;
 /// Most triangles a triangle mesh may have (`mesh::TriMesh::check`), after
-/// its polygons are split into triangles. A triangle takes 12 bytes.
+/// its polygons are split into triangles. A mesh file's are counted while it
+/// is scanned, before it is parsed. A triangle takes 12 bytes in a mesh; the
+/// OBJ parser (tobj) holds about 110 bytes a face line while it reads: a
+/// file of this many triangles peaked at 2.0 GB (measured).
 pub const MAX_TRIANGLES: usize = 1 << 24;
-/// Most vertices a triangle mesh may have (12 bytes each, 24 with normals).
+/// Most vertices a triangle mesh may have (12 bytes each, 24 with normals),
+/// and most positions (`v`), normals (`vn`) and texture coordinates (`vt`)
+/// a mesh file may list, each counted while it is scanned.
 pub const MAX_MESH_VERTICES: usize = 1 << 24;
 /// Finest icosphere (`mesh::icosphere`): level 7, 327,680 triangles and
 /// 163,842 vertices a sphere; each level has four times the triangles of the

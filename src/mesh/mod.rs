@@ -1,5 +1,6 @@
-//! Triangle meshes and where they come from: the mesh type ([`TriMesh`])
-//! and icospheres that tessellate a sphere bit-exactly ([`icosphere`]).
+//! Triangle meshes and where they come from: the mesh type ([`TriMesh`]),
+//! icospheres that tessellate a sphere bit-exactly ([`icosphere`]), and
+//! Wavefront OBJ files read and written ([`obj`]).
 //!
 //! A triangle lists three vertex indices counter-clockwise seen from its
 //! front: `cross(p1 - p0, p2 - p0)` is the front normal ([`flat_normal`]).
@@ -10,8 +11,10 @@
 //! ([`TriMesh::check`]) against the bounds of [`crate::limits`].
 
 pub mod icosphere;
+pub mod obj;
 
 pub use icosphere::{place, sphere_mesh, unit_icosphere, UnitMesh};
+pub use obj::{parse_obj, read_obj, write_obj, ObjObject};
 
 use crate::error::{Error, Result};
 use crate::limits::{MAX_MESH_VERTICES, MAX_TRIANGLES};
