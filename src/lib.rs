@@ -29,6 +29,7 @@
 //! Past one machine, a job renders a shard of its samples or rows into a
 //! partial film, and films merge into exactly the one-process image
 //! ([`shard`]). Writing several outputs as one transaction: [`output`].
+//! Triangle meshes (icospheres, Wavefront OBJ files read and written): [`mesh`].
 //!
 //! # Speed needs the build's instruction set
 //!

@@ -66,17 +66,34 @@ pub const MAX_MEDIA: usize = 64;
 /// [`MAX_SCENE_TRIANGLES`].
 pub const MAX_MESHES: usize = 1 << 16;
 /// The most triangles a scene may hold once flattened (every mesh, each
-/// group's copy included): 2^24, about 1.6 GB prepared (56 bytes a
-/// triangle in the tree's leaves, 37 in its shading record and material
-/// handle, and the tree's nodes), checked before any is made. Also bounds
-/// the planar hit indices (quads and triangles below 2^29).
-pub const MAX_SCENE_TRIANGLES: u64 = 1 << 24;
-/// The finest icosphere a scene may ask for: level 7, 327,680 triangles.
-pub const MAX_ICOSPHERE_LEVEL: u32 = 7;
+/// group's copy included), checked before any is made: 2^23. Preparing a
+/// scene peaks at about 340 bytes a triangle (the tree's build included:
+/// 805 MiB measured for 2,488,320 triangles), about 2.7 GB at the limit.
+/// Also bounds the planar hit indices (quads and triangles below 2^29).
+pub const MAX_SCENE_TRIANGLES: u64 = 1 << 23;
 /// Shapes the `book` estimator samples toward, at most (its `sample_toward`
 /// list, or the lights it takes by default), and lights the `nee-mis`
 /// estimator samples: every diffuse vertex evaluates the density of each.
 pub const MAX_SAMPLED_SHAPES: usize = 64;
+
+/// Largest triangle mesh file read (bytes, a Wavefront OBJ: `mesh::obj`),
+/// refused by its size before it is read. The file is held whole while it is
+/// scanned and parsed.
+pub const MAX_MESH_FILE_BYTES: u64 = 256 << 20;
+/// Most triangles a triangle mesh may have (`mesh::TriMesh::check`), after
+/// its polygons are split into triangles. A mesh file's are counted while it
+/// is scanned, before it is parsed. A triangle takes 12 bytes in a mesh; the
+/// OBJ parser (tobj) holds about 110 bytes a face line while it reads: a
+/// file of this many triangles peaked at 2.0 GB (measured).
+pub const MAX_TRIANGLES: usize = 1 << 24;
+/// Most vertices a triangle mesh may have (12 bytes each, 24 with normals),
+/// and most positions (`v`), normals (`vn`) and texture coordinates (`vt`)
+/// a mesh file may list, each counted while it is scanned.
+pub const MAX_MESH_VERTICES: usize = 1 << 24;
+/// Finest icosphere (`mesh::icosphere`): level 7, 327,680 triangles and
+/// 163,842 vertices a sphere; each level has four times the triangles of the
+/// one before.
+pub const MAX_ICOSPHERE_LEVEL: u32 = 7;
 
 /// The longest image file name a scene may give (bytes).
 pub const MAX_PATH_BYTES: usize = 4096;

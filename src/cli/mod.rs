@@ -64,13 +64,16 @@ enum Command {
         #[arg(long, allow_negative_numbers = true)]
         threads: Option<usize>,
     },
-    /// Write a preset as a scene file (.json or .toml).
+    /// Write a preset as a scene file (.json or .toml), or its meshes as Wavefront OBJ (.obj).
     Export {
         /// Preset name (see `rtow scenes`).
         preset: String,
-        /// Output scene file.
+        /// Output scene file, or .obj for the meshes (world space, one object a mesh).
         #[arg(short, long)]
         output: PathBuf,
+        /// Every static sphere as an icosphere mesh of level N first (as `render --tessellate`).
+        #[arg(long, value_name = "N")]
+        tessellate: Option<u32>,
     },
     /// Print a shell completion script: `rtow completions bash > ~/.local/share/bash-completion/completions/rtow`.
     Completions {
@@ -128,12 +131,19 @@ fn run(cli: Cli) -> Result<bool> {
             write_stdout(&out)
         }
         Command::Stress { quick, seed, threads } => cmd_stress(quick, seed, threads),
-        Command::Export { preset, output } => {
-            let s = scene::preset(&preset).ok_or_else(|| {
+        Command::Export { preset, output, tessellate } => {
+            let mut s = scene::preset(&preset).ok_or_else(|| {
                 let hint = scene::nearest_preset(&preset).map_or(String::new(), |p| format!("did you mean '{p}'? "));
                 Error::Input(format!("unknown preset '{}' ({hint}see `rtow scenes`)", rtow::output::clip(&preset)))
             })?;
-            scene::save_scene(&s, &output).map(|_| true)
+            if let Some(level) = tessellate {
+                s = s.tessellate(level)?;
+            }
+            if output.extension().is_some_and(|e| e.eq_ignore_ascii_case("obj")) {
+                scene::save_meshes_obj(&s, &output).map(|_| true)
+            } else {
+                scene::save_scene(&s, &output).map(|_| true)
+            }
         }
     }
 }

@@ -350,6 +350,44 @@ fn toml_inline(v: &toml::de::DeValue) -> Option<String> {
 
 /// Writes a scene file, atomically, in the format its extension names.
 /// A path without .json / .toml is a usage error (exit status 2) naming them.
+/// Writes the scene's meshes, flattened into world space, as one Wavefront
+/// OBJ file (`rtow export SCENE -o F.obj`): an object `mesh_K` per mesh in
+/// flattening order (the scene's, then each group's), its material's type
+/// in a comment; materials are not in the file. Refuses a scene without
+/// meshes.
+pub fn save_meshes_obj(scene: &Scene, path: &Path) -> Result<()> {
+    crate::output::check_extension(path, &["obj"], "mesh file")?;
+    let flat = scene.flatten();
+    if flat.meshes.is_empty() {
+        return Err(crate::Error::Input(
+            "the scene has no meshes to write as OBJ (--tessellate N turns its spheres into meshes)".into(),
+        ));
+    }
+    let names: Vec<(String, String)> = flat
+        .meshes
+        .iter()
+        .enumerate()
+        .map(|(k, m)| (format!("mesh_{k}"), format!("material {}", m.material.type_name())))
+        .collect();
+    let objects: Vec<crate::mesh::ObjObject> = flat
+        .meshes
+        .iter()
+        .zip(&names)
+        .map(|(m, (name, comment))| crate::mesh::ObjObject {
+            name,
+            comment,
+            positions: &m.positions,
+            triangles: &m.triangles,
+        })
+        .collect();
+    let mut bytes = Vec::new();
+    let header =
+        format!("rtow {}: {} meshes, {} triangles", env!("CARGO_PKG_VERSION"), objects.len(), flat.triangle_count());
+    crate::mesh::write_obj(&mut bytes, &header, &objects)
+        .map_err(|e| crate::Error::Output { path: path.to_path_buf(), message: e.to_string() })?;
+    crate::output::write_atomic(path, &bytes)
+}
+
 pub fn save_scene(scene: &Scene, path: &Path) -> Result<()> {
     crate::output::check_extension(path, &["json", "toml"], "scene file")?;
     let format = Format::from_path(path)?;

@@ -17,7 +17,7 @@ mod tessellate;
 mod validate;
 
 pub use crate::choice::Mode;
-pub use file::{load_scene, save_scene, scene_from_bytes, scene_from_str, scene_to_string, Format};
+pub use file::{load_scene, save_meshes_obj, save_scene, scene_from_bytes, scene_from_str, scene_to_string, Format};
 #[cfg(test)]
 pub(crate) use flatten::FLATTENED;
 pub use flatten::{box_quads, Flat, FlatBoundary, FlatMedium, FlatMesh};

@@ -81,6 +81,9 @@ fn bad_arguments_exit_2_naming_the_argument_and_write_nothing() {
         (vec!["render", "fnal", "-o", "keep.png"], &["unknown scene 'fnal'", "did you mean 'final'?"]),
         (vec!["export", "nw-cornel-box", "-o", "new.json"], &["did you mean 'nw-cornell-box'?"]),
         (vec!["export", "final"], &["--output"]),
+        // Meshes: a scene without any written as OBJ, a level too fine.
+        (vec!["export", "final", "-o", "final.obj"], &["no meshes", "--tessellate"]),
+        (render(&["--tessellate", "8"]), &["--tessellate", "at most 7"]),
         (vec!["paint"], &["'paint'"]),
     ];
     for (args, needles) in cases {
@@ -92,6 +95,22 @@ fn bad_arguments_exit_2_naming_the_argument_and_write_nothing() {
         assert_eq!(std::fs::read(d.join("keep.png")).unwrap(), SENTINEL, "{what}");
         assert_eq!(listing(d), ["keep.png"], "{what}: files left behind");
     }
+}
+
+/// `rtow export` writes a scene's meshes as OBJ, every triangle in world
+/// space: a preset's mesh, and any scene's spheres tessellated.
+#[test]
+fn export_writes_meshes_as_obj() {
+    let dir = tempfile::tempdir().unwrap();
+    let d = dir.path();
+    let count = |file: &str, prefix: &str| {
+        std::fs::read_to_string(d.join(file)).unwrap().lines().filter(|l| l.starts_with(prefix)).count()
+    };
+    success(&rtow(d, &["export", "cornell-box-mesh", "-o", "box.obj"]), "export cornell-box-mesh");
+    assert_eq!((count("box.obj", "o "), count("box.obj", "f "), count("box.obj", "v ")), (1, 5120, 2562));
+    success(&rtow(d, &["export", "ch09-glass", "--tessellate", "1", "-o", "glass.obj"]), "export --tessellate 1");
+    let spheres = scene::preset("ch09-glass").unwrap().spheres.len();
+    assert_eq!((count("glass.obj", "o "), count("glass.obj", "f ")), (spheres, 80 * spheres));
 }
 
 #[test]
