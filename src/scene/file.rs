@@ -359,7 +359,7 @@ pub fn save_meshes_obj(scene: &Scene, path: &Path) -> Result<()> {
     crate::output::check_extension(path, &["obj"], "mesh file")?;
     let flat = scene.flatten();
     if flat.meshes.is_empty() {
-        return Err(crate::Error::Input(
+        return Err(crate::error::Error::Input(
             "the scene has no meshes to write as OBJ (--tessellate N turns its spheres into meshes)".into(),
         ));
     }
@@ -384,7 +384,7 @@ pub fn save_meshes_obj(scene: &Scene, path: &Path) -> Result<()> {
     let header =
         format!("rtow {}: {} meshes, {} triangles", env!("CARGO_PKG_VERSION"), objects.len(), flat.triangle_count());
     crate::mesh::write_obj(&mut bytes, &header, &objects)
-        .map_err(|e| crate::Error::Output { path: path.to_path_buf(), message: e.to_string() })?;
+        .map_err(|e| crate::error::Error::Output { path: path.to_path_buf(), message: e.to_string() })?;
     crate::output::write_atomic(path, &bytes)
 }
 
