@@ -107,11 +107,6 @@ impl Triangles {
     pub fn release(&mut self) {
         self.rec = Vec::new();
     }
-
-    /// The records (empty after [`Triangles::release`]).
-    pub fn records(&self) -> &[LeafTriangle] {
-        &self.rec
-    }
 }
 
 /// The plane of the triangle `v`: its unit normal `unit((v1 - v0) x (v2 -
