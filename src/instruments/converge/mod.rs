@@ -211,7 +211,7 @@ impl ConvergeConfig {
                         estimator: Some(variant.estimator.unwrap_or(job.settings().estimator)),
                         ..Overrides::from(*job.settings())
                     };
-                    out.push(Measurement { kernel, variant, spp, job: Job::new(job.scene(), &o, &opts)? });
+                    out.push(Measurement { kernel, variant, spp, job: job.with(&o, &opts)? });
                 }
             }
         }
@@ -231,7 +231,7 @@ impl ConvergeConfig {
             estimator: Some(EstimatorChoice::Bsdf),
             ..Overrides::from(*job.settings())
         };
-        Job::new(job.scene(), &o, &opts)
+        job.with(&o, &opts)
     }
 }
 

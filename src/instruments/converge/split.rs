@@ -134,7 +134,7 @@ pub(super) fn check(width: u32, height: u32, seeds: u32) -> Result<()> {
 fn replicate(job: &Job, r: u32) -> Result<Job> {
     let opts = RenderOptions { kernel: KernelChoice::Scalar, ..*job.options() };
     let o = Overrides { seed: Some(split_seed(job.settings().seed, r)), ..Overrides::from(*job.settings()) };
-    Job::new(job.scene(), &o, &opts)
+    job.with(&o, &opts)
 }
 
 /// Splits the error of `job` (a variant's measurement at `spp`, not
