@@ -7,7 +7,8 @@
 
 use proptest::prelude::*;
 use rtow::internals::geometry::{
-    triangle_hit, Bvh, Closest, LeafTriangle, Primitive, Projection, Triangles, Walk, Walker, MISS, QUAD_BASE,
+    quad_surface, spawn, triangle_hit, triangles::plane, Bvh, Closest, LeafTriangle, Primitive, Projection, Surface,
+    Triangles, Walk, Walker, MISS, QUAD_BASE,
 };
 use rtow::internals::real::Wide;
 use rtow::internals::vec3::V3;
@@ -80,7 +81,9 @@ proptest! {
 
     /// Clear hits are hits with `t` within `2^-16` of the oracle's, clear
     /// misses are misses, at scales from 1e-3 to 1e4 and up to 1e5 from the
-    /// origin, in the scalar test and every lane of both widths alike.
+    /// origin, in the scalar test and every lane of both widths alike. A
+    /// clear hit is well inside the triangle, and its ray starts off the
+    /// plane by more than the self-hit test's rounding band.
     #[test]
     fn the_triangle_test_agrees_with_the_f64_oracle(
         v in prop::array::uniform3(prop::array::uniform3(-1.0f64..1.0)),
@@ -121,7 +124,15 @@ proptest! {
         let (t64, bary) = oracle(o64, d64, vf);
         let margin = bary.iter().fold(f64::INFINITY, |m, &x| m.min(x));
         let (hit, t) = test_all(of, df, &leaf(vf))?;
-        if margin > 0.01 && t64 > 1e-3 {
+        // The self-hit test decides the origin's side of the plane in f32
+        // (`n.o` against `dn`, both within a few units of roundoff of
+        // `|o| + |dn|`): a hit from an origin closer to the plane than that
+        // band may go either way (rays the kernels spawn start well outside it).
+        let unit = n.map(|x| x / area);
+        let dn = dot(unit, v0);
+        let band = 16.0 * 2f64.powi(-24) * (dot(o64, o64).sqrt() + dn.abs());
+        let off_plane = (dot(unit, o64) - dn).abs() > band;
+        if margin > 0.01 && t64 > 1e-3 && off_plane {
             prop_assert!(hit, "a clear hit missed: t {t64}, barycentric {bary:?}");
             let t = f32::from_bits(t) as f64;
             prop_assert!((t - t64).abs() <= t64 * 2f64.powi(-16), "t {t} against {t64}");
@@ -260,4 +271,90 @@ fn packets<W: Wide + Walker>(
         }
     }
     Ok(())
+}
+
+/// The surface the kernels shade at a triangle hit (its planar record's:
+/// the plane's normal and offset, the point re-projected), for a ray that
+/// hit triangle `index - QUAD_BASE` of `tris` at `t`.
+fn hit_surface(pos: &[[f32; 3]], tris: &[[u32; 3]], o: V3<f32>, d: V3<f32>, hit: &Closest<f32>) -> Surface<f32> {
+    let corners = tris[(hit.index - QUAD_BASE) as usize].map(|i| pos[i as usize]);
+    let (n, dn) = plane(corners);
+    quad_surface(o, d, hit.t, V3::from_array(n), dn)
+}
+
+proptest! {
+    #![proptest_config(ProptestConfig::with_cases(256))]
+
+    /// Self-hits, at scales the books never use: a ray spawned from a
+    /// triangle hit (the shading record's surface and the quads' offset, as
+    /// the kernels spawn it) never hits that triangle again, in any
+    /// direction, for lone triangles of size 1e-4 to 1e4 up to 1e6 from the
+    /// origin; on a closed mesh (an icosphere of radius 1e-4 to 1e4, hollow
+    /// ones too, its centre up to 1e4 radii and 1e6 from the origin), every
+    /// ray spawned into it hits it again elsewhere: none leaks out.
+    #[test]
+    fn spawned_rays_never_rehit_their_triangle_and_never_leak_out_of_a_closed_mesh(
+        size_exp in -4.0f64..4.0,
+        far_exp in -4.0f64..6.0,
+        corners in prop::array::uniform3(prop::array::uniform3(-1.0f64..1.0)),
+        toward in prop::array::uniform3(-1.0f64..1.0),
+        level in 0u32..3,
+        r_exp in -4i32..5,
+        c_exp in 0i32..5,
+        hollow in any::<bool>(),
+        aim in any::<u32>(),
+        bary in (0.05f64..0.9, 0.05f64..0.45),
+        dirs in prop::collection::vec(prop::array::uniform3(-1.0f32..1.0), 24),
+    ) {
+        let dirs: Vec<V3<f32>> = dirs.iter().map(|d| V3::from_array(*d)).filter(|d| d.length_squared() > 1e-6).collect();
+        // A lone triangle.
+        let size = 10f64.powf(size_exp);
+        let len = toward.iter().map(|x| x * x).sum::<f64>().sqrt().max(1e-9);
+        let centre: [f64; 3] = std::array::from_fn(|i| toward[i] / len * 10f64.powf(far_exp));
+        let v: [[f32; 3]; 3] = corners.map(|c| std::array::from_fn(|i| (centre[i] + size * c[i]) as f32));
+        let tris = [[0, 1, 2]];
+        let (n, _) = plane(v);
+        if n != [0.0; 3] {
+            let mesh = triangles(&v, &tris);
+            let p: [f32; 3] = std::array::from_fn(|i| ((v[0][i] as f64 + v[1][i] as f64 + v[2][i] as f64) / 3.0) as f32);
+            let o: [f32; 3] = std::array::from_fn(|i| p[i] + (size * (n[i] as f64 + 0.3)) as f32);
+            let d = V3::from_array(p) - V3::from_array(o);
+            let hit = brute(&mesh, V3::from_array(o), d);
+            if hit.index != MISS {
+                let s = hit_surface(&v, &tris, V3::from_array(o), d, &hit);
+                for &dir in &dirs {
+                    let again = brute(&mesh, spawn(&s, dir), dir);
+                    prop_assert_eq!(again.index, MISS, "a ray leaving {:?} along {:?} hit its triangle {:?} again", s.p, dir, v);
+                }
+            }
+        }
+        // A closed mesh.
+        let r = 10f32.powi(r_exp) * if hollow { -1.0 } else { 1.0 };
+        let c: [f32; 3] = std::array::from_fn(|i| (toward[i] / len) as f32 * r.abs() * 10f32.powi(c_exp));
+        prop_assume!(c.iter().all(|x| x.abs() <= 1e6));
+        let (pos, tris) = icosphere(level, c, r);
+        let mesh = triangles(&pos, &tris);
+        let k = aim as usize % tris.len();
+        let [a, b, e] = tris[k].map(|i| pos[i as usize].map(f64::from));
+        let p: [f32; 3] =
+            std::array::from_fn(|i| (a[i] + bary.0 * (b[i] - a[i]) + bary.1 * (1.0 - bary.0) * (e[i] - a[i])) as f32);
+        for from_inside in [false, true] {
+            let o = if from_inside { c } else { std::array::from_fn(|i| c[i] + 3.0 * (p[i] - c[i])) };
+            let (o, d) = (V3::from_array(o), V3::from_array(p) - V3::from_array(o));
+            let hit = brute(&mesh, o, d);
+            prop_assert!(hit.index != MISS, "a ray at {:?} leaked (r {}, centre {:?})", p, r, c);
+            let s = hit_surface(&pos, &tris, o, d, &hit);
+            // The side away from the centre: the plane's normal for a
+            // solid sphere, its opposite for a hollow one.
+            let corners = tris[(hit.index - QUAD_BASE) as usize].map(|i| pos[i as usize]);
+            let outward = V3::from_array(plane(corners).0) * r.signum();
+            for &dir in &dirs {
+                let again = brute(&mesh, spawn(&s, dir), dir);
+                prop_assert!(again.index != hit.index, "a ray leaving {:?} along {:?} hit its triangle again", s.p, dir);
+                if dir.dot(outward) < 0.0 {
+                    prop_assert!(again.index != MISS, "a ray spawned into the mesh at {:?} along {:?} leaked (r {}, centre {:?})", s.p, dir, r, c);
+                }
+            }
+        }
+    }
 }
