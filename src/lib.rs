@@ -61,6 +61,7 @@ pub mod files;
 pub mod film;
 mod geometry;
 mod handle;
+mod input;
 pub mod instruments;
 mod job;
 mod kernel;

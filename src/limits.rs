@@ -90,6 +90,9 @@ pub const MAX_TRIANGLES: usize = 1 << 24;
 /// and most positions (`v`), normals (`vn`) and texture coordinates (`vt`)
 /// a mesh file may list, each counted while it is scanned.
 pub const MAX_MESH_VERTICES: usize = 1 << 24;
+/// The most distinct OBJ files a scene may name (each read once, however
+/// many meshes name it).
+pub const MAX_MESH_FILES: usize = 1024;
 /// Finest icosphere (`mesh::icosphere`): level 7, 327,680 triangles and
 /// 163,842 vertices a sphere; each level has four times the triangles of the
 /// one before.

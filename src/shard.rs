@@ -339,14 +339,17 @@ fn verification_job(p: &Path, h: &Header, scene: &[u8]) -> Result<Job> {
     let now = job.identity();
     if format!("{:016x}", now.key()) != h.key {
         let version = env!("CARGO_PKG_VERSION");
-        let images = (now.settings.get("images"), h.settings.get("images"));
+        let changed = part::INPUT_FILES
+            .iter()
+            .map(|&(setting, _)| (setting, now.settings.get(setting), h.settings.get(setting)))
+            .find(|(_, now, then)| now != then);
         return Err(cannot(if h.rtow != version {
             format!(
                 "it was written by rtow {}, and this is rtow {version}, which may render it differently",
                 part::quoted(&h.rtow)
             )
-        } else if images.0 != images.1 {
-            part::images_changed(images.0, images.1, "read now", "it was rendered with")
+        } else if let Some((setting, now, then)) = changed {
+            part::files_changed(setting, now, then, "read now", "it was rendered with")
         } else {
             format!(
                 "its image key {} is not the one this rtow ({version}) gives its scene and settings",

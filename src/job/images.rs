@@ -33,12 +33,12 @@
 
 use crate::error::{Error, Result};
 use crate::film::part::fnv1a;
+use crate::input::{self, FileId, ReadError, Regular};
 use crate::limits::{MAX_IMAGE_TEXTURES, MAX_TEXELS, MAX_TEXTURE_FILE_BYTES, MAX_TOTAL_TEXELS};
 use crate::output::{clip_to, printable};
 use crate::scene::Scene;
 use crate::texture::ImageTex;
 use std::fs::{File, Metadata};
-use std::io::Read;
 use std::path::{Path, PathBuf};
 use std::sync::Arc;
 
@@ -64,22 +64,6 @@ pub struct Image {
 #[derive(Debug, Default)]
 pub struct Images {
     pub list: Vec<Image>,
-}
-
-/// What identifies a file however it is named: its device and inode.
-#[cfg(unix)]
-type FileId = (u64, u64);
-#[cfg(unix)]
-fn file_id(meta: &Metadata, _path: &Path) -> FileId {
-    use std::os::unix::fs::MetadataExt;
-    (meta.dev(), meta.ino())
-}
-/// What identifies a file however it is named: its canonical path.
-#[cfg(not(unix))]
-type FileId = PathBuf;
-#[cfg(not(unix))]
-fn file_id(_meta: &Metadata, path: &Path) -> FileId {
-    std::fs::canonicalize(path).unwrap_or_else(|_| path.to_path_buf())
 }
 
 impl Images {
@@ -206,19 +190,11 @@ fn at(path: &Path, name: &str) -> String {
     }
 }
 
-/// A regular file found and open.
-struct Found {
-    path: PathBuf,
-    file: File,
-    meta: Metadata,
-    id: FileId,
-}
-
 /// The file a scene's image `name` is: itself if absolute, else the first of
 /// `origin`'s folder and `folder` (`RTOW_IMAGES`) that holds it. Refused (a
 /// message that follows the name) when nothing is found, or when the first
 /// path that exists is not a regular file.
-fn find(name: &str, origin: Option<&Path>, folder: Option<&Path>) -> std::result::Result<Found, String> {
+fn find(name: &str, origin: Option<&Path>, folder: Option<&Path>) -> std::result::Result<Regular, String> {
     let given = Path::new(name);
     if given.is_absolute() {
         return open_regular(given, name)?.ok_or_else(|| "not found: no such file".to_string());
@@ -257,71 +233,22 @@ fn find(name: &str, origin: Option<&Path>, folder: Option<&Path>) -> std::result
 
 /// The regular file at `path`, open; `None` when nothing is there. Anything
 /// else that is there (a folder, a FIFO, a dangling link), or a path that
-/// cannot be looked at, is refused: opening a FIFO would wait for a writer.
-fn open_regular(path: &Path, name: &str) -> std::result::Result<Option<Found>, String> {
-    let here = || at(path, name);
-    let cannot = |e: std::io::Error| format!("{}cannot be read: {e}", here());
-    let meta = match std::fs::metadata(path) {
-        Ok(m) => m,
-        Err(e) if matches!(e.kind(), std::io::ErrorKind::NotFound | std::io::ErrorKind::NotADirectory) => {
-            if std::fs::symlink_metadata(path).is_ok_and(|m| m.file_type().is_symlink()) {
-                return Err(format!("{}is a symbolic link to a file that does not exist", here()));
-            }
-            return Ok(None);
-        }
-        Err(e) => return Err(cannot(e)),
-    };
-    if !meta.is_file() {
-        return Err(format!("{}{}", here(), not_a_file(&meta)));
-    }
-    let file = File::open(path).map_err(cannot)?;
-    // What was opened, not what was looked at a moment before.
-    let meta = file.metadata().map_err(cannot)?;
-    if !meta.is_file() {
-        return Err(format!("{}{}", here(), not_a_file(&meta)));
-    }
-    Ok(Some(Found { id: file_id(&meta, path), path: path.to_path_buf(), file, meta }))
-}
-
-/// What a path that is not a regular file is, for a message.
-fn not_a_file(meta: &Metadata) -> String {
-    let t = meta.file_type();
-    let what = if t.is_dir() {
-        "a folder"
-    } else {
-        #[cfg(unix)]
-        {
-            use std::os::unix::fs::FileTypeExt;
-            if t.is_fifo() {
-                "a FIFO (named pipe)"
-            } else if t.is_socket() {
-                "a socket"
-            } else if t.is_block_device() || t.is_char_device() {
-                "a device"
-            } else {
-                "not a regular file"
-            }
-        }
-        #[cfg(not(unix))]
-        "not a regular file"
-    };
-    format!("is {what}, not an image file: an image texture is a PNG or JPEG file")
+/// cannot be looked at, is refused.
+fn open_regular(path: &Path, name: &str) -> std::result::Result<Option<Regular>, String> {
+    input::open_regular(path).map_err(|u| {
+        format!("{}{}", at(path, name), u.describe("not an image file: an image texture is a PNG or JPEG file"))
+    })
 }
 
 /// The file's bytes, refused beyond [`MAX_TEXTURE_FILE_BYTES`] (by its size
 /// before reading, and while reading a file that grows).
 fn read_bounded(file: &File, meta: &Metadata) -> std::result::Result<Vec<u8>, String> {
-    let too_large =
-        || format!("is larger than {} MiB, the most an image texture file may take", MAX_TEXTURE_FILE_BYTES >> 20);
-    if meta.len() > MAX_TEXTURE_FILE_BYTES {
-        return Err(too_large());
-    }
-    let mut bytes = Vec::with_capacity(meta.len() as usize);
-    file.take(MAX_TEXTURE_FILE_BYTES + 1).read_to_end(&mut bytes).map_err(|e| format!("cannot be read: {e}"))?;
-    if bytes.len() as u64 > MAX_TEXTURE_FILE_BYTES {
-        return Err(too_large());
-    }
-    Ok(bytes)
+    input::read_bounded(file, meta, MAX_TEXTURE_FILE_BYTES).map_err(|e| match e {
+        ReadError::TooLarge(_) => {
+            format!("is larger than {} MiB, the most an image texture file may take", MAX_TEXTURE_FILE_BYTES >> 20)
+        }
+        ReadError::Io(e) => format!("cannot be read: {e}"),
+    })
 }
 
 /// The decoder's limits: [`MAX_TEXELS`] and 16 bytes a texel.

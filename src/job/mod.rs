@@ -17,6 +17,7 @@
 //! caller can check its outputs between resolving and rendering.
 
 mod images;
+mod meshes;
 mod prepare;
 
 pub(crate) use images::Images;
@@ -199,6 +200,9 @@ pub struct Job {
     plan: Plan,
     /// The image textures' files, read when the job was resolved.
     images: Arc<Images>,
+    /// The OBJ files' names and the hashes of their bytes (their meshes are
+    /// in `flat`).
+    mesh_files: Arc<MeshFiles>,
     /// The scene flattened into world-space primitives, once per scene
     /// (shared by the jobs derived from this one).
     flat: Arc<Flat>,
@@ -208,12 +212,17 @@ pub struct Job {
     prepared: Arc<OnceLock<(Prepared, f64)>>,
 }
 
+/// The OBJ files a job read: each name the scene gives, with the hash of the
+/// file's bytes.
+type MeshFiles = Vec<(String, u64)>;
+
 /// What a derived job takes from the job it derives from instead of
 /// reading or computing it again.
 #[derive(Default)]
 struct Known {
     images: Option<Arc<Images>>,
-    flat: Option<Arc<Flat>>,
+    /// The scene flattened, with its OBJ files' names and hashes.
+    flat: Option<(Arc<Flat>, Arc<MeshFiles>)>,
 }
 
 impl Job {
@@ -243,7 +252,8 @@ impl Job {
 
     /// The same scene (and its images, read once) with other overrides and options.
     pub fn with(&self, overrides: &Overrides, options: &RenderOptions) -> Result<Job> {
-        let known = Known { images: Some(self.images.clone()), flat: Some(self.flat.clone()) };
+        let known =
+            Known { images: Some(self.images.clone()), flat: Some((self.flat.clone(), self.mesh_files.clone())) };
         let mut job = Job::resolve_with(&self.scene, None, known, overrides, options)?;
         if (job.settings, &job.plan, job.estimator()) == (self.settings, &self.plan, self.estimator()) {
             job.prepared = self.prepared.clone();
@@ -273,9 +283,17 @@ impl Job {
         if scene.mode != Mode::Gradient {
             PreparedCamera::check(&view).map_err(in_file)?;
         }
-        // The one flattening of the scene: the default estimator, the plan
-        // and the layout for the kernels all read it.
-        let flat = known.flat.unwrap_or_else(|| Arc::new(scene.flatten()));
+        // The one flattening of the scene, its OBJ files read first: the
+        // default estimator, the plan and the layout for the kernels all read it.
+        let (flat, mesh_files) = match known.flat {
+            Some(known) => known,
+            None => {
+                let objs = meshes::load(scene, origin).map_err(in_file)?;
+                scene.validate_obj_meshes(&objs).map_err(in_file)?;
+                let files = objs.iter().map(|m| (m.name.clone(), m.hash)).collect();
+                (Arc::new(scene.flatten_with(&objs)), Arc::new(files))
+            }
+        };
         let settings = overrides.resolve(scene, &flat);
         settings.validate()?;
         options.validate()?;
@@ -300,6 +318,7 @@ impl Job {
             kernel: Kernel::resolve(options.kernel),
             plan,
             images,
+            mesh_files,
             flat,
             prepared: Arc::new(OnceLock::new()),
         })
@@ -437,6 +456,11 @@ impl Job {
         if !self.images.list.is_empty() {
             let list: Vec<String> = self.images.list.iter().map(|i| format!("{:016x} {}", i.hash, i.name)).collect();
             set("images", list.join(", "));
+        }
+        // The bytes of the OBJ files, likewise.
+        if !self.mesh_files.is_empty() {
+            let list: Vec<String> = self.mesh_files.iter().map(|(name, hash)| format!("{hash:016x} {name}")).collect();
+            set("meshes", list.join(", "));
         }
         Identity { scene_hash: self.scene_hash, width: s.width, height: s.height, settings: map }
     }

@@ -55,9 +55,10 @@
 
 use super::TriMesh;
 use crate::error::{Error, Result};
+use crate::input::{self, ReadError};
 use crate::limits::{MAX_MESH_FILE_BYTES, MAX_MESH_VERTICES, MAX_TRIANGLES};
-use std::fs::{File, Metadata};
-use std::io::{self, Read, Write};
+use crate::output::{clip_to, printable};
+use std::io::{self, Write};
 use std::path::{Path, PathBuf};
 
 /// The triangle mesh in the OBJ file at `path` (see the module's rules).
@@ -316,97 +317,28 @@ fn index(word: &str, defined: usize, what: &str) -> Fault {
 fn read_file(path: &Path) -> Result<Vec<u8>> {
     let name = shown_path(path).display().to_string();
     let refuse = |what: String| Error::Input(format!("mesh file {name} {what}"));
-    let cannot = |e: io::Error| refuse(format!("cannot be read: {e}"));
-    let meta = std::fs::metadata(path).map_err(|e| {
-        if e.kind() == io::ErrorKind::NotFound && std::fs::symlink_metadata(path).is_ok_and(|m| m.is_symlink()) {
-            return refuse("is a symbolic link to a file that does not exist".into());
-        }
-        cannot(e)
-    })?;
-    // Looked at before opening: opening a FIFO would wait for a writer.
-    if let Some(what) = not_a_file(&meta) {
-        return Err(refuse(what));
-    }
-    let file = File::open(path).map_err(cannot)?;
-    // What was opened, not what was looked at a moment before.
-    let meta = file.metadata().map_err(cannot)?;
-    if let Some(what) = not_a_file(&meta) {
-        return Err(refuse(what));
-    }
-    let too_large = |size: String| {
-        refuse(format!("is too large: {size} bytes, at most {MAX_MESH_FILE_BYTES} (limits::MAX_MESH_FILE_BYTES)"))
-    };
-    if meta.len() > MAX_MESH_FILE_BYTES {
-        return Err(too_large(meta.len().to_string()));
-    }
-    let mut bytes = Vec::with_capacity(meta.len() as usize);
-    file.take(MAX_MESH_FILE_BYTES + 1).read_to_end(&mut bytes).map_err(cannot)?;
-    if bytes.len() as u64 > MAX_MESH_FILE_BYTES {
-        return Err(too_large(format!("more than {MAX_MESH_FILE_BYTES} (it grew while read)")));
-    }
-    Ok(bytes)
+    let found = input::open_regular(path)
+        .map_err(|u| refuse(u.describe("not a file")))?
+        .ok_or_else(|| refuse("cannot be read: no such file".into()))?;
+    input::read_bounded(&found.file, &found.meta, MAX_MESH_FILE_BYTES).map_err(|e| match e {
+        ReadError::TooLarge(size) => refuse(format!(
+            "is too large: {} bytes, at most {MAX_MESH_FILE_BYTES} (limits::MAX_MESH_FILE_BYTES)",
+            size.map_or_else(|| format!("more than {MAX_MESH_FILE_BYTES} (it grew while read)"), |s| s.to_string())
+        )),
+        ReadError::Io(e) => refuse(format!("cannot be read: {e}")),
+    })
 }
 
-/// What a path that is not a regular file is; `None` for a regular file.
-fn not_a_file(meta: &Metadata) -> Option<String> {
-    let t = meta.file_type();
-    if t.is_file() {
-        return None;
-    }
-    let what = if t.is_dir() {
-        "a folder"
-    } else {
-        #[cfg(unix)]
-        {
-            use std::os::unix::fs::FileTypeExt;
-            if t.is_fifo() {
-                "a FIFO (named pipe)"
-            } else if t.is_socket() {
-                "a socket"
-            } else if t.is_block_device() || t.is_char_device() {
-                "a device"
-            } else {
-                "not a regular file"
-            }
-        }
-        #[cfg(not(unix))]
-        "not a regular file"
-    };
-    Some(format!("is {what}, not a file"))
-}
-
-/// `text` safe to print in a one-line message: control characters and
-/// Unicode bidirectional controls escaped (`\u{1b}`).
-fn escaped(text: &str) -> String {
-    let unsafe_char = |c: char| {
-        c.is_control()
-            || matches!(c, '\u{61c}' | '\u{200e}' | '\u{200f}' | '\u{202a}'..='\u{202e}' | '\u{2066}'..='\u{2069}')
-    };
-    let mut out = String::with_capacity(text.len());
-    for c in text.chars() {
-        if unsafe_char(c) {
-            out.extend(c.escape_unicode());
-        } else {
-            out.push(c);
-        }
-    }
-    out
-}
-
-/// A word of a file for a message: [`escaped`], at most 40 characters.
+/// A word of a file for a message: [`printable`], at most 40 characters.
 fn shown(text: &str) -> String {
-    let text = escaped(text);
-    match text.char_indices().nth(40) {
-        Some((i, _)) => format!("{}...", &text[..i]),
-        None => text,
-    }
+    clip_to(&printable(text), 40)
 }
 
-/// A path as messages show it: [`escaped`] if it needs to be.
+/// A path as messages show it: [`printable`] if it needs to be.
 fn shown_path(path: &Path) -> PathBuf {
     match path.to_str() {
-        Some(text) if escaped(text) == text => path.to_path_buf(),
-        _ => PathBuf::from(escaped(&path.display().to_string())),
+        Some(text) if printable(text) == text => path.to_path_buf(),
+        _ => PathBuf::from(printable(&path.display().to_string()).into_owned()),
     }
 }
 
@@ -652,7 +584,7 @@ f 4 1 5 8
             write(ObjObject { positions: &nan, triangles: &[], ..ok }),
             "OBJ object a: position 0 is not finite: [0.0, NaN, 0.0]"
         );
-        assert!(write(ObjObject { name: "a\nv 1 2 3", ..ok }).starts_with("OBJ object name 'a\\u{a}v 1 2 3'"));
+        assert!(write(ObjObject { name: "a\nv 1 2 3", ..ok }).starts_with("OBJ object name 'a\\nv 1 2 3'"));
         assert!(write(ObjObject { name: "", ..ok }).contains("empty"));
         assert!(write(ObjObject { name: " a", ..ok }).contains("spaces"));
         assert!(write(ObjObject { comment: "a\rb", ..ok }).contains("comment"));
@@ -796,7 +728,7 @@ f 4 1 5 8
         let e = read_obj(d).unwrap_err().to_string();
         assert_eq!(e, format!("mesh file {} is a folder, not a file", d.display()));
         let big = d.join("big.obj");
-        File::create(&big).unwrap().set_len(MAX_MESH_FILE_BYTES + 1).unwrap();
+        std::fs::File::create(&big).unwrap().set_len(MAX_MESH_FILE_BYTES + 1).unwrap();
         let e = read_obj(&big).unwrap_err().to_string();
         assert!(e.ends_with("is too large: 268435457 bytes, at most 268435456 (limits::MAX_MESH_FILE_BYTES)"), "{e}");
         std::fs::write(d.join("tri.obj"), "v 0 0 0\nv 1 0 0\nv 0 1 0\nf 1 2 3\n").unwrap();

@@ -348,15 +348,20 @@ fn toml_inline(v: &toml::de::DeValue) -> Option<String> {
     })
 }
 
-/// Writes a scene file, atomically, in the format its extension names.
-/// A path without .json / .toml is a usage error (exit status 2) naming them.
 /// Writes the scene's meshes, flattened into world space, as one Wavefront
 /// OBJ file (`rtow export SCENE -o F.obj`): an object `mesh_K` per mesh in
 /// flattening order (the scene's, then each group's), its material's type
 /// in a comment; materials are not in the file. Refuses a scene without
-/// meshes.
+/// meshes, and one with OBJ meshes (they are files already: this writes the
+/// meshes rtow generates).
 pub fn save_meshes_obj(scene: &Scene, path: &Path) -> Result<()> {
     crate::output::check_extension(path, &["obj"], "mesh file")?;
+    if let Some((_, field)) = scene.obj_file_fields().first() {
+        return Err(crate::error::Error::invalid(
+            field.as_str(),
+            "names an OBJ file: export writes only the meshes rtow generates (icospheres, --tessellate N)",
+        ));
+    }
     let flat = scene.flatten();
     if flat.meshes.is_empty() {
         return Err(crate::error::Error::Input(
@@ -388,6 +393,8 @@ pub fn save_meshes_obj(scene: &Scene, path: &Path) -> Result<()> {
     crate::output::write_atomic(path, &bytes)
 }
 
+/// Writes a scene file, atomically, in the format its extension names.
+/// A path without .json / .toml is a usage error (exit status 2) naming them.
 pub fn save_scene(scene: &Scene, path: &Path) -> Result<()> {
     crate::output::check_extension(path, &["json", "toml"], "scene file")?;
     let format = Format::from_path(path)?;

@@ -10,7 +10,10 @@
 //! bounding box of a rotated box is that of its world-space quads, each
 //! covering its four corners (#749, #1402).
 
-use super::{Group, Material, Medium, MediumBoundary, Mesh, MeshShape, Mode, Quad, QuadBox, Scene, Shape, Sphere};
+use super::{
+    Group, Material, Medium, MediumBoundary, Mesh, MeshShape, Mode, ObjMesh, ObjMeshes, Quad, QuadBox, Scene, Shape,
+    Sphere,
+};
 use crate::choice::EstimatorChoice;
 use std::collections::HashMap;
 use std::sync::Arc;
@@ -202,8 +205,8 @@ impl Icospheres {
 }
 
 /// A mesh under transform `t` (`None`: the identity, the vertices as the
-/// mesh's own definition rounds them).
-fn mesh(t: Option<&Transform>, m: &Mesh, icospheres: &mut Icospheres) -> FlatMesh {
+/// mesh's own definition rounds them); an OBJ mesh's from `objs`.
+fn mesh(t: Option<&Transform>, m: &Mesh, icospheres: &mut Icospheres, objs: &ObjMeshes) -> FlatMesh {
     match m.shape {
         MeshShape::Icosphere { center, radius, level } => {
             let UnitIcosphere { unit, triangles } = icospheres.of(level);
@@ -216,7 +219,30 @@ fn mesh(t: Option<&Transform>, m: &Mesh, icospheres: &mut Icospheres) -> FlatMes
             };
             FlatMesh { positions, triangles: triangles.clone(), material: m.material.clone() }
         }
+        MeshShape::Obj { ref file, scale } => {
+            let obj = objs.get(file).expect("Scene::flatten_with: every OBJ file the scene names is read first");
+            let s = scale as f64;
+            let positions = match (t, scale == 1.0) {
+                (None, true) => obj.positions.to_vec(),
+                (None, false) => obj.positions.iter().map(|p| f32s(f64s(*p).map(|x| s * x))).collect(),
+                (Some(t), _) => obj.positions.iter().map(|p| f32s(t.point(f64s(*p).map(|x| s * x)))).collect(),
+            };
+            FlatMesh { positions, triangles: obj.triangles.clone(), material: m.material.clone() }
+        }
     }
+}
+
+/// The largest absolute coordinate the OBJ mesh `obj` reaches, multiplied by
+/// `scale` and moved by `group` (at most: the corners of its bounds).
+pub(super) fn obj_reach(group: Option<&Group>, scale: f32, obj: &ObjMesh) -> f64 {
+    let t = group.map_or(Transform::IDENTITY, Transform::of);
+    let (lo, hi) = (f64s(obj.bounds.0), f64s(obj.bounds.1));
+    (0..8)
+        .map(|c: usize| {
+            let corner: [f64; 3] = std::array::from_fn(|i| scale as f64 * if c >> i & 1 == 0 { lo[i] } else { hi[i] });
+            t.point(corner).iter().fold(0.0f64, |m, x| m.max(x.abs()))
+        })
+        .fold(0.0, f64::max)
 }
 
 impl Flat {
@@ -224,8 +250,8 @@ impl Flat {
         self.media.extend(media.iter().map(|m| medium(t, m)));
     }
 
-    fn add_meshes(&mut self, t: Option<&Transform>, meshes: &[Mesh], icospheres: &mut Icospheres) {
-        self.meshes.extend(meshes.iter().map(|m| mesh(t, m, icospheres)));
+    fn add_meshes(&mut self, t: Option<&Transform>, meshes: &[Mesh], icospheres: &mut Icospheres, objs: &ObjMeshes) {
+        self.meshes.extend(meshes.iter().map(|m| mesh(t, m, icospheres, objs)));
     }
 
     /// Every primitive's material: the spheres', the quads', the meshes'.
@@ -284,13 +310,15 @@ pub(super) fn group(g: &Group) -> Flat {
 }
 
 /// The largest absolute coordinate a mesh of group `g` reaches once moved
-/// (at most; its vertices are not made).
-pub(super) fn mesh_reach(g: &Group, m: &Mesh) -> f64 {
+/// (at most; its vertices are not made); `None` for an OBJ mesh, whose
+/// reach is checked once its file is read ([`obj_reach`]).
+pub(super) fn mesh_reach(g: &Group, m: &Mesh) -> Option<f64> {
     match m.shape {
         MeshShape::Icosphere { center, radius, .. } => {
             let c = Transform::of(g).point(f64s(center));
-            c.iter().fold(0.0f64, |m, x| m.max(x.abs())) + (radius as f64).abs()
+            Some(c.iter().fold(0.0f64, |m, x| m.max(x.abs())) + (radius as f64).abs())
         }
+        MeshShape::Obj { .. } => None,
     }
 }
 
@@ -347,7 +375,19 @@ impl Scene {
 
     /// The scene's primitives in world space (see [`Flat`]); a scene without
     /// quads, boxes or groups gives back its spheres unchanged.
+    ///
+    /// # Panics
+    /// When the scene has OBJ meshes: their files are read first (a render
+    /// job does), and [`Scene::flatten_with`] flattens with them.
     pub fn flatten(&self) -> Flat {
+        self.flatten_with(&ObjMeshes::default())
+    }
+
+    /// [`Scene::flatten`] with the meshes of the scene's OBJ files.
+    ///
+    /// # Panics
+    /// When `objs` lacks a file the scene names.
+    pub fn flatten_with(&self, objs: &ObjMeshes) -> Flat {
         #[cfg(test)]
         FLATTENED.with(|n| n.set(n.get() + 1));
         let mut flat = Flat::default();
@@ -360,17 +400,45 @@ impl Scene {
             flat.add_media(&Transform::of(g), &g.media);
         }
         let mut icospheres = Icospheres::default();
-        flat.add_meshes(None, &self.meshes, &mut icospheres);
+        flat.add_meshes(None, &self.meshes, &mut icospheres, objs);
         for g in &self.groups {
-            flat.add_meshes(Some(&Transform::of(g)), &g.meshes, &mut icospheres);
+            flat.add_meshes(Some(&Transform::of(g)), &g.meshes, &mut icospheres, objs);
         }
         flat
     }
 
-    /// The number of triangles [`Scene::flatten`] gives (without flattening).
-    pub fn triangle_count(&self) -> u64 {
-        let meshes = self.meshes.iter().chain(self.groups.iter().flat_map(|g| &g.meshes));
-        meshes.map(|m| m.shape.triangle_count()).sum()
+    /// Every mesh: the scene's, then each group's (`None` for the scene's own).
+    pub(crate) fn all_meshes(&self) -> impl Iterator<Item = (Option<usize>, usize, &Mesh)> {
+        let own = self.meshes.iter().enumerate().map(|(i, m)| (None, i, m));
+        own.chain(
+            self.groups
+                .iter()
+                .enumerate()
+                .flat_map(|(g, group)| group.meshes.iter().enumerate().map(move |(i, m)| (Some(g), i, m))),
+        )
+    }
+
+    /// The number of triangles known without reading a file: the
+    /// icospheres' ([`MeshShape::generated_triangles`]).
+    pub fn generated_triangles(&self) -> u64 {
+        self.all_meshes().map(|(_, _, m)| m.shape.generated_triangles()).sum()
+    }
+
+    /// The OBJ files the scene's meshes name, each once, in the order the
+    /// scene first names them, with the first field that names it
+    /// (`groups[g].meshes[i].shape.obj.file`).
+    pub fn obj_file_fields(&self) -> Vec<(&str, String)> {
+        let mut seen = std::collections::HashSet::new();
+        let mut names = Vec::new();
+        for (g, i, m) in self.all_meshes() {
+            if let MeshShape::Obj { file, .. } = &m.shape {
+                if seen.insert(file.as_str()) {
+                    let prefix = g.map_or_else(String::new, |g| format!("groups[{g}]."));
+                    names.push((file.as_str(), format!("{prefix}meshes[{i}].shape.obj.file")));
+                }
+            }
+        }
+        names
     }
 
     /// The image files the scene's textures name, each once, in the order

@@ -26,6 +26,7 @@ pub use render_table::{BookTable, RenderTable};
 pub use source::{nearest_preset, SceneSource};
 
 use serde::{Deserialize, Serialize};
+use std::sync::Arc;
 
 /// Written as `{"type": "<kind>", ...fields}`. Read through `MaterialFields`:
 /// serde reads an internally tagged enum through a buffer, and errors inside it
@@ -429,7 +430,8 @@ impl TryFrom<BoundaryFields> for MediumBoundary {
 
 /// A triangle mesh (past the books), with one material: `{"shape":
 /// {"icosphere": {"center": [x, y, z], "radius": r, "level": n}},
-/// "material": ..}`.
+/// "material": ..}` or `{"shape": {"obj": {"file": "bunny.obj", "scale":
+/// s}}, "material": ..}`.
 #[derive(Serialize, Deserialize, Clone, Debug, PartialEq)]
 #[serde(deny_unknown_fields)]
 pub struct Mesh {
@@ -438,7 +440,7 @@ pub struct Mesh {
 }
 
 /// Where a mesh's triangles come from.
-#[derive(Serialize, Deserialize, Clone, Copy, Debug, PartialEq)]
+#[derive(Serialize, Deserialize, Clone, Debug, PartialEq)]
 #[serde(rename_all = "lowercase", deny_unknown_fields)]
 pub enum MeshShape {
     /// The sphere `(center, radius)` as a closed icosphere of `20 4^level`
@@ -452,14 +454,81 @@ pub enum MeshShape {
         radius: f32,
         level: u32,
     },
+    /// The triangles of a Wavefront OBJ file (`crate::mesh::obj`'s rules),
+    /// its positions multiplied by `scale` (default 1; positive) before a
+    /// group turns and moves them. `file` is found as an image texture's
+    /// file is, but without a folder of its own: an absolute path as it
+    /// is, a relative one beside the scene file (or the partial film).
+    /// Read once per job, however many meshes name it.
+    Obj {
+        file: String,
+        #[serde(default = "one", deserialize_with = "de::f32", skip_serializing_if = "is_one")]
+        scale: f32,
+    },
+}
+
+fn one() -> f32 {
+    1.0
+}
+
+fn is_one(x: &f32) -> bool {
+    *x == 1.0
 }
 
 impl MeshShape {
-    /// The number of triangles.
-    pub fn triangle_count(&self) -> u64 {
+    /// The number of triangles known without reading a file: an icosphere's;
+    /// 0 for an OBJ file (counted once the job reads it).
+    pub fn generated_triangles(&self) -> u64 {
         match *self {
             MeshShape::Icosphere { level, .. } => 20u64 << (2 * level.min(31) as u64),
+            MeshShape::Obj { .. } => 0,
         }
+    }
+}
+
+/// The meshes of a scene's OBJ files, read (by the render job) before the
+/// scene is flattened: one entry per distinct file, under every name the
+/// scene gives it.
+#[derive(Clone, Debug, Default)]
+pub struct ObjMeshes {
+    list: Vec<ObjMesh>,
+    by_name: std::collections::HashMap<String, usize>,
+}
+
+/// One OBJ file's mesh: the name the scene gives it, the hash of its bytes,
+/// its positions and its triangles (shared by every mesh that names it).
+#[derive(Clone, Debug)]
+pub struct ObjMesh {
+    pub name: String,
+    pub hash: u64,
+    pub positions: Arc<Vec<[f32; 3]>>,
+    pub triangles: Arc<Vec<[u32; 3]>>,
+    /// The smallest box holding every position, `(min, max)`.
+    pub bounds: ([f32; 3], [f32; 3]),
+}
+
+impl ObjMeshes {
+    /// The mesh of the file a scene names `name`.
+    pub fn get(&self, name: &str) -> Option<&ObjMesh> {
+        self.by_name.get(name).map(|&k| &self.list[k])
+    }
+
+    /// Adds the mesh a scene names `mesh.name` (a name given again replaces
+    /// nothing: the first stays).
+    pub fn insert(&mut self, mesh: ObjMesh) {
+        if !self.by_name.contains_key(&mesh.name) {
+            self.by_name.insert(mesh.name.clone(), self.list.len());
+            self.list.push(mesh);
+        }
+    }
+
+    /// Every name with its mesh, in the order the names were added.
+    pub fn iter(&self) -> impl Iterator<Item = &ObjMesh> {
+        self.list.iter()
+    }
+
+    pub fn is_empty(&self) -> bool {
+        self.list.is_empty()
     }
 }
 

@@ -4,8 +4,8 @@
 //! computable at every image size) is the job module's, which runs both once.
 
 use super::{
-    Background, Camera, Group, Material, Medium, MediumBoundary, Mesh, MeshShape, Mode, Quad, QuadBox, Scene, Shape,
-    Sphere, Texture,
+    Background, Camera, Group, Material, Medium, MediumBoundary, Mesh, MeshShape, Mode, ObjMeshes, Quad, QuadBox,
+    Scene, Shape, Sphere, Texture,
 };
 use crate::error::{Error, Result};
 use crate::limits::{self, MAX_ICOSPHERE_LEVEL, MAX_MEDIA, MAX_QUADS, MAX_SCENE_TRIANGLES, MAX_SPHERES};
@@ -92,12 +92,9 @@ impl Scene {
         if media > MAX_MEDIA {
             return Err(Error::invalid("media", format!("at most {MAX_MEDIA} media (groups' included), got {media}")));
         }
-        let triangles = self.triangle_count();
+        let triangles = self.generated_triangles();
         if triangles > MAX_SCENE_TRIANGLES {
-            return Err(Error::invalid(
-                "meshes",
-                format!("at most {MAX_SCENE_TRIANGLES} triangles (every mesh, groups' included), got {triangles}"),
-            ));
+            return Err(too_many_triangles(triangles));
         }
         members("", &self.spheres, &self.quads, &self.boxes)?;
         for (i, m) in self.meshes.iter().enumerate() {
@@ -155,16 +152,10 @@ impl Group {
         }
         for (i, m) in self.meshes.iter().enumerate() {
             m.validate(&|name: &str| format!("{field}.meshes[{i}].{name}"))?;
-            let reach = super::flatten::mesh_reach(self, m);
-            if reach > limits::MAX_COORD as f64 {
-                return Err(Error::invalid(
-                    format!("{field}.translate"),
-                    format!(
-                        "meshes[{i}] once moved reaches {reach:e}, outside [-{m:e}, {m:e}] (the range rtow's f32 \
-                         kernels are verified in)",
-                        m = limits::MAX_COORD
-                    ),
-                ));
+            if let Some(reach) = super::flatten::mesh_reach(self, m) {
+                if reach > limits::MAX_COORD as f64 {
+                    return Err(too_far(format!("{field}.translate"), &format!("meshes[{i}] once moved"), reach));
+                }
             }
         }
         let flat = super::flatten::group(self);
@@ -444,8 +435,79 @@ impl Mesh {
                     }
                 })
             }
+            MeshShape::Obj { ref file, scale } => {
+                if file.is_empty() {
+                    return Err(Error::invalid(field("shape.obj.file"), "must name an OBJ file, got an empty name"));
+                }
+                if file.len() > limits::MAX_PATH_BYTES || file.contains('\0') {
+                    return Err(Error::invalid(
+                        field("shape.obj.file"),
+                        format!(
+                            "must be a file name of at most {} bytes without NUL characters",
+                            limits::MAX_PATH_BYTES
+                        ),
+                    ));
+                }
+                if !(scale > 0.0 && scale <= limits::MAX_COORD) {
+                    return Err(Error::invalid(
+                        field("shape.obj.scale"),
+                        format!("must be positive and at most {:e}, got {scale}", limits::MAX_COORD),
+                    ));
+                }
+                let material = Sphere { center: [0.0; 3], center1: None, radius: 1.0, material: self.material.clone() };
+                material.validate(field)
+            }
         }
     }
+}
+
+impl Scene {
+    /// The checks that need the scene's OBJ files read (`objs`, by the
+    /// render job): every mesh within [`limits::MAX_COORD`] once scaled and
+    /// moved, and every mesh's triangles together at most
+    /// [`MAX_SCENE_TRIANGLES`].
+    pub fn validate_obj_meshes(&self, objs: &ObjMeshes) -> Result<()> {
+        let mut triangles = self.generated_triangles();
+        for (g, i, m) in self.all_meshes() {
+            let MeshShape::Obj { ref file, scale } = m.shape else { continue };
+            let field = g.map_or_else(|| format!("meshes[{i}]"), |g| format!("groups[{g}].meshes[{i}]"));
+            let Some(obj) = objs.get(file) else {
+                return Err(Error::invalid(format!("{field}.shape.obj.file"), "was not read (a bug in rtow)"));
+            };
+            triangles += obj.triangles.len() as u64;
+            if triangles > MAX_SCENE_TRIANGLES {
+                return Err(too_many_triangles(triangles));
+            }
+            let reach = super::flatten::obj_reach(g.map(|g| &self.groups[g]), scale, obj);
+            if reach > limits::MAX_COORD as f64 {
+                let (at, what) = match g {
+                    Some(g) => (format!("groups[{g}].translate"), format!("meshes[{i}] once scaled and moved")),
+                    None => (format!("{field}.shape.obj.scale"), "the mesh once scaled".to_string()),
+                };
+                return Err(too_far(at, &what, reach));
+            }
+        }
+        Ok(())
+    }
+}
+
+/// A scene with more than [`MAX_SCENE_TRIANGLES`] triangles (at least `n`).
+fn too_many_triangles(n: u64) -> Error {
+    Error::invalid(
+        "meshes",
+        format!("at most {MAX_SCENE_TRIANGLES} triangles (every mesh, groups' included), got {n} or more"),
+    )
+}
+
+/// A mesh (`what`) that reaches `reach`, past [`limits::MAX_COORD`].
+fn too_far(field: String, what: &str, reach: f64) -> Error {
+    Error::invalid(
+        field,
+        format!(
+            "{what} reaches {reach:e}, outside [-{m:e}, {m:e}] (the range rtow's f32 kernels are verified in)",
+            m = limits::MAX_COORD
+        ),
+    )
 }
 
 impl Sphere {

@@ -40,7 +40,7 @@ fn every_preset_is_bit_identical_across_kernels() {
         // Brute force over a mesh of hundreds of thousands of triangles takes
         // minutes: there the scalar tree is the reference (the trees find
         // brute force's hits bit for bit: tests/kernels/triangles.rs).
-        let big = sc.triangle_count() > 10_000;
+        let big = sc.generated_triangles() > 10_000;
         let reference = if big { AccelChoice::Bvh } else { AccelChoice::Brute };
         let a = render_accel(&sc, s, Scalar, 2, 16, reference);
         for (kernel, accel) in others().into_iter().filter(|&(_, a)| !big || a != AccelChoice::Brute) {

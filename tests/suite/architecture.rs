@@ -12,7 +12,10 @@ use std::path::{Path, PathBuf};
 /// The layers, bottom up. A module may import modules of lower layers, and
 /// of its own layer where the layer allows it (the graph stays acyclic).
 const LAYERS: &[(&str, &[&str])] = &[
-    ("foundation", &["error", "choice", "real", "math", "limits", "output", "vec3", "sampling", "settings", "mesh"]),
+    (
+        "foundation",
+        &["error", "choice", "real", "math", "limits", "output", "vec3", "sampling", "settings", "mesh", "input"],
+    ),
     ("user side", &["scene"]),
     (
         "kernel side",

@@ -24,6 +24,7 @@ mod lambertian;
 mod lights;
 mod materials;
 mod media;
+mod meshes;
 mod motion;
 mod nextweek;
 mod physics;

@@ -46,6 +46,7 @@ fn scene_around(section: &str, inner: &str) -> Option<String> {
         "boundary.box" => format!(r#""media": [{{"boundary": {{"box": {{{inner}}}}}}}]"#),
         "mesh" => format!(r#""meshes": [{{{inner}}}]"#),
         "mesh.icosphere" => format!(r#""meshes": [{{"shape": {{"icosphere": {{{inner}}}}}}}]"#),
+        "mesh.obj" => format!(r#""meshes": [{{"shape": {{"obj": {{{inner}}}}}}}]"#),
         "material" => format!(r#""spheres": [{{"center": [0, 0, -2], "radius": 1, "material": {{{inner}}}}}]"#),
         "texture" => format!(
             r#""spheres": [{{"center": [0, 0, -2], "radius": 1, "material": {{"type": "lambertian", "albedo": {{{inner}}}}}}}]"#
@@ -73,6 +74,7 @@ const FIELD_SECTIONS: &[&str] = &[
     "boundary.box",
     "mesh",
     "mesh.icosphere",
+    "mesh.obj",
     "material",
     "texture",
     "sky",

@@ -431,8 +431,8 @@ pub fn same_image(p: &Path, h: &Header, p0: &Path, h0: &Header, consequence: &st
     }
     for name in h.settings.keys().chain(h0.settings.keys()) {
         let (v, v0) = (h.settings.get(name), h0.settings.get(name));
-        if v != v0 && name == "images" {
-            return Err(refuse(images_changed(v0, v, &format!("of {a}"), "it was rendered with")));
+        if v != v0 && INPUT_FILES.iter().any(|&(setting, _)| setting == name) {
+            return Err(refuse(files_changed(name, v0, v, &format!("of {a}"), "it was rendered with")));
         }
         if v != v0 {
             let show = |v: Option<&String>| v.map_or_else(|| "(unset)".into(), |v| c(v));
@@ -451,10 +451,14 @@ pub fn same_image(p: &Path, h: &Header, p0: &Path, h0: &Header, consequence: &st
     Ok(())
 }
 
-/// The entries of an identity's `images` setting (`"<hash> <name>, <hash>
-/// <name>"`, `job::Job::identity`), as (hash, name): split where `, ` is
-/// followed by a hash and a space, so a name may hold `, `.
-fn image_entries(v: &str) -> Vec<(&str, &str)> {
+/// The identity's settings that hash input files' bytes (`job::Job::identity`),
+/// with what their files are called.
+pub const INPUT_FILES: [(&str, &str); 2] = [("images", "image texture"), ("meshes", "OBJ file")];
+
+/// The entries of an identity's `images` or `meshes` setting (`"<hash>
+/// <name>, <hash> <name>"`, `job::Job::identity`), as (hash, name): split
+/// where `, ` is followed by a hash and a space, so a name may hold `, `.
+fn file_entries(v: &str) -> Vec<(&str, &str)> {
     let starts_entry = |i: usize| {
         v.as_bytes().get(i..i + 17).is_some_and(|b| b[..16].iter().all(u8::is_ascii_hexdigit) && b[16] == b' ')
     };
@@ -472,16 +476,24 @@ fn image_entries(v: &str) -> Vec<(&str, &str)> {
         .collect()
 }
 
-/// Which image textures differ between two `images` settings, named with
-/// the hashes of their bytes, for a refusal: `now` is the setting of what
-/// `now_is` ("read now"), `then` of what `then_is` ("it was rendered with").
-pub fn images_changed(now: Option<&String>, then: Option<&String>, now_is: &str, then_is: &str) -> String {
-    let (now, then) = (now.map_or(vec![], |v| image_entries(v)), then.map_or(vec![], |v| image_entries(v)));
+/// Which input files differ between two values of the identity setting
+/// `setting` (`images` or `meshes`, [`INPUT_FILES`]), named with the hashes
+/// of their bytes, for a refusal: `now` is the setting of what `now_is`
+/// ("read now"), `then` of what `then_is` ("it was rendered with").
+pub fn files_changed(
+    setting: &str,
+    now: Option<&String>,
+    then: Option<&String>,
+    now_is: &str,
+    then_is: &str,
+) -> String {
+    let noun = INPUT_FILES.iter().find(|&&(s, _)| s == setting).map_or("input file", |&(_, noun)| noun);
+    let (now, then) = (now.map_or(vec![], |v| file_entries(v)), then.map_or(vec![], |v| file_entries(v)));
     let mut changed = Vec::new();
     for &(hash, name) in &now {
         if let Some(&(h0, _)) = then.iter().find(|&&(h0, n)| n == name && h0 != hash) {
             changed.push(format!(
-                "the image texture '{}' {now_is} is not the one {then_is} (its bytes hash to {}, not {})",
+                "the {noun} '{}' {now_is} is not the one {then_is} (its bytes hash to {}, not {})",
                 quoted(name),
                 quoted(hash),
                 quoted(h0)
@@ -491,11 +503,7 @@ pub fn images_changed(now: Option<&String>, then: Option<&String>, now_is: &str,
     if changed.is_empty() {
         let names =
             |v: &[(&str, &str)]| v.iter().map(|(_, n)| format!("'{}'", quoted(n))).collect::<Vec<_>>().join(", ");
-        changed.push(format!(
-            "the image textures {now_is} ({}) are not the ones {then_is} ({})",
-            names(&now),
-            names(&then)
-        ));
+        changed.push(format!("the {noun}s {now_is} ({}) are not the ones {then_is} ({})", names(&now), names(&then)));
     }
     changed.join("; ")
 }
@@ -928,20 +936,20 @@ mod tests {
         let then = "0123456789abcdef maps/earth, map.jpg, 00000000000000aa é.png".to_string();
         let now = "0123456789abcdef maps/earth, map.jpg, 00000000000000bb é.png".to_string();
         assert_eq!(
-            image_entries(&then),
+            file_entries(&then),
             vec![("0123456789abcdef", "maps/earth, map.jpg"), ("00000000000000aa", "é.png")]
         );
-        let m = images_changed(Some(&now), Some(&then), "read now", "it was rendered with");
+        let m = files_changed("images", Some(&now), Some(&then), "read now", "it was rendered with");
         assert_eq!(
             m,
             "the image texture 'é.png' read now is not the one it was rendered with (its bytes hash to \
              00000000000000bb, not 00000000000000aa)"
         );
         // Nothing to match by name: both lists, by name.
-        let m = images_changed(Some(&now), None, "read now", "it was rendered with");
+        let m = files_changed("images", Some(&now), None, "read now", "it was rendered with");
         assert!(m.contains("('maps/earth, map.jpg', 'é.png') are not the ones it was rendered with ()"), "{m}");
         for hostile in ["", ", ", "x, 0123456789abcdef", ", 0123456789abcdef é", "é, 0123456789abcdef "] {
-            image_entries(hostile);
+            file_entries(hostile);
         }
     }
 
