@@ -22,8 +22,8 @@ pub struct DiffArgs {
     /// A second render of B with another seed: B's noise, for the region z-tests.
     #[arg(long, value_name = "FILE")]
     b2: Option<PathBuf>,
-    #[arg(long, allow_negative_numbers = true, default_value_t = DEFAULT_GAMMA, help = gamma_help())]
-    gamma: f32,
+    #[arg(long, allow_negative_numbers = true, help = gamma_help())]
+    gamma: Option<f32>,
     #[arg(long, allow_negative_numbers = true, help = ppd_help())]
     ppd: Option<f32>,
     /// The region z-tests split the image into K x K regions.
@@ -58,7 +58,7 @@ pub struct DiffArgs {
 /// `--gamma`'s help.
 fn gamma_help() -> String {
     format!(
-        "The gamma PNG inputs were encoded with: each byte b is linear light ((b + 0.5) / 256)^G [default: {}, the \
+        "The gamma PNG inputs were encoded with: each byte b is linear light ((b + 0.5) / 256)^G [default: {:.1}, the \
          gamma rtow writes its PNGs with by default, as the book does]. Linear inputs are encoded with it for FLIP",
         DEFAULT_GAMMA
     )
@@ -77,7 +77,7 @@ impl DiffArgs {
         DiffSpec {
             a2: self.a2.clone(),
             b2: self.b2.clone(),
-            gamma: self.gamma,
+            gamma: self.gamma.unwrap_or(DEFAULT_GAMMA),
             ppd: self.ppd.unwrap_or(diff::flip::DEFAULT_PPD),
             regions: self.regions,
             z: self.z,
