@@ -13,7 +13,10 @@
 //! where `s^2 = sum_p (x1_p - x2_p)^2 / (4 n^2)` is the variance of the region's two-seed
 //! mean estimated from the seeds' per-pixel differences (`n` pixels; pixels' errors are
 //! independent: every pixel draws its own samples). A region that is identical on both
-//! sides in every pixel (the clamped light) has `z = 0`.
+//! sides in every pixel (the clamped light) has `z = 0`. The statistics are `rtow diff`'s
+//! (`rtow::instruments::diff::regions`); this example adds the book's PPM and encoding,
+//! and prints a table per region. Two files rtow reads (PNG, EXR, PFM, `.rtfilm`) compare
+//! the same way with `rtow diff A1 B1 --a2 A2 --b2 B2`.
 //!
 //! Any of the four may be either kind (a `.ppm` is read as the book's, anything else as
 //! rtow's), to compare two rtow renders, or two of the book's, the same way.
@@ -26,6 +29,7 @@
 //! and channel, `(mean1 - mean2) / (2 s)`, whose root mean square is about 1 when pixels'
 //! errors are independent and the estimate is right.
 
+use rtow::instruments::diff::{decode_byte, Regions, ZTest};
 use std::path::Path;
 use std::process::ExitCode;
 
@@ -42,10 +46,9 @@ fn book_byte(x: f64) -> u8 {
     (256.0 * g.clamp(0.0, 0.999)) as u8
 }
 
-/// A byte decoded to linear light at the middle of its quantization step.
+/// A byte decoded to linear light at the middle of its quantization step (gamma 2).
 fn decode(b: u8) -> f64 {
-    let g = (b as f64 + 0.5) / 256.0;
-    g * g
+    decode_byte(b, 2.0)
 }
 
 /// Reads the book's ASCII PPM (P3, maxval 255).
@@ -95,32 +98,9 @@ fn read_any(path: &str) -> Result<Linear, String> {
     }
 }
 
-/// Per region and channel: the two-seed mean, the variance of that mean, and seed 1's mean
-/// minus seed 2's.
-type Region = ([f64; 3], [f64; 3], [f64; 3]);
-
-fn regions(a: &Linear, b: &Linear, k: usize) -> Vec<Region> {
-    let mut out = Vec::with_capacity(k * k);
-    for ry in 0..k {
-        for rx in 0..k {
-            let (y0, y1) = (ry * a.height / k, (ry + 1) * a.height / k);
-            let (x0, x1) = (rx * a.width / k, (rx + 1) * a.width / k);
-            let n = ((y1 - y0) * (x1 - x0)) as f64;
-            let (mut sum, mut sq, mut diff) = ([0.0; 3], [0.0; 3], [0.0; 3]);
-            for y in y0..y1 {
-                for x in x0..x1 {
-                    let (p, q) = (a.data[y * a.width + x], b.data[y * a.width + x]);
-                    for c in 0..3 {
-                        sum[c] += 0.5 * (p[c] + q[c]);
-                        sq[c] += (p[c] - q[c]) * (p[c] - q[c]);
-                        diff[c] += p[c] - q[c];
-                    }
-                }
-            }
-            out.push((sum.map(|s| s / n), sq.map(|s| s / (4.0 * n * n)), diff.map(|d| d / n)));
-        }
-    }
-    out
+/// A side's two seeds, region by region (`rtow diff`'s statistics).
+fn regions(a: &Linear, b: &Linear, k: usize) -> Regions {
+    Regions::two_renders(k, a.width, a.height, |i| a.data[i], |i| b.data[i])
 }
 
 fn run() -> Result<(), String> {
@@ -158,50 +138,29 @@ fn run() -> Result<(), String> {
         println!("| region (row, col) | book mean (r g b) | rtow mean (r g b) | z (r g b) |");
         println!("|---|---|---|---|");
     }
-    let (mut over, mut sum_z2, mut count, mut max_z) = (0, 0.0, 0, 0.0f64);
-    for (i, ((mb, vb, _), (mr, vr, _))) in bk.iter().zip(&rt).enumerate() {
-        let z: [f64; 3] = std::array::from_fn(|c| {
-            let d = mb[c] - mr[c];
-            let s = (vb[c] + vr[c]).sqrt();
-            if s > 0.0 {
-                d / s
-            } else if d == 0.0 {
-                0.0
-            } else {
-                d.signum() * f64::INFINITY
-            }
-        });
-        for &v in &z {
-            over += (v.abs() > 3.0) as usize;
-            sum_z2 += v * v;
-            count += 1;
-            max_z = max_z.max(v.abs());
-        }
+    let t = ZTest::new(&bk, &rt, 3.0);
+    for ((b, r), z) in bk.cells.iter().zip(&rt.cells).zip(&t.cells) {
+        let z = z.z;
         let flag = if z.iter().any(|v| v.abs() > 3.0) { " **" } else { "" };
         let (book, rtow) = if noise {
-            (format!("{} | {}", fmt3(*mb), sd3(*vb)), format!("{} | {}", fmt3(*mr), sd3(*vr)))
+            (format!("{} | {}", fmt3(b.mean), sd3(b.var)), format!("{} | {}", fmt3(r.mean), sd3(r.var)))
         } else {
-            (fmt3(*mb), fmt3(*mr))
+            (fmt3(b.mean), fmt3(r.mean))
         };
-        println!("| ({}, {}){flag} | {book} | {rtow} | {:+.2} {:+.2} {:+.2} |", i / k, i % k, z[0], z[1], z[2]);
+        println!("| ({}, {}){flag} | {book} | {rtow} | {:+.2} {:+.2} {:+.2} |", b.row, b.col, z[0], z[1], z[2]);
     }
     println!();
     println!(
-        "{k}x{k} regions of {}x{} pixels, {count} region-channels: {over} with |z| > 3, rms z {:.3}, max |z| {:.2}",
+        "{k}x{k} regions of {}x{} pixels, {} region-channels: {} with |z| > 3, rms z {:.3}, max |z| {:.2}",
         book[0].width,
         book[0].height,
-        (sum_z2 / count as f64).sqrt(),
-        max_z
+        t.count,
+        t.over,
+        t.rms,
+        t.worst.z.abs()
     );
     // Seed against seed on each side: the difference of two means has variance 4 s^2.
-    let self_rms = |side: &[Region]| {
-        let z2: Vec<f64> = side
-            .iter()
-            .flat_map(|(_, v, d)| (0..3).filter(|&c| v[c] > 0.0).map(move |c| d[c] * d[c] / (4.0 * v[c])))
-            .collect();
-        ((z2.iter().sum::<f64>() / z2.len().max(1) as f64).sqrt(), z2.len())
-    };
-    let ((zb, nb), (zr, nr)) = (self_rms(&bk), self_rms(&rt));
+    let ((zb, nb), (zr, nr)) = (bk.self_check().unwrap_or_default(), rt.self_check().unwrap_or_default());
     println!("noise check, seed 1 against seed 2: rms z {zb:.3} for the book ({nb} region-channels), {zr:.3} for rtow ({nr})");
     Ok(())
 }

@@ -247,6 +247,15 @@ pub fn flag_of(field: &str) -> Option<&'static str> {
         "at_spp" => "--at-spp",
         "adaptive_min" => "--adaptive-min",
         "tolerance" => "--tolerance",
+        "ppd" => "--ppd",
+        "regions" => "--regions",
+        "z" => "--z",
+        "max_mse" => "--max-mse",
+        "max_rel_mse" => "--max-rel-mse",
+        "max_flip" => "--max-flip",
+        "max_z_fails" => "--max-z-fails",
+        "json" => "--json",
+        "heatmap" => "--heatmap",
         _ => return None,
     })
 }

@@ -4,6 +4,7 @@
 mod args;
 mod bench;
 mod converge;
+mod diff;
 mod merge;
 mod render;
 
@@ -52,6 +53,9 @@ enum Command {
     /// Run time against error: measure kernels and estimator variants at several
     /// sample counts against a reference; write a CSV, a markdown table and a log-log plot.
     Converge(converge::ConvergeArgs),
+    /// Compare image A with the reference B (PNG, EXR, PFM or .rtfilm): MSE, relMSE, the largest difference,
+    /// FLIP, region z-tests when the noise is known; exit status 3 when a --max-* threshold is exceeded.
+    Diff(diff::DiffArgs),
     /// Numerical stress tests against an f64 oracle, with both kernels; exit status 1 if a bound breaks.
     Stress {
         /// The small version (what `cargo test` runs).
@@ -89,22 +93,24 @@ pub(crate) use say;
 pub(crate) use tell;
 
 /// Prints the stress tables; exits with status 1 when a bound is broken.
-fn cmd_stress(quick: bool, seed: u64, threads: Option<usize>) -> Result<bool> {
+fn cmd_stress(quick: bool, seed: u64, threads: Option<usize>) -> Result<u8> {
     use std::io::Write;
     let cfg = rtow::instruments::stress::StressConfig { quick, seed, threads };
     let report = rtow::instruments::stress::run(&cfg, &mut |part| tell!("done: {part}"))?;
     say!("{}", report.table().trim_end_matches('\n'));
     let _ = std::io::stdout().flush();
-    Ok(report.passed())
+    Ok(if report.passed() { 0 } else { 1 })
 }
 
-/// Ok(false): the command ran but its check failed (exit status 1).
-fn run(cli: Cli) -> Result<bool> {
+/// The exit status of a command that ran: 0; 1 when its check failed (bench,
+/// stress); 3 when a comparison exceeded a threshold (diff).
+fn run(cli: Cli) -> Result<u8> {
     match cli.command {
-        Command::Render(a) => render::run(a).map(|_| true),
-        Command::Merge(a) => merge::run(a).map(|_| true),
-        Command::Bench(a) => bench::run(a),
-        Command::Converge(a) => converge::run(a).map(|_| true),
+        Command::Render(a) => render::run(a).map(|_| 0),
+        Command::Merge(a) => merge::run(a).map(|_| 0),
+        Command::Bench(a) => bench::run(a).map(|ok| if ok { 0 } else { 1 }),
+        Command::Converge(a) => converge::run(a).map(|_| 0),
+        Command::Diff(a) => diff::run(a),
         Command::Scenes => {
             let width = scene::presets().iter().map(|p| p.name.len()).max().unwrap_or(0);
             for (i, &group) in scene::PresetGroup::ALL.iter().enumerate() {
@@ -116,7 +122,7 @@ fn run(cli: Cli) -> Result<bool> {
                     say!("  {:<width$}  {}", p.name, p.description);
                 }
             }
-            Ok(true)
+            Ok(0)
         }
         Command::Completions { shell } => {
             let mut out = Vec::new();
@@ -140,9 +146,9 @@ fn run(cli: Cli) -> Result<bool> {
                 s = s.tessellate(level)?;
             }
             if output.extension().is_some_and(|e| e.eq_ignore_ascii_case("obj")) {
-                scene::save_meshes_obj(&s, &output).map(|_| true)
+                scene::save_meshes_obj(&s, &output).map(|_| 0)
             } else {
-                scene::save_scene(&s, &output).map(|_| true)
+                scene::save_scene(&s, &output).map(|_| 0)
             }
         }
     }
@@ -190,13 +196,13 @@ fn command() -> clap::Command {
 }
 
 /// Writes generated text to stdout; a write error is an output failure (exit status 1).
-fn write_stdout(bytes: &[u8]) -> Result<bool> {
+fn write_stdout(bytes: &[u8]) -> Result<u8> {
     use std::io::Write as _;
     let mut out = std::io::stdout().lock();
     out.write_all(bytes)
         .and_then(|_| out.flush())
         .map_err(|e| Error::System(format!("cannot write to stdout: {e}")))?;
-    Ok(true)
+    Ok(0)
 }
 
 pub fn main() -> ExitCode {
@@ -206,8 +212,7 @@ pub fn main() -> ExitCode {
         Err(e) => clap_exit(e),
     };
     match run(cli) {
-        Ok(true) => ExitCode::SUCCESS,
-        Ok(false) => ExitCode::from(1),
+        Ok(status) => ExitCode::from(status),
         Err(e) => {
             // One line, bounded, whatever the input it quotes, its control
             // characters escaped (a file name in a scene file may hold any).

@@ -2,10 +2,13 @@
 //! work per kernel, baselines), [`stress`] (numerical stress against an f64
 //! oracle) and [`converge`] (run time against error). They drive the real
 //! kernels, observing them through [`probe`]s; none keeps a copy of a kernel.
+//! [`diff`] measures images instead: how far one is from another (MSE,
+//! relMSE, FLIP, region z-tests).
 
 pub mod bench;
 pub mod callgrind;
 pub mod converge;
+pub mod diff;
 pub mod instructions;
 pub mod noise;
 pub mod stress;

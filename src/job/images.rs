@@ -311,7 +311,7 @@ fn decode(bytes: &[u8], format: image::ImageFormat, size: (u32, u32)) -> std::re
 /// chunks it reads, but stops after the image data: a file cut in or before
 /// its IEND chunk, or with a flipped bit in a chunk after the image data,
 /// decodes.
-fn png_chunks(bytes: &[u8]) -> std::result::Result<(), String> {
+pub(crate) fn png_chunks(bytes: &[u8]) -> std::result::Result<(), String> {
     let mut i = 8; // after the signature
     while let Some(head) = bytes.get(i..i + 8) {
         let len = u32::from_be_bytes([head[0], head[1], head[2], head[3]]) as usize;

@@ -22,6 +22,8 @@ mod prepare;
 
 pub(crate) use images::Images;
 pub use images::{images_folder, IMAGES_ENV};
+// `rtow diff` checks the PNGs it reads as image textures are checked.
+pub(crate) use images::png_chunks;
 
 use crate::camera::PreparedCamera;
 use crate::choice::{AccelChoice, EstimatorChoice, KernelChoice, Mode};

@@ -16,6 +16,7 @@ mod architecture;
 mod bench_cli;
 mod cli;
 mod converge_cli;
+mod diff_cli;
 mod estimator;
 mod film_range;
 mod hostile;

@@ -12,6 +12,7 @@ pub const SIGNED_EPSILON: f64 = 0.01;
 
 #[derive(Clone, Copy, Debug, PartialEq)]
 pub struct Metrics {
+    pub mse: f64,
     pub rmse: f64,
     /// Mean of `(x - r)^2 / (r^2 + 0.01)`.
     pub relmse: f64,
@@ -38,7 +39,7 @@ pub fn error_metrics(image: &Image, reference: &Image) -> Metrics {
         }
     }
     let n = n.max(1) as f64;
-    Metrics { rmse: (se / n).sqrt(), relmse: rel / n, mean_rel_error: signed / n }
+    Metrics { mse: se / n, rmse: (se / n).sqrt(), relmse: rel / n, mean_rel_error: signed / n }
 }
 
 /// One measured render.
