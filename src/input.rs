@@ -7,6 +7,7 @@
 //! was opened, not what was looked at a moment before). The callers word
 //! the refusals: each names its own kind of file and field.
 
+use crate::output::{clip_to, printable};
 use std::fs::{File, Metadata};
 use std::io::Read;
 use std::path::{Path, PathBuf};
@@ -126,4 +127,20 @@ pub fn read_bounded(file: &File, meta: &Metadata, max: u64) -> Result<Vec<u8>, R
         return Err(ReadError::TooLarge(None));
     }
     Ok(bytes)
+}
+
+/// A path for a message: its control characters escaped, at most 300
+/// characters (a name may have 4,096 bytes; the message is one line).
+pub fn shown(path: &Path) -> String {
+    clip_to(&printable(&path.display().to_string()), 300)
+}
+
+/// `"at <path> "` when the file read is not the name a scene gives (`name`),
+/// else `""`.
+pub fn at(path: &Path, name: &str) -> String {
+    if path == Path::new(name) {
+        String::new()
+    } else {
+        format!("at {} ", shown(path))
+    }
 }

@@ -33,7 +33,7 @@
 
 use crate::error::{Error, Result};
 use crate::film::part::fnv1a;
-use crate::input::{self, FileId, ReadError, Regular};
+use crate::input::{self, at, shown, FileId, ReadError, Regular};
 use crate::limits::{MAX_IMAGE_TEXTURES, MAX_TEXELS, MAX_TEXTURE_FILE_BYTES, MAX_TOTAL_TEXELS};
 use crate::output::{clip_to, printable};
 use crate::scene::Scene;
@@ -170,24 +170,9 @@ struct Pending<'a> {
     meta: Metadata,
 }
 
-/// A path for a message: its control characters escaped, at most 300
-/// characters (a name may have 4,096 bytes; the message is one line).
-fn shown(path: &Path) -> String {
-    clip_to(&printable(&path.display().to_string()), 300)
-}
-
 /// A scene's name of an image for a message, as [`shown`].
 fn shown_name(name: &str) -> String {
     shown(Path::new(name))
-}
-
-/// `" at <path> "` when the file read is not the name as given, else `" "`.
-fn at(path: &Path, name: &str) -> String {
-    if path == Path::new(name) {
-        String::new()
-    } else {
-        format!("at {} ", shown(path))
-    }
 }
 
 /// The file a scene's image `name` is: itself if absolute, else the first of

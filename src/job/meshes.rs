@@ -25,9 +25,8 @@
 
 use crate::error::{Error, Result};
 use crate::film::part::fnv1a;
-use crate::input::{self, FileId, ReadError, Regular};
+use crate::input::{self, at, FileId, ReadError, Regular};
 use crate::limits::{MAX_MESH_FILES, MAX_MESH_FILE_BYTES, MAX_SCENE_TRIANGLES};
-use crate::output::{clip_to, printable};
 use crate::scene::{ObjMesh, ObjMeshes, Scene};
 use std::path::Path;
 use std::sync::Arc;
@@ -49,7 +48,8 @@ pub(crate) fn load(scene: &Scene, origin: Option<&Path>) -> Result<ObjMeshes> {
     let mut read: Vec<(FileId, ObjMesh)> = Vec::new();
     let mut triangles = 0u64;
     for (name, field) in &names {
-        let refuse = |what: String| Error::invalid(field, format!("OBJ file '{}' {what}", shown(name)));
+        let refuse =
+            |what: String| Error::invalid(field, format!("OBJ file '{}' {what}", input::shown(Path::new(name))));
         let found = find(name, origin).map_err(refuse)?;
         if let Some((_, mesh)) = read.iter().find(|(id, _)| *id == found.id) {
             meshes.insert(ObjMesh { name: name.to_string(), ..mesh.clone() });
@@ -86,21 +86,6 @@ pub(crate) fn load(scene: &Scene, origin: Option<&Path>) -> Result<ObjMeshes> {
         read.push((found.id, obj));
     }
     Ok(meshes)
-}
-
-/// A name or path for a message: control characters escaped, at most 300
-/// characters.
-fn shown(name: &str) -> String {
-    clip_to(&printable(name), 300)
-}
-
-/// `"at <path> "` when the file read is not the name as given, else `""`.
-fn at(path: &Path, name: &str) -> String {
-    if path == Path::new(name) {
-        String::new()
-    } else {
-        format!("at {} ", shown(&path.display().to_string()))
-    }
 }
 
 /// The file a scene's OBJ `name` is: itself if absolute, else beside
