@@ -526,10 +526,6 @@ impl ObjMeshes {
     pub fn iter(&self) -> impl Iterator<Item = &ObjMesh> {
         self.list.iter()
     }
-
-    pub fn is_empty(&self) -> bool {
-        self.list.is_empty()
-    }
 }
 
 /// Primitives under one transform, the book's instance order: first

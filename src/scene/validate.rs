@@ -454,8 +454,7 @@ impl Mesh {
                         format!("must be positive and at most {:e}, got {scale}", limits::MAX_COORD),
                     ));
                 }
-                let material = Sphere { center: [0.0; 3], center1: None, radius: 1.0, material: self.material.clone() };
-                material.validate(field)
+                self.material.validate(&|name: &str| field(&format!("material.{name}")))
             }
         }
     }
