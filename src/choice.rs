@@ -91,6 +91,19 @@ choice!(
 );
 
 choice!(
+    /// What a render does on SIGINT, SIGTERM or SIGHUP.
+    #[derive(Default)]
+    OnInterrupt {
+        /// Finish the round of samples under way, write a film of the samples
+        /// done (to resume), exit with 128 + the signal.
+        #[default]
+        Film = "film",
+        /// Stop at once, write nothing (exit with 128 + the signal).
+        Quit = "quit",
+    }
+);
+
+choice!(
     /// Which kernel renders.
     KernelChoice {
         /// One path at a time: the reference.

@@ -29,6 +29,9 @@ pub enum Error {
     /// The operating system refused a resource (e.g. worker threads).
     #[error("{0}")]
     System(String),
+    /// A signal (its number) stopped the run before it had anything to keep.
+    #[error("{message}")]
+    Interrupted { signal: i32, message: String },
 }
 
 impl Error {
@@ -37,10 +40,12 @@ impl Error {
     }
 
     /// The process exit status for this error: 2 for bad input, 1 for a
-    /// failure to write output or to get a resource.
+    /// failure to write output or to get a resource, 128 + the signal for
+    /// an interrupted run.
     pub fn exit_code(&self) -> i32 {
         match self {
             Error::Output { .. } | Error::System(_) => 1,
+            Error::Interrupted { signal, .. } => 128 + signal,
             Error::InFile { error, .. } => error.exit_code(),
             _ => 2,
         }

@@ -5,28 +5,31 @@
 //! renders a whole image or a partial film, whether it counts work for the
 //! statistics, and the order of the checks.
 
-use crate::choice::{EstimatorChoice, OnRejected};
+use crate::choice::{EstimatorChoice, OnInterrupt, OnRejected};
 use crate::error::{Error, Result};
 use crate::estimator::{Adaptive, Estimator, Roulette};
 use crate::film::part::{self, is_part_path, Part, Split, SplitKind};
+use crate::film::{Image, TileFilm};
 use crate::job::Job;
-use crate::output::{check_extension, OutputId, Outputs};
+use crate::output::{check_extension, Graceful, OutputId, Outputs};
 use crate::plan::Plan;
 use crate::probe::WorkCounters;
 use crate::provenance::Provenance;
-use crate::render::{render, render_counted, Progress, Rendered, Stats};
+use crate::render::{render, render_counted, render_crop, Crop, Progress, Rendered, Stats};
+use crate::rounds::{Preview, RoundsReport, Schedule, Stopped};
 use crate::sampling::Sampler;
 use crate::scene::SceneSource;
 use crate::settings::Settings;
 use crate::shard::{self, FilmRequest};
 use serde::Serialize;
 use std::path::{Path, PathBuf};
-use std::time::Instant;
+use std::time::{Duration, Instant};
 
 /// The files a render or a merge writes.
 #[derive(Clone, Debug, Default)]
 pub struct RenderFiles {
-    /// The image (`.png`, 8-bit, gamma encoded) or a partial film (`.rtfilm`).
+    /// The image (`.png`, 8-bit, gamma encoded; `.exr` or `.pfm`, linear)
+    /// or a partial film (`.rtfilm`).
     pub output: PathBuf,
     /// The linear image: `.pfm` or `.exr`.
     pub float: Option<PathBuf>,
@@ -55,7 +58,7 @@ impl Default for FileNames {
 
 impl RenderFiles {
     fn check_types(&self) -> Result<()> {
-        check_extension(&self.output, &["png", part::EXTENSION], self.names.output)?;
+        check_extension(&self.output, &["png", "exr", "pfm", part::EXTENSION], self.names.output)?;
         if let Some(f) = &self.float {
             check_extension(f, &["pfm", "exr"], self.names.float)?;
         }
@@ -98,6 +101,102 @@ pub struct RenderRequest<'a> {
     /// Whether rejected samples fail the render (nothing written) or only
     /// warn (the caller prints [`Stats::rejected`]'s warning).
     pub on_rejected: OnRejected,
+    /// A time limit, previews, and what a signal does.
+    pub rounds: RoundsRequest,
+    /// Only this window of the image (an image of its size, its pixels
+    /// those of the whole render); rendered in one go, to an image.
+    pub crop: Option<Crop>,
+}
+
+/// Refuses what a crop cannot be combined with.
+fn check_crop(req: &RenderRequest) -> Result<()> {
+    let Some(c) = &req.crop else { return Ok(()) };
+    let s = req.job.settings();
+    c.check(s.width, s.height)?;
+    let with = if req.split.kind != SplitKind::None {
+        Some("--shard")
+    } else if req.resume.is_some() {
+        Some("--resume")
+    } else if req.files.writes_film() {
+        Some("a partial film output (.rtfilm)")
+    } else if req.rounds.time_limit.is_some() {
+        Some("--time-limit")
+    } else if req.rounds.preview_every.is_some() {
+        Some("--preview-every")
+    } else {
+        None
+    };
+    match with {
+        Some(w) => Err(Error::invalid("crop", format!("renders a window in one go, to an image; not with {w}"))),
+        None => Ok(()),
+    }
+}
+
+/// How a whole render goes in rounds of samples ([`crate::rounds`]): with a
+/// time limit or previews, and, by default, so that SIGINT, SIGTERM or
+/// SIGHUP leave a film to resume ([`OnInterrupt::Film`]). Adaptive sampling,
+/// shards and scenes that trace no samples render in one go (a time limit
+/// or previews are refused for them).
+#[derive(Clone, Copy, Debug, Default)]
+pub struct RoundsRequest {
+    /// Render whole rounds while the next one fits in this budget, then
+    /// write the image of the samples reached (at least one per pixel).
+    pub time_limit: Option<Duration>,
+    /// Rewrite the output image (atomically, the lock kept) after the first
+    /// round and then after a round once this much time has passed.
+    pub preview_every: Option<Duration>,
+    pub on_interrupt: OnInterrupt,
+}
+
+impl RoundsRequest {
+    /// Whether the run asked for what only rounds give (a time limit, previews).
+    fn asked(&self) -> bool {
+        self.time_limit.is_some() || self.preview_every.is_some()
+    }
+}
+
+/// Where a render stopped by a signal writes its film: the output itself
+/// when it is a film, else the output with the extension `.rtfilm`.
+pub fn interrupt_film_path(output: &Path) -> PathBuf {
+    if is_part_path(output) {
+        output.to_path_buf()
+    } else {
+        output.with_extension(part::EXTENSION)
+    }
+}
+
+/// Refuses a time limit or previews that this render cannot honour.
+fn check_rounds(req: &RenderRequest) -> Result<()> {
+    let r = &req.rounds;
+    if !r.asked() {
+        return Ok(());
+    }
+    let flag = if r.time_limit.is_some() { "time_limit" } else { "preview_every" };
+    if req.split.kind != SplitKind::None {
+        return Err(Error::invalid(flag, "a shard renders its piece whole; it needs a whole render"));
+    }
+    if req.job.options().adaptive.is_some() {
+        return Err(Error::invalid(
+            flag,
+            "adaptive sampling decides at doubling sample counts, so it cannot stop between rounds: \
+             drop one of the two",
+        ));
+    }
+    if req.job.mode() == crate::choice::Mode::Gradient {
+        return Err(Error::invalid(flag, "this scene traces no samples (a gradient): it renders at once"));
+    }
+    if r.preview_every.is_some() && req.files.writes_film() {
+        return Err(Error::invalid(
+            "preview_every",
+            "previews an image: write a .png, .exr or .pfm (a film is written on an interrupt anyway)",
+        ));
+    }
+    if let Some(t) = r.preview_every {
+        if t.is_zero() {
+            return Err(Error::invalid("preview_every", "must be longer than 0 s"));
+        }
+    }
+    Ok(())
 }
 
 /// Renders `req` and writes its files; returns the statistics (the run's,
@@ -107,8 +206,70 @@ pub struct RenderRequest<'a> {
 /// samples, or any under [`OnRejected::Error`], writes nothing (exit status 2).
 pub fn render_to_files(req: &RenderRequest, progress: Option<&(dyn Fn(Progress) + Sync)>) -> Result<Stats> {
     let files = &req.files;
-    files.check_types()?;
-    if req.split.kind != SplitKind::None && !files.writes_film() {
+    check_request(req)?;
+    let resume = match &req.resume {
+        Some(p) => Some((p.clone(), Part::read(p)?)),
+        None => None,
+    };
+    // Rounds: asked for, or so that a signal leaves a film.
+    let graceful = req.rounds.on_interrupt == OnInterrupt::Film;
+    let in_rounds = (req.rounds.asked() || graceful)
+        && req.crop.is_none()
+        && req.split.kind == SplitKind::None
+        && req.job.options().adaptive.is_none()
+        && req.job.mode() != crate::choice::Mode::Gradient;
+    // A partial film (a shard, a resumed render, a whole render to resume
+    // later, or one that a signal may stop) is checked against the job
+    // once, here.
+    let film = match files.writes_film() || resume.is_some() || in_rounds {
+        true => Some(FilmRequest::new(req.job, req.split, resume)?),
+        false => None,
+    };
+    let verified = match &film {
+        Some(f) => shard::verify_film(f, req.verify)?,
+        None => None,
+    };
+    let mut out = Planned::new(req, in_rounds && graceful)?;
+    let r = match &film {
+        Some(film) if in_rounds => match render_in_rounds(req, film, &mut out, graceful, progress)? {
+            Ran::Done(r) => r,
+            Ran::Stopped(stats) => return Ok(stats),
+        },
+        Some(film) => {
+            let (r, part) = shard::render_part(film, progress)?;
+            r.stats.rejected().check(req.on_rejected)?;
+            out.stage_main(req, &r, &part)?;
+            r
+        }
+        None => {
+            // Statistics come with the exact work counters (a counted render costs nothing measurable).
+            let counted = files.stats.is_some();
+            let r: Rendered = match &req.crop {
+                Some(c) => render_crop(req.job, c, counted, progress)?,
+                None if counted => render_counted(req.job, progress)?,
+                None => render(req.job, progress)?,
+            };
+            r.stats.rejected().check(req.on_rejected)?;
+            out.outputs.stage(out.main, &r.image.file_bytes(&files.output, out.gamma, files.names.output)?)?;
+            r
+        }
+    };
+    if let (Some(id), Some(f)) = (out.float, &files.float) {
+        out.outputs.stage(id, &r.image.file_bytes(f, 1.0, files.names.float)?)?;
+    }
+    if let Some(id) = out.stats {
+        let mut file = StatsFile::of_render(&r.stats, req.split);
+        file.verified = verified;
+        out.outputs.stage(id, json(&file).as_bytes())?;
+    }
+    out.outputs.commit()?;
+    Ok(r.stats)
+}
+
+/// The checks of a request that need no file read.
+fn check_request(req: &RenderRequest) -> Result<()> {
+    req.files.check_types()?;
+    if req.split.kind != SplitKind::None && !req.files.writes_film() {
         return Err(Error::invalid(
             "shard",
             format!(
@@ -117,61 +278,125 @@ pub fn render_to_files(req: &RenderRequest, progress: Option<&(dyn Fn(Progress) 
             ),
         ));
     }
-    let resume = match &req.resume {
-        Some(p) => Some((p.clone(), Part::read(p)?)),
-        None => None,
-    };
-    // A partial film (a shard, a resumed render, or a whole render to
-    // resume later) is checked against the job once, here.
-    let film = match files.writes_film() || resume.is_some() {
-        true => Some(FilmRequest::new(req.job, req.split, resume)?),
-        false => None,
-    };
-    let verified = match &film {
-        Some(f) => shard::verify_film(f, req.verify)?,
-        None => None,
-    };
-    // The outputs are one transaction: checked now, written only when all
-    // of them are ready. The resume film was read whole above, so the
-    // output (and only the output) may replace it: a render continued in place.
-    let mut outputs = Outputs::new();
-    if let Some(f) = &req.source.file {
-        outputs.input(f, "scene file");
+    check_crop(req)?;
+    check_rounds(req)
+}
+
+/// A render's outputs, checked: the transaction and which output is which.
+struct Planned {
+    outputs: Outputs,
+    main: OutputId,
+    float: Option<OutputId>,
+    stats: Option<OutputId>,
+    /// The film a signal leaves, when the output is not a film itself.
+    interrupt: Option<(PathBuf, OutputId)>,
+    gamma: f32,
+}
+
+impl Planned {
+    /// The outputs are one transaction: checked now, written only when all
+    /// of them are ready. The resume film was read whole before, so the
+    /// output (and only the output) may replace it: a render continued in
+    /// place; with `interruptible`, so may the film a signal leaves.
+    fn new(req: &RenderRequest, interruptible: bool) -> Result<Planned> {
+        let files = &req.files;
+        let mut outputs = Outputs::new();
+        if let Some(f) = req.source.file.as_ref().filter(|f| Some(*f) != req.resume.as_ref()) {
+            outputs.input(f, "scene file");
+        }
+        let interrupt_path = (interruptible && !files.writes_film()).then(|| interrupt_film_path(&files.output));
+        if let Some(p) = &req.resume {
+            let by = if interrupt_path.as_deref() == Some(p.as_path()) { INTERRUPT_FILM } else { files.names.output };
+            outputs.input_replaceable_by(p, "film being resumed", by);
+        }
+        let (main, float, stats) = files.add_to(&mut outputs)?;
+        let interrupt = match interrupt_path {
+            Some(p) => Some((p.clone(), outputs.add(&p, INTERRUPT_FILM)?)),
+            None => None,
+        };
+        let gamma = files.gamma.unwrap_or(req.job.default_gamma());
+        Ok(Planned { outputs, main, float, stats, interrupt, gamma })
     }
-    if let Some(p) = &req.resume {
-        outputs.input_replaceable_by(p, "film being resumed", files.names.output);
-    }
-    let (out_id, float_id, stats_id) = files.add_to(&mut outputs)?;
-    let gamma = files.gamma.unwrap_or(req.job.default_gamma());
-    let r = if let Some(film) = &film {
-        let (r, part) = shard::render_part(film, progress)?;
-        r.stats.rejected().check(req.on_rejected)?;
+
+    /// Stages the main output: the film, or the image.
+    fn stage_main(&mut self, req: &RenderRequest, r: &Rendered, part: &Part) -> Result<()> {
+        let files = &req.files;
         let bytes = if files.writes_film() {
             part.to_bytes()
         } else {
-            r.image.file_bytes(&files.output, gamma, files.names.output)?
+            r.image.file_bytes(&files.output, self.gamma, files.names.output)?
         };
-        outputs.stage(out_id, &bytes)?;
-        r
-    } else {
-        // Statistics come with the exact work counters (a counted render costs nothing measurable).
-        let r: Rendered =
-            if files.stats.is_some() { render_counted(req.job, progress)? } else { render(req.job, progress)? };
-        r.stats.rejected().check(req.on_rejected)?;
-        outputs.stage(out_id, &r.image.file_bytes(&files.output, gamma, files.names.output)?)?;
-        r
-    };
-    if let (Some(id), Some(f)) = (float_id, &files.float) {
-        outputs.stage(id, &r.image.file_bytes(f, 1.0, files.names.float)?)?;
+        self.outputs.stage(self.main, &bytes)
     }
-    if let Some(id) = stats_id {
-        let mut file = StatsFile::of_render(&r.stats, req.split);
-        file.verified = verified;
-        outputs.stage(id, json(&file).as_bytes())?;
-    }
-    outputs.commit()?;
-    Ok(r.stats)
 }
+
+/// How a render in rounds ended.
+enum Ran {
+    /// With an image to write, as every render.
+    Done(Rendered),
+    /// Stopped by a signal: its film written, nothing else.
+    Stopped(Stats),
+}
+
+/// A whole render in rounds ([`crate::rounds`]): previews published as it
+/// goes; a stop by a signal writes only the film of the samples done.
+fn render_in_rounds(
+    req: &RenderRequest,
+    film: &FilmRequest,
+    out: &mut Planned,
+    graceful: bool,
+    progress: Option<&(dyn Fn(Progress) + Sync)>,
+) -> Result<Ran> {
+    let files = &req.files;
+    let (mut r, part, mut report) = {
+        let _graceful = graceful.then(Graceful::enter);
+        let (w, h) = (req.job.settings().width, req.job.settings().height);
+        let (outputs, main, gamma) = (&mut out.outputs, out.main, out.gamma);
+        let mut preview = |tiles: &[TileFilm], _spp: u32| -> Result<()> {
+            let mut image = Image::new(w, h);
+            tiles.iter().for_each(|t| image.put_tile(t));
+            outputs.publish(main, &image.file_bytes(&files.output, gamma, files.names.output)?)
+        };
+        let rr = &req.rounds;
+        let preview = rr.preview_every.map(|_| &mut preview as Preview);
+        let mut schedule = Schedule::new(req.job.settings().spp, rr.time_limit, rr.preview_every, preview, graceful);
+        let (rendered, part) = shard::render_part_in(film, Some(&mut schedule), files.stats.is_some(), progress)?;
+        (rendered, part, schedule.report())
+    };
+    r.stats.rejected().check(req.on_rejected)?;
+    if report.stopped == Some(Stopped::Signal) {
+        // Only the film of the samples done, and only if this run added any.
+        let first = film.resume().map_or(0, |(_, p)| p.header.samples[1]);
+        if part.header.spp <= first {
+            return Err(Error::Interrupted {
+                signal: report.signal_number,
+                message: format!(
+                    "interrupted by {} before a round of samples was done: no output was written",
+                    report.signal.unwrap_or("a signal")
+                ),
+            });
+        }
+        let (path, id) = out.interrupt.clone().unwrap_or_else(|| (files.output.clone(), out.main));
+        for other in [Some(out.main), out.float, out.stats].into_iter().flatten().filter(|&o| o != id) {
+            out.outputs.forget(other);
+        }
+        let mut outputs = std::mem::take(&mut out.outputs);
+        outputs.stage(id, &part.to_bytes())?;
+        outputs.commit()?;
+        report.film = Some(path);
+        r.stats.rounds = Some(report);
+        return Ok(Ran::Stopped(r.stats));
+    }
+    if let Some((_, id)) = out.interrupt {
+        out.outputs.forget(id);
+    }
+    out.stage_main(req, &r, &part)?;
+    r.stats.rounds = Some(report);
+    Ok(Ran::Done(r))
+}
+
+/// What [`Outputs`] calls the film a signal leaves.
+const INTERRUPT_FILM: &str = "the film written on an interrupt";
 
 /// The schema of every statistics file rtow writes (`render --stats-json`
 /// and `merge --stats-json`), named by its `schema` field; docs/figures.md
@@ -229,6 +454,13 @@ pub struct StatsFile {
     /// What was checked by recomputation (a merge's parts, a resumed film);
     /// `null` when nothing was.
     pub verified: Option<shard::Verified>,
+    /// A render in rounds ([`crate::rounds`]): rounds, the samples asked
+    /// for (`spp` is those reached) and why it stopped early (`null`: it did
+    /// not); `null` for a render in one go and for a merge.
+    pub rounds: Option<RoundsReport>,
+    /// The window rendered (`render --crop`: `width` and `height` are the
+    /// whole image's, the hash the window's); `null`: the whole image.
+    pub crop: Option<Crop>,
     pub provenance: Provenance,
 }
 
@@ -280,6 +512,8 @@ impl StatsFile {
             split,
             merge: None,
             verified: None,
+            rounds: st.rounds.clone(),
+            crop: st.crop.clone(),
             provenance: Provenance::collect(),
         }
     }
@@ -324,6 +558,8 @@ impl StatsFile {
                 write_seconds: st.write_seconds,
             }),
             verified: Some(st.verified),
+            rounds: None,
+            crop: None,
             provenance: Provenance::collect(),
         }
     }

@@ -48,7 +48,7 @@
 use crate::error::{Error, Result};
 use std::io::Write;
 use std::path::{Path, PathBuf};
-use std::sync::atomic::{AtomicBool, Ordering};
+use std::sync::atomic::{AtomicBool, AtomicI32, Ordering};
 use std::sync::{Mutex, MutexGuard};
 
 /// Temporary files of staged, uncommitted outputs and the lock files of
@@ -89,17 +89,25 @@ pub fn install_signal_cleanup() {
             let _ = signal_hook::flag::register(SIGXFSZ, std::sync::Arc::new(AtomicBool::new(false)));
             let Ok(mut signals) = signal_hook::iterator::Signals::new([SIGINT, SIGTERM, SIGHUP]) else { return };
             std::thread::spawn(move || {
-                if let Some(sig) = signals.forever().next() {
+                for sig in signals.forever() {
+                    let name = signal_name(sig);
+                    // A render in rounds stops at the end of its round and
+                    // writes a film to resume; a second signal quits at once.
+                    if GRACEFUL.load(Ordering::SeqCst)
+                        && STOP.compare_exchange(0, sig, Ordering::SeqCst, Ordering::SeqCst).is_ok()
+                    {
+                        let _ = writeln!(
+                            std::io::stderr(),
+                            "rtow: {name}: finishing the current round of samples to write a film to resume \
+                             ({name} again quits now, writing nothing)"
+                        );
+                        continue;
+                    }
                     // Held until exit: no commit can start or be half done.
                     let list = pending();
                     for p in list.iter() {
                         let _ = std::fs::remove_file(p);
                     }
-                    let name = match sig {
-                        SIGINT => "SIGINT",
-                        SIGTERM => "SIGTERM",
-                        _ => "SIGHUP",
-                    };
                     // A closed terminal (SIGHUP) may make stderr fail: never panic on it.
                     let _ =
                         writeln!(std::io::stderr(), "{}", interrupted_message(name, COMMITTED.load(Ordering::SeqCst)));
@@ -108,6 +116,60 @@ pub fn install_signal_cleanup() {
             });
         }
     });
+}
+
+/// Set while a run can stop gracefully ([`Graceful`]).
+static GRACEFUL: AtomicBool = AtomicBool::new(false);
+
+/// The signal that asked a graceful run to stop (0: none).
+static STOP: AtomicI32 = AtomicI32::new(0);
+
+#[cfg(unix)]
+fn signal_name(sig: i32) -> &'static str {
+    use signal_hook::consts::{SIGINT, SIGTERM};
+    match sig {
+        SIGINT => "SIGINT",
+        SIGTERM => "SIGTERM",
+        _ => "SIGHUP",
+    }
+}
+
+/// While one is alive, the first SIGINT, SIGTERM or SIGHUP does not end the
+/// process (with [`install_signal_cleanup`]'s handler installed): it is
+/// recorded for [`Graceful::stop_requested`], and the run (a render in
+/// rounds) stops at its next safe point, writes what it has and exits with
+/// 128 + the signal itself. A second signal ends the process as usual.
+pub struct Graceful(());
+
+impl Graceful {
+    /// Starts graceful handling (one at a time; a signal recorded before is forgotten).
+    pub fn enter() -> Graceful {
+        STOP.store(0, Ordering::SeqCst);
+        GRACEFUL.store(true, Ordering::SeqCst);
+        Graceful(())
+    }
+
+    /// The signal that asked to stop, if one did: its name and number.
+    pub fn stop_requested(&self) -> Option<(&'static str, i32)> {
+        stop_signal()
+    }
+}
+
+/// The signal recorded by a [`Graceful`] run, if any.
+pub fn stop_signal() -> Option<(&'static str, i32)> {
+    match STOP.load(Ordering::SeqCst) {
+        0 => None,
+        #[cfg(unix)]
+        sig => Some((signal_name(sig), sig)),
+        #[cfg(not(unix))]
+        sig => Some(("signal", sig)),
+    }
+}
+
+impl Drop for Graceful {
+    fn drop(&mut self) {
+        GRACEFUL.store(false, Ordering::SeqCst);
+    }
 }
 
 /// The lock file of output `target`: `<target>.lock`.
@@ -312,6 +374,8 @@ struct Staged {
     temp: Option<PathBuf>,
     /// This run's lock file of the output (see the module documentation).
     lock: PathBuf,
+    /// Taken out of the transaction ([`Outputs::forget`]).
+    forgotten: bool,
 }
 
 /// A run's outputs: checked, staged and committed together (see the module
@@ -387,7 +451,14 @@ impl Outputs {
         }
         temp_in(dir).map_err(|e| output_error(path, e))?;
         let lock = take_lock(path, &target)?;
-        self.outputs.push(Staged { shown: path.to_path_buf(), target, flag: flag.to_string(), temp: None, lock });
+        self.outputs.push(Staged {
+            shown: path.to_path_buf(),
+            target,
+            flag: flag.to_string(),
+            temp: None,
+            lock,
+            forgotten: false,
+        });
         Ok(OutputId(self.outputs.len() - 1))
     }
 
@@ -415,6 +486,32 @@ impl Outputs {
         Ok(())
     }
 
+    /// Writes output `id` now, atomically (staged, then renamed into place),
+    /// outside the transaction: a preview of an image still being rendered.
+    /// The output keeps its lock and must be staged again before the commit.
+    pub fn publish(&mut self, id: OutputId, bytes: &[u8]) -> Result<()> {
+        self.stage(id, bytes)?;
+        let mut list = pending();
+        let o = &mut self.outputs[id.0];
+        let tmp = o.temp.take().expect("staged above");
+        list.retain(|p| p != &tmp);
+        std::fs::rename(&tmp, &o.target).map_err(|e| {
+            let _ = std::fs::remove_file(&tmp);
+            output_error(&o.shown, e)
+        })
+    }
+
+    /// Takes output `id` out of the transaction: it is not written, its lock
+    /// is released (a render stopped by a signal writes only its film).
+    pub fn forget(&mut self, id: OutputId) {
+        let o = &mut self.outputs[id.0];
+        if let Some(t) = o.temp.take() {
+            remove_temp(&t);
+        }
+        release_lock(&o.lock);
+        o.forgotten = true;
+    }
+
     /// Renames every staged output into place; all or none (see the module
     /// documentation). Every output must have been staged.
     pub fn commit(mut self) -> Result<()> {
@@ -424,6 +521,7 @@ impl Outputs {
             std::thread::sleep(std::time::Duration::from_millis(ms));
         }
         let mut list = pending();
+        self.outputs.retain(|o| !o.forgotten);
         if let Some(o) = self.outputs.iter().find(|o| o.temp.is_none()) {
             return Err(output_error(&o.shown, "was never written (internal error)"));
         }
@@ -492,7 +590,7 @@ fn remove_temp(p: &Path) {
 
 impl Drop for Outputs {
     fn drop(&mut self) {
-        for o in &mut self.outputs {
+        for o in self.outputs.iter_mut().filter(|o| !o.forgotten) {
             if let Some(t) = o.temp.take() {
                 remove_temp(&t);
             }

@@ -11,6 +11,7 @@ use crate::kernel::{gradient, isa, scalar, wavefront, Kernel};
 use crate::plan::{Plan, Prepared};
 use crate::probe::{Observed, Probe, WorkCounters};
 use crate::real::Wide;
+use crate::rounds::Rounds;
 use crate::sampling::{with_path_sampler, PathSampler, Sampler};
 use rayon::prelude::*;
 use serde::Serialize;
@@ -73,6 +74,12 @@ pub struct Stats {
     pub work: Option<WorkCounters>,
     pub image_hash: String,
     pub plan: Plan,
+    /// A render in rounds ([`crate::rounds`]): what the rounds did (`spp`
+    /// above is the samples they reached); `None` for a render in one go.
+    pub rounds: Option<crate::rounds::RoundsReport>,
+    /// The window rendered ([`render_crop`]; `width` and `height` are the
+    /// whole image's); `None`: the whole image.
+    pub crop: Option<Crop>,
 }
 
 impl Stats {
@@ -100,12 +107,20 @@ pub struct Rendered {
     pub stats: Stats,
 }
 
-/// The tiles of rows `rows`, empty (of scale `scale`) or starting from `start`'s accumulators.
-fn tiles(width: u32, rows: Range<u32>, edge: u32, moments: bool, scale: Scale, start: Option<&Film>) -> Vec<TileFilm> {
+/// The tiles of columns `cols` and rows `rows`, empty (of scale `scale`) or
+/// starting from `start`'s accumulators.
+fn tiles(
+    cols: Range<u32>,
+    rows: Range<u32>,
+    edge: u32,
+    moments: bool,
+    scale: Scale,
+    start: Option<&Film>,
+) -> Vec<TileFilm> {
     let mut v = Vec::new();
     for y0 in rows.clone().step_by(edge as usize) {
-        for x0 in (0..width).step_by(edge as usize) {
-            let (w, h) = (edge.min(width - x0), edge.min(rows.end - y0));
+        for x0 in cols.clone().step_by(edge as usize) {
+            let (w, h) = (edge.min(cols.end - x0), edge.min(rows.end - y0));
             let t = match start {
                 Some(f) => f.tile(x0, y0, w, h),
                 None => TileFilm::new(x0, y0, w, h).scaled(scale),
@@ -127,6 +142,8 @@ pub(crate) struct Portion<'a> {
     pub rows: Option<Range<u32>>,
     /// Sample indices (`None`: `0..spp`).
     pub samples: Option<Range<u32>>,
+    /// Columns (`None`: every column); only without a film (`start`, or one kept).
+    pub cols: Option<Range<u32>>,
     /// The accumulators to continue from (their rows include `rows`).
     pub start: Option<&'a Film>,
 }
@@ -144,7 +161,32 @@ pub(crate) fn render_portion(
     portion: Portion,
     progress: Option<&(dyn Fn(Progress) + Sync)>,
 ) -> Result<(Rendered, Option<Film>)> {
-    render_inner(job, portion, true, progress, &|| ()).map(|(r, _, f)| (r, f))
+    render_inner(job, portion, true, None, progress, &|| ()).map(|(r, _, f)| (r, f))
+}
+
+/// Renders a [`Portion`] of every row in the rounds `rounds` decides; returns
+/// the image and accumulators of the samples the rounds reached, and the
+/// end of those samples (the portion's end unless `rounds` stopped early).
+/// With `counted`, the statistics carry the exact work counters.
+pub(crate) fn render_rounds(
+    job: &Job,
+    portion: Portion,
+    rounds: &mut (dyn Rounds + Send),
+    counted: bool,
+    progress: Option<&(dyn Fn(Progress) + Sync)>,
+) -> Result<(Rendered, Option<Film>)> {
+    if !counted {
+        return render_inner(job, portion, true, Some(rounds), progress, &|| ()).map(|(r, _, f)| (r, f));
+    }
+    let (mut r, probes, f) = render_inner(job, portion, true, Some(rounds), progress, &Observed::counting)?;
+    r.stats.work = Some(total_work(&probes));
+    Ok((r, f))
+}
+
+fn total_work(probes: &[Observed]) -> WorkCounters {
+    let mut w = WorkCounters::default();
+    probes.iter().for_each(|p| w.merge(&p.work.total()));
+    w
 }
 
 /// Renders the pixels `pixels` (x, y), each alone and from empty
@@ -177,12 +219,84 @@ pub fn render_pixels(job: &Job, pixels: &[(u32, u32)], samples: Range<u32>) -> V
     tiles
 }
 
+/// A window of the image, in pixels: columns `x` and rows `y` (pbrt's crop
+/// window). Its pixels are bit for bit those of the whole render.
+#[derive(Clone, Debug, PartialEq, Eq, Serialize)]
+pub struct Crop {
+    pub x: Range<u32>,
+    pub y: Range<u32>,
+}
+
+impl Crop {
+    /// `x0,x1,y0,y1`: columns `x0..x1` and rows `y0..y1` (ends excluded).
+    pub fn parse(text: &str) -> Result<Crop> {
+        let bad = || {
+            Error::invalid(
+                "crop",
+                format!(
+                    "'{}' is not x0,x1,y0,y1 (pixels; columns x0..x1 and rows y0..y1, ends excluded)",
+                    crate::output::clip(text)
+                ),
+            )
+        };
+        let v: Vec<u32> = text
+            .split(',')
+            .map(|p| p.trim().parse::<u32>())
+            .collect::<std::result::Result<_, _>>()
+            .map_err(|_| bad())?;
+        match v[..] {
+            [x0, x1, y0, y1] => Ok(Crop { x: x0..x1, y: y0..y1 }),
+            _ => Err(bad()),
+        }
+    }
+
+    /// Refuses a window that is empty or not inside a `width` x `height` image.
+    pub fn check(&self, width: u32, height: u32) -> Result<()> {
+        let (x, y) = (&self.x, &self.y);
+        if x.is_empty() || y.is_empty() || x.end > width || y.end > height {
+            return Err(Error::invalid(
+                "crop",
+                format!(
+                    "columns {}..{} and rows {}..{} are not a window of the {width}x{height} image (each range \
+                     non-empty, x1 <= {width}, y1 <= {height})",
+                    x.start, x.end, y.start, y.end
+                ),
+            ));
+        }
+        Ok(())
+    }
+}
+
+/// Renders the window `crop` of `job`'s image (checked: [`Crop::check`]):
+/// an image of the window's size, its pixels bit for bit the whole render's.
+/// With `counted`, the statistics carry the exact work counters; the
+/// statistics' image hash is the window's.
+pub fn render_crop(
+    job: &Job,
+    crop: &Crop,
+    counted: bool,
+    progress: Option<&(dyn Fn(Progress) + Sync)>,
+) -> Result<Rendered> {
+    let s = job.settings();
+    crop.check(s.width, s.height)?;
+    let portion = Portion { rows: Some(crop.y.clone()), cols: Some(crop.x.clone()), ..Default::default() };
+    let mut r = if counted {
+        let (mut r, probes, _) = render_inner(job, portion, false, None, progress, &Observed::counting)?;
+        r.stats.work = Some(total_work(&probes));
+        r
+    } else {
+        render_inner(job, portion, false, None, progress, &|| ())?.0
+    };
+    r.image = r.image.crop(crop.x.clone(), crop.y.clone());
+    r.stats.image_hash = format!("{:016x}", r.image.hash());
+    r.stats.crop = Some(crop.clone());
+    Ok(r)
+}
+
 /// Renders with the exact work counters on (`Stats::work`).
 pub fn render_counted(job: &Job, progress: Option<&(dyn Fn(Progress) + Sync)>) -> Result<Rendered> {
     let (mut r, probes) = render_probed(job, progress, &Observed::counting)?;
-    let mut w = WorkCounters::default();
-    probes.iter().for_each(|p| w.merge(&p.work.total()));
-    r.stats.work = Some(w);
+    r.stats.work = Some(total_work(&probes));
     Ok(r)
 }
 
@@ -192,13 +306,14 @@ pub fn render_probed<P: Probe + Send>(
     progress: Option<&(dyn Fn(Progress) + Sync)>,
     make: &(dyn Fn() -> P + Sync),
 ) -> Result<(Rendered, Vec<P>)> {
-    render_inner(job, Portion::default(), false, progress, make).map(|(r, p, _)| (r, p))
+    render_inner(job, Portion::default(), false, None, progress, make).map(|(r, p, _)| (r, p))
 }
 
 fn render_inner<P: Probe + Send>(
     job: &Job,
     portion: Portion,
     keep_film: bool,
+    rounds: Option<&mut (dyn Rounds + Send)>,
     progress: Option<&(dyn Fn(Progress) + Sync)>,
     make: &(dyn Fn() -> P + Sync),
 ) -> Result<(Rendered, Vec<P>, Option<Film>)> {
@@ -212,13 +327,20 @@ fn render_inner<P: Probe + Send>(
     let threads = pool.current_num_threads();
     let t1 = Instant::now();
     let rows = portion.rows.clone().unwrap_or(0..settings.height);
+    let cols = portion.cols.clone().unwrap_or(0..settings.width);
+    debug_assert!(cols == (0..settings.width) || (!keep_film && portion.start.is_none()), "films hold whole rows");
     let samples = portion.samples.clone().unwrap_or(0..settings.spp);
     debug_assert!(rows.start <= rows.end && rows.end <= settings.height && samples.end <= settings.spp);
     debug_assert!(portion.start.is_none_or(|f| f.rows.start <= rows.start && f.rows.end >= rows.end));
-    let work = Work { rows, samples, start: portion.start, keep_film };
-    let out = pool.install(|| render_prepared(prep, job.kernel(), opts.tile, &work, progress, make));
+    let work = Work { cols, rows, samples, start: portion.start, keep_film };
+    let in_rounds = rounds.is_some();
+    let out = pool.install(|| render_prepared(prep, job.kernel(), opts.tile, &work, rounds, progress, make))?;
     let seconds = t1.elapsed().as_secs_f64();
-    let stats = Stats::new(job, &out, seconds, threads);
+    let mut stats = Stats::new(job, &out, seconds, threads);
+    if in_rounds {
+        // Rounds that stopped early rendered the image of the samples they reached.
+        stats.spp = out.reached;
+    }
     Ok((Rendered { image: out.image, stats }, out.probes, out.film))
 }
 
@@ -254,6 +376,8 @@ impl Stats {
             work: None,
             image_hash: format!("{:016x}", out.image.hash()),
             plan: job.plan().clone(),
+            rounds: None,
+            crop: None,
         }
     }
 }
@@ -261,6 +385,7 @@ impl Stats {
 /// What a render does: rows, sample indices, where the accumulators start,
 /// and whether the caller wants them back.
 struct Work<'a> {
+    cols: Range<u32>,
     rows: Range<u32>,
     samples: Range<u32>,
     start: Option<&'a Film>,
@@ -279,6 +404,8 @@ struct Finished<P> {
     probes: Vec<P>,
     /// The accumulators of the rows rendered (`None` for the gradient).
     film: Option<Film>,
+    /// The end of the sample indices rendered (the settings' spp for the gradient).
+    reached: u32,
 }
 
 fn render_prepared<P: Probe + Send>(
@@ -286,57 +413,104 @@ fn render_prepared<P: Probe + Send>(
     kernel: Kernel,
     tile: u32,
     work: &Work,
+    rounds: Option<&mut (dyn Rounds + Send)>,
     progress: Option<&(dyn Fn(Progress) + Sync)>,
     make: &(dyn Fn() -> P + Sync),
-) -> Finished<P> {
+) -> Result<Finished<P>> {
     let s = prep.settings;
-    let mut image = Image::new(s.width, s.height);
     if prep.plan.mode == Mode::Gradient {
-        for y in 0..s.height {
-            for x in 0..s.width {
-                image.data[(y * s.width + x) as usize] = gradient(x, y, s.width, s.height);
-            }
-        }
-        return Finished {
-            image,
-            rays: 0,
-            shadow_rays: 0,
-            rejected: 0,
-            rejected_out_of_range: 0,
-            traced: None,
-            probes: Vec::new(),
-            film: None,
-        };
+        return Ok(gradient_image(s.width, s.height, s.spp));
     }
     let moments = prep.estimator.adaptive.is_some();
     let scale = prep.plan.film_scale();
     debug_assert!(work.start.is_none_or(|f| f.scale == scale), "a film of another scale is refused before");
-    let mut films = tiles(s.width, work.rows.clone(), tile, moments, scale, work.start);
+    let mut films = tiles(work.cols.clone(), work.rows.clone(), tile, moments, scale, work.start);
     let started: u64 = films.iter().flat_map(|t| &t.count).map(|&c| c as u64).sum();
-    let total = films.len() as u64;
+    // Progress counts tiles, each once per sample of its round: a render in
+    // rounds goes over every tile once a round.
+    let samples = work.samples.clone();
+    let per_tile = samples.len().max(1) as u64;
+    let total = films.len() as u64 * per_tile;
     let done = AtomicU64::new(0);
     let rays = AtomicU64::new(0);
+    let round = AtomicU64::new(per_tile);
     let report = |n: u64| {
-        let d = done.fetch_add(1, Ordering::Relaxed) + 1;
+        let k = round.load(Ordering::Relaxed);
+        let d = done.fetch_add(k, Ordering::Relaxed) + k;
         let r = rays.fetch_add(n, Ordering::Relaxed) + n;
         if let Some(p) = progress {
             p(Progress { tiles_done: d, tiles_total: total, rays: r });
         }
     };
-    let samples = work.samples.clone();
     // The one place the kernel and the sampler become types.
-    let probes: Vec<P> = with_path_sampler!(s.sampler, sampler => match kernel {
-        Kernel::Scalar => scalar_tiles(prep, sampler, &mut films, samples, &report, make),
-        Kernel::Simd8 => wide_tiles::<f32x8, P, _>(prep, sampler, &mut films, samples, &report, make),
-        Kernel::Simd16 => wide_tiles::<f32x16, P, _>(prep, sampler, &mut films, samples, &report, make),
-    });
+    let trace = |films: &mut [TileFilm], samples: Range<u32>| -> Vec<P> {
+        with_path_sampler!(s.sampler, sampler => match kernel {
+            Kernel::Scalar => scalar_tiles(prep, sampler, films, samples, &report, make),
+            Kernel::Simd8 => wide_tiles::<f32x8, P, _>(prep, sampler, films, samples, &report, make),
+            Kernel::Simd16 => wide_tiles::<f32x16, P, _>(prep, sampler, films, samples, &report, make),
+        })
+    };
+    let (probes, reached) = match rounds {
+        None => (trace(&mut films, samples.clone()), samples.end),
+        Some(rounds) => in_rounds(&mut films, samples, rounds, &round, trace)?,
+    };
     // The film is gathered only for a caller that wants it (a partial film):
     // a plain render writes the image straight from the tiles.
-    let mut film = work.keep_film.then(|| Film::new(s.width, s.height, work.rows.clone(), moments).scaled(scale));
-    let mut rejected = 0;
-    let mut rejected_out_of_range = 0;
-    let mut shadow_rays = 0;
-    let mut traced = 0;
+    let film = work.keep_film.then(|| Film::new(s.width, s.height, work.rows.clone(), moments).scaled(scale));
+    let mut out = gather(films, Image::new(s.width, s.height), film);
+    out.traced = out.traced.map(|t| t - started);
+    Ok(Finished { rays: rays.into_inner(), probes, reached, ..out })
+}
+
+/// The gradient (a scene that traces no samples), as a finished render.
+fn gradient_image<P>(width: u32, height: u32, spp: u32) -> Finished<P> {
+    let mut image = Image::new(width, height);
+    for y in 0..height {
+        for x in 0..width {
+            image.data[(y * width + x) as usize] = gradient(x, y, width, height);
+        }
+    }
+    Finished {
+        image,
+        rays: 0,
+        shadow_rays: 0,
+        rejected: 0,
+        rejected_out_of_range: 0,
+        traced: None,
+        probes: Vec::new(),
+        film: None,
+        reached: spp,
+    }
+}
+
+/// Traces `samples` in the rounds `rounds` decides (`round` holds the
+/// samples of the round under way, for progress); returns the probes of
+/// every round and the end of the samples reached.
+fn in_rounds<P>(
+    films: &mut [TileFilm],
+    samples: Range<u32>,
+    rounds: &mut (dyn Rounds + Send),
+    round: &AtomicU64,
+    trace: impl Fn(&mut [TileFilm], Range<u32>) -> Vec<P>,
+) -> Result<(Vec<P>, u32)> {
+    let mut probes = Vec::new();
+    let mut reached = samples.start;
+    while let Some(end) = rounds.next(reached, samples.end) {
+        debug_assert!(reached < end && end <= samples.end);
+        round.store((end - reached) as u64, Ordering::Relaxed);
+        let t = Instant::now();
+        probes.extend(trace(films, reached..end));
+        reached = end;
+        rounds.ended(films, reached, t.elapsed().as_secs_f64())?;
+    }
+    Ok((probes, reached))
+}
+
+/// The tiles into the image (through `film`, when the caller keeps one),
+/// with their counts (`traced`: every sample the tiles hold, resumed ones
+/// included; no rays, probes or samples reached).
+fn gather<P>(films: Vec<TileFilm>, mut image: Image, mut film: Option<Film>) -> Finished<P> {
+    let (mut rejected, mut rejected_out_of_range, mut shadow_rays, mut traced) = (0, 0, 0, 0);
     // Tiles are dropped as they are copied: the peak stays near one film.
     for t in films {
         match &mut film {
@@ -351,8 +525,18 @@ fn render_prepared<P: Probe + Send>(
     if let Some(f) = &film {
         f.write_into(&mut image);
     }
-    let traced = Some(traced - started);
-    Finished { image, rays: rays.into_inner(), shadow_rays, rejected, rejected_out_of_range, traced, probes, film }
+    let traced = Some(traced);
+    Finished {
+        image,
+        rays: 0,
+        shadow_rays,
+        rejected,
+        rejected_out_of_range,
+        traced,
+        probes: Vec::new(),
+        film,
+        reached: 0,
+    }
 }
 
 fn scalar_tiles<P: Probe + Send, S: PathSampler>(

@@ -12,7 +12,8 @@ use crate::estimator::{Adaptive, Estimator, Roulette};
 use crate::film::part::{self, PartCounters, Pixel};
 use crate::film::Film;
 use crate::job::{Job, Overrides, RenderOptions};
-use crate::render::{render_pixels, render_portion, Portion, Progress, Rendered};
+use crate::render::{render_pixels, render_portion, render_rounds, Portion, Progress, Rendered};
+use crate::rounds::Rounds;
 use crate::settings::Settings;
 use serde::Serialize;
 use std::path::{Path, PathBuf};
@@ -117,10 +118,48 @@ fn check(job: &Job, split: Split, resume: Option<&(PathBuf, Part)>) -> Result<()
     Ok(())
 }
 
+/// A render to continue, read from its partial film alone.
+pub struct FilmScene {
+    /// The film's embedded scene, named after the film (files it names are
+    /// found beside the film).
+    pub source: crate::scene::SceneSource,
+    /// The settings its header records (`spp`: the samples it holds).
+    pub settings: Settings,
+    /// Its roulette and adaptive sampling.
+    pub estimator: Estimator,
+}
+
+/// The scene and settings of the render a partial film is of: what
+/// `render --resume FILM` continues when it is given no scene. The film's
+/// data is checked when it is resumed.
+pub fn scene_of_film(path: &Path) -> Result<FilmScene> {
+    let part = Part::read(path)?;
+    let s = RenderSettings::of(&part.header).map_err(|m| Error::Input(format!("{}: {m}", path.display())))?;
+    let text = std::str::from_utf8(&part.scene)
+        .map_err(|e| Error::Input(format!("{}: the embedded scene is not UTF-8: {e}", path.display())))?;
+    let scene = crate::scene::scene_from_str(text, crate::scene::Format::Json, path)?;
+    let name = path.file_stem().map_or_else(|| "film".into(), |s| s.to_string_lossy().into_owned());
+    let source = crate::scene::SceneSource { scene, name, file: Some(path.to_path_buf()) };
+    Ok(FilmScene { source, settings: s.settings, estimator: s.estimator })
+}
+
 /// Renders the request's portion of its job (checked when the request was
 /// made): the image (of this run's rows), its statistics, and the partial
 /// film to write.
 pub fn render_part(req: &FilmRequest, progress: Option<&(dyn Fn(Progress) + Sync)>) -> Result<(Rendered, Part)> {
+    render_part_in(req, None, false, progress)
+}
+
+/// [`render_part`], in the rounds of samples `rounds` decides when given
+/// (a whole render: [`crate::rounds`]): the film is then of the samples the
+/// rounds reached, a whole render of that many samples per pixel. With
+/// `counted`, the statistics carry the exact work counters.
+pub(crate) fn render_part_in(
+    req: &FilmRequest,
+    rounds: Option<&mut (dyn Rounds + Send)>,
+    counted: bool,
+    progress: Option<&(dyn Fn(Progress) + Sync)>,
+) -> Result<(Rendered, Part)> {
     let job = req.job;
     let settings = job.settings();
     let (start, mut counters) = match &req.resume {
@@ -130,11 +169,19 @@ pub fn render_part(req: &FilmRequest, progress: Option<&(dyn Fn(Progress) + Sync
     let first = req.resume.as_ref().map_or(0, |(_, p)| p.header.samples[1]);
     let samples = req.split.samples(settings.spp);
     let portion = Portion {
+        cols: None,
         rows: Some(req.split.rows(settings.height)),
         samples: Some(samples.start.max(first)..samples.end),
         start,
     };
-    let (rendered, film) = render_portion(job, portion, progress)?;
+    let in_rounds = rounds.is_some();
+    let (rendered, film) = match rounds {
+        None => render_portion(job, portion, progress)?,
+        Some(rounds) => {
+            debug_assert!(req.split.kind == SplitKind::None, "only a whole render goes in rounds");
+            render_rounds(job, portion, rounds, counted, progress)?
+        }
+    };
     let film = film.ok_or_else(|| Error::Input("this scene traces no samples: it has no film".into()))?;
     let st = &rendered.stats;
     counters.add(&PartCounters {
@@ -143,7 +190,9 @@ pub fn render_part(req: &FilmRequest, progress: Option<&(dyn Fn(Progress) + Sync
         rejected_samples: st.rejected_samples,
         rejected_out_of_range: st.rejected_out_of_range,
     });
-    let part = Part::new(&job.identity(), job.scene_json(), settings.spp, req.split, film, counters);
+    // Rounds that stopped early: a whole render of the samples reached.
+    let spp = if in_rounds { rendered.stats.spp } else { settings.spp };
+    let part = Part::new(&job.identity(), job.scene_json(), spp, req.split, film, counters);
     Ok((rendered, part))
 }
 

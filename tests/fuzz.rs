@@ -616,6 +616,8 @@ fn check_film(films: &Films, which: usize, bytes: &[u8]) -> Result<&'static str,
             verify,
             files: out,
             on_rejected: rtow::OnRejected::Warn,
+            rounds: Default::default(),
+            crop: None,
         };
         files::render_to_files(&req, None).map(|_| "resumed")
     } else {

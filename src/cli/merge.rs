@@ -13,8 +13,9 @@ pub struct MergeArgs {
     /// The partial films (.rtfilm) of one render: every shard of its split, in any order.
     #[arg(required = true, value_name = "PART")]
     parts: Vec<PathBuf>,
-    /// Output PNG (8-bit, gamma encoded), or a partial film (.rtfilm) of the
-    /// whole render (to resume it with more samples later).
+    /// Output image by its extension: PNG (8-bit, gamma encoded), EXR or PFM
+    /// (linear), or a partial film (.rtfilm) of the whole render (to resume
+    /// it with more samples later).
     #[arg(short, long)]
     output: PathBuf,
     #[command(flatten)]

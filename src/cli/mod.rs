@@ -106,7 +106,7 @@ fn cmd_stress(quick: bool, seed: u64, threads: Option<usize>) -> Result<u8> {
 /// stress); 3 when a comparison exceeded a threshold (diff).
 fn run(cli: Cli) -> Result<u8> {
     match cli.command {
-        Command::Render(a) => render::run(a).map(|_| 0),
+        Command::Render(a) => render::run(a),
         Command::Merge(a) => merge::run(a).map(|_| 0),
         Command::Bench(a) => bench::run(a).map(|ok| if ok { 0 } else { 1 }),
         Command::Converge(a) => converge::run(a).map(|_| 0),

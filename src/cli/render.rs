@@ -6,19 +6,26 @@ use super::args::{choice, kernel_parser, EstimatorArgs, ImageArgs, OutputArgs, R
 use super::{say, tell};
 use clap::Args;
 use indicatif::{ProgressBar, ProgressStyle};
+use rtow::files::RoundsRequest;
 use rtow::files::{self, RenderRequest};
+use rtow::rounds::Stopped;
 use rtow::shard::{Split, SplitKind};
 use rtow::{Job, KernelChoice, Progress, Result, Stats};
+use rtow::{OnInterrupt, Overrides};
 use std::io::IsTerminal;
 use std::path::PathBuf;
+use std::time::Duration;
 use std::time::Instant;
 
 #[derive(Args)]
 pub struct RenderArgs {
-    /// A preset name (see `rtow scenes`) or a scene file (.json / .toml).
-    scene: String,
-    /// Output PNG (8-bit, gamma encoded), or a partial film (.rtfilm) for
-    /// `rtow merge` or `--resume` [default: <scene name>.png]
+    /// A preset name (see `rtow scenes`) or a scene file (.json / .toml);
+    /// with --resume it may be left out: the film's own scene and settings.
+    #[arg(required_unless_present = "resume")]
+    scene: Option<String>,
+    /// Output image by its extension: PNG (8-bit, gamma encoded), EXR or PFM
+    /// (linear), or a partial film (.rtfilm) for `rtow merge` or `--resume`
+    /// [default: <scene name>.png]
     #[arg(short, long)]
     output: Option<PathBuf>,
     /// Render only the K-th of N deterministic pieces of the work (K from 1 to N)
@@ -33,8 +40,30 @@ pub struct RenderArgs {
     split: SplitKind,
     /// Continue a render that wrote a partial film with fewer samples per
     /// pixel (same scene and settings): gives exactly the image of --spp.
+    /// Without a scene, the film's own scene and settings (flags given still win).
     #[arg(long, value_name = "FILE")]
     resume: Option<PathBuf>,
+    /// Render whole rounds of samples while the next fits in DURATION (e.g.
+    /// 30s, 10m, 1h30m), then write the image of the samples reached (at
+    /// least one per pixel; --spp is the most): exactly the render of that
+    /// sample count, which the summary and --stats-json give.
+    #[arg(long, value_name = "DURATION", value_parser = duration)]
+    time_limit: Option<Duration>,
+    /// Rewrite the output image (atomically, for a viewer to reload) after
+    /// the first round of samples and then every DURATION (e.g. 10s).
+    #[arg(long, value_name = "DURATION", value_parser = duration)]
+    preview_every: Option<Duration>,
+    /// On SIGINT, SIGTERM or SIGHUP: film (finish the round of samples under
+    /// way, write a film of the samples done to resume: the output's name
+    /// with .rtfilm; a second signal quits at once) or quit (stop at once).
+    /// Either way the other outputs are not written.
+    #[arg(long, value_parser = choice::<OnInterrupt>(OnInterrupt::NAMES), default_value = "film")]
+    on_interrupt: OnInterrupt,
+    /// Render only the window of columns x0..x1 and rows y0..y1 (pixels,
+    /// ends excluded) into an image of its size, its pixels bit for bit
+    /// those of the whole render. In one go, to an image.
+    #[arg(long, value_name = "x0,x1,y0,y1", allow_hyphen_values = true)]
+    crop: Option<String>,
     // How the film to resume is checked (--verify N --verify-seed S).
     #[command(flatten)]
     verify: VerifyArgs,
@@ -91,10 +120,37 @@ pub fn with_progress<T>(quiet: bool, work: impl FnOnce(Option<&(dyn Fn(Progress)
     out
 }
 
-pub fn run(a: RenderArgs) -> Result<()> {
-    let source = a.image.open(&a.scene)?;
-    let options = a.estimator.options(a.run.options(a.kernel))?;
-    let job = Job::from_source(&source, &a.image.overrides(), &options)?;
+/// A duration as humans write one: `30s`, `10m`, `1h30m`, `500ms`.
+fn duration(text: &str) -> std::result::Result<Duration, String> {
+    humantime::parse_duration(text).map_err(|e| format!("{e} (write e.g. 30s, 10m, 1h30m)"))
+}
+
+/// The scene to render and the settings under the flags: the scene named,
+/// or a film's own (`--resume FILM` without a scene).
+fn scene_and_settings(a: &RenderArgs) -> Result<(rtow::SceneSource, Overrides, rtow::RenderOptions)> {
+    let mut options = a.estimator.options(a.run.options(a.kernel))?;
+    let overrides = a.image.overrides();
+    match (&a.scene, &a.resume) {
+        (Some(spec), _) => Ok((a.image.open(spec)?, overrides, options)),
+        (None, Some(film)) => {
+            let f = rtow::shard::scene_of_film(film)?;
+            let mut source = f.source;
+            if let Some(level) = a.image.tessellate {
+                source.scene = source.scene.tessellate(level)?;
+            }
+            options.roulette = options.roulette.or(f.estimator.roulette);
+            options.adaptive = options.adaptive.or(f.estimator.adaptive);
+            Ok((source, overrides.or(&Overrides::from(f.settings)), options))
+        }
+        (None, None) => Err(rtow::Error::invalid("scene", "name a scene, or a film with --resume")),
+    }
+}
+
+/// Renders; the exit status is 0, or 128 + the signal that stopped the
+/// render (its film written).
+pub fn run(a: RenderArgs) -> Result<u8> {
+    let (source, overrides, options) = scene_and_settings(&a)?;
+    let job = Job::from_source(&source, &overrides, &options)?;
     for w in job.warnings() {
         tell!("warning: {}", rtow::output::printable(&super::message(w)));
     }
@@ -111,6 +167,12 @@ pub fn run(a: RenderArgs) -> Result<()> {
         verify: a.verify.verify(),
         files: a.files.files(output.clone()),
         on_rejected: a.rejected.on_rejected,
+        rounds: RoundsRequest {
+            time_limit: a.time_limit,
+            preview_every: a.preview_every,
+            on_interrupt: a.on_interrupt,
+        },
+        crop: a.crop.as_deref().map(rtow::Crop::parse).transpose()?,
     };
     if a.explain {
         say!("{}", job.explain());
@@ -120,10 +182,26 @@ pub fn run(a: RenderArgs) -> Result<()> {
     if let Some(w) = st.rejected().warning() {
         tell!("warning: {w}");
     }
+    if let Some(r) = st.rounds.as_ref().filter(|r| r.stopped == Some(Stopped::Signal)) {
+        // Said even with -q: the outputs asked for were not written.
+        let film = r.film.as_deref().unwrap_or(&output);
+        tell!(
+            "rtow: {}: stopped after {} of {} samples per pixel; wrote only {} (continue: rtow render --resume {} \
+             --spp {} -o {})",
+            r.signal.unwrap_or("signal"),
+            st.spp,
+            r.spp_requested,
+            film.display(),
+            film.display(),
+            r.spp_requested,
+            output.display()
+        );
+        return Ok((128 + r.signal_number).clamp(0, 255) as u8);
+    }
     if !a.quiet {
         say!("{}", summary(&source.name, &st, &req, &output));
     }
-    Ok(())
+    Ok(0)
 }
 
 /// The one line a render ends with.
@@ -140,6 +218,16 @@ fn summary(name: &str, st: &Stats, req: &RenderRequest, output: &std::path::Path
     };
     let rejected =
         if st.rejected_samples > 0 { format!(", {} samples rejected", st.rejected_samples) } else { String::new() };
+    let piece = match &st.crop {
+        Some(c) => format!("{piece} (window {}..{} x {}..{})", c.x.start, c.x.end, c.y.start, c.y.end),
+        None => piece,
+    };
+    let piece = match &st.rounds {
+        Some(r) if r.stopped == Some(Stopped::TimeLimit) => {
+            format!("{piece} (time limit: {} of {} spp, in {} rounds)", st.spp, r.spp_requested, r.rounds)
+        }
+        _ => piece,
+    };
     let shadow = if st.shadow_rays > 0 {
         format!(" + {} shadow rays = {:.2} M/s", st.shadow_rays, st.mshadow_rays_per_s)
     } else {

@@ -390,6 +390,17 @@ impl Image {
         }
     }
 
+    /// The pixels of columns `x` and rows `y` (within the image), as an image of their own.
+    pub fn crop(&self, x: Range<u32>, y: Range<u32>) -> Image {
+        let mut out = Image::new(x.len() as u32, y.len() as u32);
+        for (row, yy) in y.enumerate() {
+            let from = (yy * self.width + x.start) as usize;
+            let to = row * x.len();
+            out.data[to..to + x.len()].copy_from_slice(&self.data[from..from + x.len()]);
+        }
+        out
+    }
+
     /// FNV-1a over the bits of every value: equal hashes, identical images.
     pub fn hash(&self) -> u64 {
         let mut h: u64 = 0xcbf2_9ce4_8422_2325;

@@ -98,6 +98,22 @@ impl Overrides {
 }
 
 /// Exactly these settings, whatever the scene's table says.
+impl Overrides {
+    /// These overrides, with `base`'s values where these have none.
+    pub fn or(&self, base: &Overrides) -> Overrides {
+        Overrides {
+            width: self.width.or(base.width),
+            height: self.height.or(base.height),
+            spp: self.spp.or(base.spp),
+            max_depth: self.max_depth.or(base.max_depth),
+            seed: self.seed.or(base.seed),
+            sampler: self.sampler.or(base.sampler),
+            estimator: self.estimator.or(base.estimator),
+            book: self.book || base.book,
+        }
+    }
+}
+
 impl From<Settings> for Overrides {
     fn from(s: Settings) -> Overrides {
         Overrides {

@@ -22,7 +22,7 @@ const LAYERS: &[(&str, &[&str])] = &[
         &["handle", "probe", "film", "material", "texture", "geometry", "camera", "estimator", "plan", "kernel"],
     ),
     ("bridge", &["job"]),
-    ("driver", &["render", "shard", "files", "provenance"]),
+    ("driver", &["render", "rounds", "shard", "files", "provenance"]),
     ("instruments", &["instruments"]),
 ];
 
