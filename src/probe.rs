@@ -14,6 +14,7 @@
 //! sample index, which do not depend on kernel, tile or thread.
 
 pub use crate::geometry::work::{Counter, Work};
+use crate::handle::Kind;
 use crate::real::{Real, MAX_LANES};
 use crate::vec3::V3;
 use std::any::Any;
@@ -104,6 +105,16 @@ pub trait Probe: Counter {
     /// bit for bit, and only when [`Probe::PATHS`].
     #[inline(always)]
     fn contributed(&mut self, _id: PathId<f32>, _length: u32, _strategy: Strategy, _c: V3<f32>) {}
+
+    /// Path `id` scattered at a vertex whose material is of kind `kind`
+    /// (`Isotropic`: inside a medium): its next direction `dir`, the
+    /// attenuation `atten` it multiplies the throughput by (the albedo times
+    /// the estimator's weight) and `pdf`, the density of `dir` that weighs a
+    /// light the next ray hits under `nee-mis` (0 for a specular bounce and
+    /// under `book`, whose weight holds the mixture's density). Called by the
+    /// scalar kernel, only when [`Probe::PATHS`].
+    #[inline(always)]
+    fn scattered(&mut self, _id: PathId<f32>, _kind: Kind, _dir: V3<f32>, _atten: [f32; 3], _pdf: f32) {}
 
     /// `n` rays are traced next, each the `depth`-th of its path (0: camera rays).
     #[inline(always)]
@@ -322,6 +333,9 @@ pub trait PathEvents: Send {
     /// [`Probe::contributed`].
     fn contributed(&mut self, _id: PathId<f32>, _length: u32, _strategy: Strategy, _c: V3<f32>) {}
 
+    /// [`Probe::scattered`].
+    fn scattered(&mut self, _id: PathId<f32>, _kind: Kind, _dir: V3<f32>, _atten: [f32; 3], _pdf: f32) {}
+
     /// What the tool keeps of this observer once its tile is rendered.
     fn finish(self: Box<Self>) -> Box<dyn Any + Send>;
 }
@@ -405,6 +419,13 @@ impl Probe for Observed<'_> {
     fn contributed(&mut self, id: PathId<f32>, length: u32, strategy: Strategy, c: V3<f32>) {
         if let Some(e) = &mut self.events {
             e.contributed(id, length, strategy, c);
+        }
+    }
+
+    #[inline]
+    fn scattered(&mut self, id: PathId<f32>, kind: Kind, dir: V3<f32>, atten: [f32; 3], pdf: f32) {
+        if let Some(e) = &mut self.events {
+            e.scattered(id, kind, dir, atten, pdf);
         }
     }
 

@@ -240,6 +240,8 @@ pub fn flag_of(field: &str) -> Option<&'static str> {
         "time_limit" => "--time-limit",
         "preview_every" => "--preview-every",
         "crop" => "--crop",
+        "trace_pixel" => "--trace-pixel",
+        "trace_samples" => "--trace-samples",
         "gamma" => "--gamma",
         "kernels" => "--kernels",
         "variants" => "--variants",

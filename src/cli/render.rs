@@ -64,6 +64,20 @@ pub struct RenderArgs {
     /// those of the whole render. In one go, to an image.
     #[arg(long, value_name = "x0,x1,y0,y1", allow_hyphen_values = true)]
     crop: Option<String>,
+    /// Print the paths of pixel (x, y) event by event (hits, materials,
+    /// normals, scattered directions with their densities and attenuations,
+    /// the terms added to the radiance) for --trace-samples samples, and the
+    /// pixel's value over them; renders nothing else, writes no file.
+    #[arg(
+        long,
+        value_name = "x,y",
+        allow_hyphen_values = true,
+        conflicts_with_all = ["output", "shard", "resume", "crop", "time_limit", "preview_every", "float", "stats_json"]
+    )]
+    trace_pixel: Option<String>,
+    /// How many samples --trace-pixel follows (its first ones, 1 to 64).
+    #[arg(long, value_name = "N", default_value_t = 4, requires = "trace_pixel")]
+    trace_samples: u32,
     // How the film to resume is checked (--verify N --verify-seed S).
     #[command(flatten)]
     verify: VerifyArgs,
@@ -153,6 +167,11 @@ pub fn run(a: RenderArgs) -> Result<u8> {
     let job = Job::from_source(&source, &overrides, &options)?;
     for w in job.warnings() {
         tell!("warning: {}", rtow::output::printable(&super::message(w)));
+    }
+    if let Some(pixel) = &a.trace_pixel {
+        let (x, y) = rtow::instruments::trace::parse_pixel(pixel)?;
+        say!("{}", rtow::instruments::trace::trace_pixel(&job, x, y, 0..a.trace_samples)?.trim_end());
+        return Ok(0);
     }
     let split = match &a.shard {
         Some(k) => Split::parse(k, a.split)?,

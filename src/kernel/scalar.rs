@@ -326,14 +326,15 @@ fn step<P: Probe, const M: bool>(
         }
         return Some(if black { (path.sum.to_array(), rays, path.shadow_rays) } else { path.end(rays, c) });
     }
-    let (next_o, dir, atten, shadow) = if hit >= MEDIUM_BASE {
-        medium_vertex(v, path, hit, t, rng)
+    let (next_o, dir, atten, shadow, kind) = if hit >= MEDIUM_BASE {
+        let (o, dir, atten, shadow) = medium_vertex(v, path, hit, t, rng);
+        (o, dir, atten, shadow, Kind::Isotropic)
     } else {
         match shade::<P, M>(v, path, hit, t, rng, probe) {
-            Ok((dir, atten, srf, dir_pdf, shadow, diffuse)) => {
+            Ok((dir, atten, srf, dir_pdf, shadow, kind)) => {
                 path.pdf = dir_pdf;
-                path.scattered = diffuse;
-                (spawn(&srf, dir), dir, atten, shadow)
+                path.scattered = kind == Kind::Lambertian;
+                (spawn(&srf, dir), dir, atten, shadow, kind)
             }
             Err(c) => {
                 if P::PATHS && probe.paths() {
@@ -344,6 +345,9 @@ fn step<P: Probe, const M: bool>(
             }
         }
     };
+    if P::PATHS && probe.paths() {
+        probe.scattered(path.id, kind, dir, atten, path.pdf);
+    }
     if let Some(sh) = shadow {
         trace_shadow::<P, M>(prep, path, sh, rays, probe);
     }
@@ -411,8 +415,8 @@ fn trace_shadow<P: Probe, const M: bool>(prep: &Prepared, path: &mut Path, sh: S
 
 /// A scattered path: its new direction, the attenuation, the surface it
 /// leaves, the direction's density (0: specular), its light sample, and
-/// whether the vertex is diffuse.
-type Scattered = (V3<f32>, [f32; 3], Surface<f32>, f32, Option<Shadow>, bool);
+/// the vertex's material kind.
+type Scattered = (V3<f32>, [f32; 3], Surface<f32>, f32, Option<Shadow>, Kind);
 
 /// The surface `path` hit (`hit`, at `t` along its ray): the scattered
 /// direction, the attenuation and the surface, or the path's last term (a
@@ -476,5 +480,5 @@ fn shade<P: Probe, const M: bool>(
         },
     };
     let (dir, atten, dir_pdf, shadow) = dir_atten;
-    Ok((dir, atten, srf, dir_pdf, shadow, kind == Kind::Lambertian))
+    Ok((dir, atten, srf, dir_pdf, shadow, kind))
 }

@@ -1,5 +1,7 @@
-//! `render --crop`: a window of the image, its pixels bit for bit those of
-//! the whole render, in every kernel and for windows that cut tiles anywhere.
+//! Looking closer: `render --crop` (a window of the image, its pixels bit for
+//! bit those of the whole render, in every kernel and for windows that cut
+//! tiles anywhere), `--trace-pixel` (one pixel's paths, event by event), and
+//! a linear image as the output.
 
 use crate::common::{failure, listing, rtow};
 use std::path::Path;
@@ -90,4 +92,61 @@ fn the_output_may_be_a_linear_image_by_its_extension() {
     assert_eq!(pfm.len() - pfm.iter().enumerate().filter(|&(_, &c)| c == b'\n').nth(2).unwrap().0 - 1, w * h * 12);
     let r = rtow(d, &["render", "final", "-o", "b.jpg"]);
     assert!(failure(&r, 2, "jpg").contains(".png or .exr or .pfm or .rtfilm"), "{}", r.stderr);
+}
+
+/// The pixel value a trace ends with, as its text prints it.
+fn traced_value(stdout: &str) -> String {
+    let line = stdout.lines().find(|l| l.starts_with("pixel value over")).expect("the trace ends with the pixel value");
+    line.rsplit_once(": ").unwrap().1.to_string()
+}
+
+#[test]
+fn a_pixel_trace_follows_its_paths_and_ends_with_the_renders_value() {
+    let dir = tempfile::tempdir().unwrap();
+    let d = dir.path();
+    let mut a = vec!["render", "final", "--trace-pixel", "20,12", "--trace-samples", "3"];
+    a.extend_from_slice(&SIZE);
+    let r = rtow(d, &a);
+    r.ok();
+    for want in ["sample 0:", "sample 2:", "camera ray from", "ray 1: hits sphere", "scatters toward", "radiance ("] {
+        assert!(r.stdout.contains(want), "no {want:?} in the trace:\n{}", r.stdout);
+    }
+    assert!(!r.stdout.contains("sample 3:"), "three samples only");
+    assert!(listing(d).is_empty(), "a trace writes no file: {:?}", listing(d));
+    // The value it ends with is the render's pixel, bit for bit.
+    let mut c = vec!["render", "final", "--crop", "20,21,12,13", "-o", "p.exr", "-q"];
+    c.extend_from_slice(&SIZE);
+    rtow(d, &c).ok();
+    let (_, _, v) = exr(&d.join("p.exr"));
+    assert_eq!(traced_value(&r.stdout), format!("({:?}, {:?}, {:?})", v[0], v[1], v[2]));
+    // Light samples are traced as their own terms.
+    let mut n = vec!["render", "nw-cornell-box", "--estimator", "nee-mis", "--trace-pixel", "25,15"];
+    n.extend_from_slice(&["--trace-samples", "16", "--width", "50", "--height", "30", "--spp", "16", "--depth", "6"]);
+    let r = rtow(d, &n);
+    r.ok();
+    assert!(r.stdout.contains("+ light sample ("), "{}", r.stdout);
+    assert!(r.stdout.contains("(lambertian)"), "{}", r.stdout);
+}
+
+#[test]
+fn a_pixel_trace_refuses_what_it_cannot_follow() {
+    let dir = tempfile::tempdir().unwrap();
+    let d = dir.path();
+    let cases: [(&[&str], &str); 6] = [
+        (&["--trace-pixel", "50,3"], "not a pixel"),
+        (&["--trace-pixel", "3"], "x,y"),
+        (&["--trace-pixel", "-3,4"], "x,y"),
+        (&["--trace-pixel", "3,4", "--trace-samples", "0"], "--trace-samples"),
+        (&["--trace-pixel", "3,4", "--trace-samples", "65"], "--trace-samples"),
+        (&["--trace-pixel", "3,4", "-o", "x.png"], "--output"),
+    ];
+    for (extra, says) in cases {
+        let mut a = vec!["render", "final"];
+        a.extend_from_slice(&SIZE);
+        a.extend_from_slice(extra);
+        let line = failure(&rtow(d, &a), 2, says);
+        assert!(line.contains(says), "{extra:?}: {line}");
+    }
+    let r = rtow(d, &["render", "ch01-gradient", "--trace-pixel", "1,1"]);
+    assert!(failure(&r, 2, "gradient").contains("--trace-pixel"));
 }
