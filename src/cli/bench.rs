@@ -10,7 +10,7 @@ use rtow::instruments::instructions::{
 use rtow::output::{OutputId, Outputs};
 use rtow::{Error, Job, KernelChoice, Result, SceneSource};
 use std::ffi::OsString;
-use std::path::PathBuf;
+use std::path::{Path, PathBuf};
 
 #[derive(Args)]
 pub struct BenchArgs {
@@ -158,6 +158,12 @@ fn count_instructions(a: &BenchArgs, source: &SceneSource, job: &Job) -> Result<
     if let Some(r) = &a.reason {
         instructions::check_reason(r)?;
     }
+    rtow::instruments::callgrind::valgrind_version()?;
+    if cfg!(target_feature = "avx512f") {
+        if let Some(v3) = countable_build()? {
+            return delegate(&v3);
+        }
+    }
     let baseline = a.baseline.as_deref().map(InstructionsBaseline::load).transpose()?;
     if let Some(b) = &baseline {
         b.check(&source.name, job.settings(), job.threads(), &a.kernels)?;
@@ -188,6 +194,60 @@ fn count_instructions(a: &BenchArgs, source: &SceneSource, job: &Job) -> Result<
     write_report(&report.table(), &report.to_json(), outputs, ids)?;
     let Some(b) = baseline else { return Ok(true) };
     Ok(print_instructions_comparison(&report, &b, a.max_rise))
+}
+
+/// Where an x86-64-v3 build of this rtow is looked for when this one uses
+/// AVX-512 (which valgrind does not know): `RTOW_COUNT_WITH`, else
+/// `target/isa-v3/x86_64-unknown-linux-gnu/release/rtow` beside this build's
+/// `target/release/rtow` (where the README's command and the gate build it).
+/// `None` when there is none; an error when the one found is of another
+/// commit (it would count other code).
+fn countable_build() -> Result<Option<PathBuf>> {
+    let named = std::env::var_os("RTOW_COUNT_WITH").filter(|v| !v.is_empty()).map(PathBuf::from);
+    let found = named.clone().or_else(|| {
+        let me = std::env::current_exe().ok()?;
+        let target = me.parent()?.parent()?;
+        Some(target.join("isa-v3/x86_64-unknown-linux-gnu/release/rtow"))
+    });
+    let Some(path) = found.filter(|p| p.is_file()) else {
+        return match named {
+            Some(p) => Err(Error::invalid("RTOW_COUNT_WITH", format!("{}: not a file", p.display()))),
+            None => Ok(None),
+        };
+    };
+    let theirs = std::process::Command::new(&path)
+        .arg("--version")
+        .output()
+        .map_err(|e| Error::System(format!("cannot run {}: {e}", path.display())))?;
+    let text = String::from_utf8_lossy(&theirs.stdout);
+    let (version, isa) = (text.lines().next().unwrap_or_default(), text.lines().nth(1).unwrap_or_default());
+    if version != format!("rtow {}", rtow::provenance::version()) || isa.contains("AVX-512") {
+        return Err(Error::System(format!(
+            "this build uses AVX-512, which valgrind does not know, and {} is not an x86-64-v3 build of this \
+             rtow ({version}; {isa}): rebuild it with RUSTFLAGS=\"-C target-cpu=x86-64-v3\" cargo build --release \
+             --target x86_64-unknown-linux-gnu --target-dir target/isa-v3",
+            path.display(),
+        )));
+    }
+    Ok(Some(path))
+}
+
+/// Runs this very command line with the x86-64-v3 build `v3` instead (it
+/// counts, prints and writes everything); its exit status is this one's.
+fn delegate(v3: &Path) -> Result<bool> {
+    tell!(
+        "bench --instructions: this build uses AVX-512, which valgrind does not know; counting with {}",
+        v3.display()
+    );
+    let status = std::process::Command::new(v3)
+        .args(std::env::args_os().skip(1))
+        .status()
+        .map_err(|e| Error::System(format!("cannot run {}: {e}", v3.display())))?;
+    match status.code() {
+        Some(0) => Ok(true),
+        Some(1) => Ok(false),
+        _ => Err(Error::System(format!("{} ended with {status} (its messages are above)", v3.display()))),
+    }
 }
 
 /// The process `--instructions` counts: this very command line's job (the

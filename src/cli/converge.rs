@@ -1,7 +1,7 @@
 //! `rtow converge`: run time against error.
 
 use super::args::{kernel_parser, RunArgs, SizeArgs};
-use super::say;
+use super::{say, tell};
 use clap::Args;
 use rtow::instruments::converge::{self, ConvergeConfig, ConvergeSpec, Event, Reference, ReportFiles, Variant};
 use rtow::output::check_extension;
@@ -39,9 +39,9 @@ pub struct ConvergeArgs {
     /// Adaptive variants decide after N, 2N, 4N, ... samples.
     #[arg(long, allow_negative_numbers = true, value_name = "N", default_value_t = ADAPTIVE_MIN_SPP)]
     adaptive_min: u32,
-    /// The sampler of the variants that name none (plain, rr, ...).
-    #[arg(long, value_parser = super::args::sampler_parser(), default_value = "independent")]
-    sampler: Sampler,
+    /// The sampler of the variants that name none (plain, rr, ...) [default: render's, sobol]
+    #[arg(long, value_parser = super::args::sampler_parser())]
+    sampler: Option<Sampler>,
     /// Also report what every configuration needs to reach the error of the baseline at N spp
     /// (N from --spp-list).
     #[arg(long, allow_negative_numbers = true, value_name = "N")]
@@ -86,7 +86,7 @@ pub fn run(a: ConvergeArgs) -> Result<()> {
     let mut variants = a.variants.iter().map(|v| Variant::parse(v)).collect::<Result<Vec<_>>>()?;
     for v in &mut variants {
         if v.sampler == Sampler::Independent {
-            v.sampler = a.sampler;
+            v.sampler = a.sampler.unwrap_or_default();
         }
     }
     let reference = match (&a.reference, a.reference_spp) {
@@ -138,6 +138,10 @@ fn show(e: Event, px: f64, header: &mut bool) {
     match e {
         Event::ReferenceStart { spp, seed } => say!("reference: {spp} spp with seed {seed} ..."),
         Event::ReferenceDone { seconds } => say!("reference: done in {seconds:.2} s"),
+        Event::ReferenceNoise(n) => match n.warning() {
+            Some(w) => tell!("warning: {w}"),
+            None => say!("reference: its own noise is {:.1}% of the smallest error measured", 100.0 * n.share()),
+        },
         Event::SplitStart { variant, spp, seeds } => {
             say!("split: {} at {spp} spp, {seeds} scalar renders ...", variant.name())
         }

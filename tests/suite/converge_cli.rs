@@ -30,6 +30,8 @@ fn converge_writes_table_plot_and_reference_and_reuses_the_reference() {
         "1,4,16",
         "--reference-spp",
         "64",
+        "--sampler",
+        "independent",
         "--out",
         out_s,
     ];
@@ -78,6 +80,15 @@ fn converge_writes_table_plot_and_reference_and_reuses_the_reference() {
     assert_eq!(json["files"][0], "ch07-diffuse.csv");
     assert_eq!(json["provenance"]["isa"], rtow::isa());
     assert_eq!(json["provenance"]["command_line"][1], "converge");
+    // The reference's own noise, from its two halves: at 64 spp against errors
+    // at 16 spp it is a quarter or more of the smallest error, and said so.
+    let noise = &json["reference_noise"];
+    let (mse, smallest) = (noise["mse"].as_f64().unwrap(), noise["smallest_mse"].as_f64().unwrap());
+    let rmse16 = err("plain", "16");
+    assert!(mse > 0.0 && smallest > 0.0 && smallest <= rmse16 * rmse16 * (1.0 + 1e-9), "{noise} {rmse16}");
+    assert!(mse > 0.1 * smallest, "{noise}");
+    assert!(o.stderr.contains("warning: the reference's own noise"), "{}", o.stderr);
+    assert!(md.contains("Reference noise:") && md.contains("Too noisy"), "{md}");
 
     // Again from the saved reference: the errors are the same as before.
     let again = dir.path().join("again");
@@ -92,6 +103,8 @@ fn converge_writes_table_plot_and_reference_and_reuses_the_reference() {
         reference.to_str().unwrap(),
         "--repeat",
         "2",
+        "--sampler",
+        "independent",
         "--out",
         again.to_str().unwrap(),
     ];
@@ -106,6 +119,9 @@ fn converge_writes_table_plot_and_reference_and_reuses_the_reference() {
         assert_eq!(before[rmse], r[rmse]);
     }
     assert!(!again.join("ch07-diffuse-reference.exr").exists());
+    let json: serde_json::Value =
+        serde_json::from_str(&std::fs::read_to_string(again.join("ch07-diffuse.json")).unwrap()).unwrap();
+    assert!(json["reference_noise"].is_null(), "a reference from a file has no known noise");
 }
 
 fn fails_naming(args: &[&str], flag: &str, code: i32) {

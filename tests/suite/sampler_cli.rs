@@ -104,6 +104,8 @@ fn bench_and_converge_measure_sobol() {
             "9",
             "--variants",
             "plain,sobol,sobol+rr",
+            "--sampler",
+            "independent",
             "--spp-list",
             "4,8",
             "--reference-spp",
@@ -115,4 +117,14 @@ fn bench_and_converge_measure_sobol() {
     ok(&o);
     let csv = std::fs::read_to_string(dir.join("c/ch07-diffuse.csv")).unwrap();
     assert!(csv.contains(",sobol,4,") && csv.contains(",sobol+rr,8,"), "{csv}");
+    assert!(csv.contains(",plain,4,"), "--sampler independent: plain is independent sampling: {csv}");
+    // Without --sampler, the variants that name none take render's default, Sobol.
+    let args = ["converge", "ch07-diffuse", "--width", "16", "--height", "9", "--variants", "plain,rr"];
+    let o = rtow(dir, &[&args[..], &["--spp-list", "4", "--reference-spp", "16", "--out", "d"]].concat());
+    ok(&o);
+    let csv = std::fs::read_to_string(dir.join("d/ch07-diffuse.csv")).unwrap();
+    assert!(csv.contains(",sobol,4,") && csv.contains(",sobol+rr,4,") && !csv.contains(",plain,"), "{csv}");
+    let o = rtow(dir, &[&args[..6], &["--variants", "plain,sobol", "--spp-list", "4", "--out", "e"]].concat());
+    assert_eq!(o.code, 2, "{}", o.stderr);
+    assert!(o.stderr.contains("listed twice") && o.stderr.contains("--sampler independent"), "{}", o.stderr);
 }

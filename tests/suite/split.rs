@@ -101,6 +101,8 @@ fn converge_split_writes_its_table_and_refuses_bad_settings() {
         "2,4",
         "--reference-spp",
         "8",
+        "--sampler",
+        "independent",
         "--threads",
         "1",
         "--out",

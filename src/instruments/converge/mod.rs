@@ -150,7 +150,14 @@ impl ConvergeSpec {
         }
         for (i, v) in self.variants.iter().enumerate() {
             if self.variants[..i].contains(v) {
-                return Err(Error::invalid("variants", format!("'{}' is listed twice", v.name())));
+                return Err(Error::invalid(
+                    "variants",
+                    format!(
+                        "'{}' is listed twice (a variant that names no sampler takes --sampler's, by default \
+                         render's: sobol; --sampler independent makes plain the independent one)",
+                        v.name()
+                    ),
+                ));
             }
         }
         for (i, k) in self.kernels.iter().enumerate() {
@@ -263,6 +270,8 @@ pub struct ConvergeReport {
     pub at_spp: Option<u32>,
     /// The reference, when this run rendered it (written out for reuse with `--reference`).
     pub rendered_reference: Option<Image>,
+    /// The rendered reference's own noise (`None` for a reference from a file, or of 1 spp).
+    pub reference_noise: Option<ReferenceNoise>,
     /// The build, machine, date and command of the run (written to `<scene>.json`).
     pub provenance: crate::provenance::Provenance,
     pub rows: Vec<ConvergeRow>,
@@ -280,6 +289,8 @@ pub enum Event<'a> {
     ReferenceDone {
         seconds: f64,
     },
+    /// The rendered reference's noise, once the errors are measured.
+    ReferenceNoise(&'a ReferenceNoise),
     Measured(&'a ConvergeRow),
     /// A variant's split starts: `seeds` scalar renders at `spp`.
     SplitStart {
@@ -323,18 +334,27 @@ pub fn run(job: &Job, name: &str, cfg: &ConvergeConfig, mut on: impl FnMut(Event
         Reference::Spp(n) => Some((*n, cfg.reference_job(job, *n)?)),
         Reference::File(_) => None,
     };
-    let (reference, ref_text, rendered) = match (&cfg.reference, reference_job) {
-        (Reference::File(path), _) => (load_reference(path, s.width, s.height)?, format!("{}", path.display()), false),
+    let (reference, ref_text, rendered, reference_mse) = match (&cfg.reference, reference_job) {
+        (Reference::File(path), _) => {
+            (load_reference(path, s.width, s.height)?, format!("{}", path.display()), false, None)
+        }
         (_, Some((n, rj))) => {
             on(Event::ReferenceStart { spp: n, seed: rj.settings().seed });
-            let r = render(&rj, None)?;
-            on(Event::ReferenceDone { seconds: r.stats.seconds });
-            let seed = rj.settings().seed;
-            (r.image, format!("{n} spp, seed {seed} (simd kernel, plain: independent sampling)"), true)
+            let t = std::time::Instant::now();
+            let (image, mse, text) = render_reference(&rj, n)?;
+            on(Event::ReferenceDone { seconds: t.elapsed().as_secs_f64() });
+            (image, text, true, mse)
         }
         (Reference::Spp(_), None) => unreachable!("a rendered reference has its job"),
     };
     let (rows, threads) = measure(&plan, cfg.repeat, &reference, &mut on)?;
+    let noise = reference_mse.map(|mse| ReferenceNoise {
+        mse,
+        smallest_mse: rows.iter().map(ConvergeRow::mse).fold(f64::INFINITY, f64::min),
+    });
+    if let Some(n) = &noise {
+        on(Event::ReferenceNoise(n));
+    }
     let mut splits = Vec::new();
     if let Some(n) = cfg.split {
         // The first kernel's measurement of each variant at `n` spp.
@@ -361,10 +381,83 @@ pub fn run(job: &Job, name: &str, cfg: &ConvergeConfig, mut on: impl FnMut(Event
         threads,
         at_spp: cfg.at_spp,
         rendered_reference: rendered.then_some(reference),
+        reference_noise: noise,
         provenance: crate::provenance::Provenance::collect(),
         rows,
         splits,
     })
+}
+
+/// The reference rendered by `rj` (`n` samples per pixel) in two halves of
+/// independent seeds (the second [`reference_seed`] of the first), averaged
+/// by their samples; with the estimate of its own expected MSE from their
+/// difference: `var = E[(h1 - h2)^2] n1 n2 / n^2` per channel (`None` for
+/// one sample per pixel, which cannot be halved).
+fn render_reference(rj: &Job, n: u32) -> Result<(Image, Option<f64>, String)> {
+    let seed = rj.settings().seed;
+    if n < 2 {
+        let r = render(rj, None)?;
+        return Ok((r.image, None, format!("{n} spp, seed {seed} (simd kernel, plain: independent sampling)")));
+    }
+    let (n1, n2) = (n / 2, n - n / 2);
+    let seed2 = reference_seed(seed);
+    let half = |spp: u32, seed: u64| {
+        rj.with_overrides(&Overrides { spp: Some(spp), seed: Some(seed), ..Overrides::from(*rj.settings()) })
+    };
+    let a = render(&half(n1, seed)?, None)?.image;
+    let b = render(&half(n2, seed2)?, None)?.image;
+    let (w1, w2) = (n1 as f64 / n as f64, n2 as f64 / n as f64);
+    let mut image = Image::new(a.width, a.height);
+    let mut sq = 0.0;
+    for ((out, p), q) in image.data.iter_mut().zip(&a.data).zip(&b.data) {
+        for k in 0..3 {
+            let (x, y) = (p[k] as f64, q[k] as f64);
+            out[k] = (w1 * x + w2 * y) as f32;
+            sq += (x - y) * (x - y);
+        }
+    }
+    let mse = sq / (3 * image.data.len().max(1)) as f64 * w1 * w2;
+    let text = format!(
+        "{n} spp: {n1} with seed {seed} and {n2} with seed {seed2}, averaged (simd kernel, plain: independent \
+         sampling)"
+    );
+    Ok((image, Some(mse), text))
+}
+
+/// The reference's own noise against the errors measured: every MSE
+/// measured against it carries the reference's (about `mse` more than
+/// against the true image), and its noise biases the mean signed error in
+/// dark pixels.
+#[derive(Clone, Copy, Debug, PartialEq, serde::Serialize)]
+pub struct ReferenceNoise {
+    /// The reference's expected MSE (estimated from its two halves).
+    pub mse: f64,
+    /// The smallest MSE measured against it.
+    pub smallest_mse: f64,
+}
+
+impl ReferenceNoise {
+    /// Above this share of the smallest error measured, the reference is too noisy.
+    pub const TOO_NOISY: f64 = 0.1;
+
+    /// The reference's MSE as a share of the smallest MSE measured.
+    pub fn share(&self) -> f64 {
+        self.mse / self.smallest_mse
+    }
+
+    /// A warning when the reference's noise is not small against the errors measured.
+    pub fn warning(&self) -> Option<String> {
+        (!(self.share() <= Self::TOO_NOISY)).then(|| {
+            format!(
+                "the reference's own noise (estimated MSE {:.3e}) is {:.0}% of the smallest error measured \
+                 ({:.3e}): every MSE carries it and the mean signed error is biased by it; raise --reference-spp \
+                 (its MSE falls as 1/spp)",
+                self.mse,
+                100.0 * self.share(),
+                self.smallest_mse
+            )
+        })
+    }
 }
 
 /// Every measurement once per pass, `repeat` passes: a change of load on the
@@ -532,6 +625,7 @@ mod tests {
             at_spp: Some(16),
             provenance: crate::provenance::Provenance::collect(),
             rendered_reference: None,
+            reference_noise: None,
             rows,
             splits: vec![],
         };

@@ -172,6 +172,17 @@ impl ConvergeReport {
              of the linear image; mean signed rel. error = mean of (x - r) / (r + 0.01), zero in expectation without bias.\n\n",
             self.scene, self.width, self.height, self.max_depth, self.seed, self.reference, self.repeat, self.threads
         );
+        if let Some(n) = &self.reference_noise {
+            let _ = writeln!(
+                s,
+                "Reference noise: its own MSE, estimated from its two halves, is {:.3e}, {:.1}% of the smallest MSE \
+                 measured ({:.3e}); every MSE below carries it.{}\n",
+                n.mse,
+                100.0 * n.share(),
+                n.smallest_mse,
+                if n.warning().is_some() { " **Too noisy for these errors: raise --reference-spp.**" } else { "" }
+            );
+        }
         s += "| kernel | variant | spp | seconds | Mrays/s | samples/px | RMSE | relMSE | mean signed rel. error | efficiency 1/(MSE s) |\n";
         s += "|---|---|---:|---:|---:|---:|---:|---:|---:|---:|\n";
         let px = (self.width as f64 * self.height as f64).max(1.0);
@@ -233,6 +244,7 @@ impl ConvergeReport {
             "max_depth": self.max_depth,
             "seed": self.seed,
             "reference": self.reference,
+            "reference_noise": self.reference_noise,
             "repeat": self.repeat,
             "threads": self.threads,
             "at_spp": self.at_spp,
