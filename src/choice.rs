@@ -43,6 +43,7 @@ macro_rules! choice {
 /// What the renderer computes for each camera ray.
 #[derive(Serialize, Deserialize, Clone, Copy, Debug, PartialEq, Eq, Default)]
 #[serde(rename_all = "lowercase")]
+#[cfg_attr(feature = "schema", derive(schemars::JsonSchema))]
 pub enum Mode {
     /// Chapter 1: no rays; r = x / width, g = (rows from the bottom) / height, b = 0.2.
     Gradient,

@@ -3,6 +3,7 @@
 
 use clap::builder::{PossibleValuesParser, TypedValueParser};
 use clap::Args;
+use rtow::scene::Assignment;
 use rtow::{
     AccelChoice, Adaptive, EstimatorChoice, KernelChoice, Mode, OnRejected, Overrides, RenderOptions, Result, Roulette,
     Sampler, SceneSource, Settings, ADAPTIVE_MIN_SPP, DEFAULT_TILE, ROULETTE_AFTER_RAYS,
@@ -40,9 +41,47 @@ pub struct SizeArgs {
     pub seed: Option<u64>,
 }
 
+/// Values of the scene set from the command line (`--set KEY=VALUE`).
+#[derive(Args, Clone, Debug)]
+pub struct SetArgs {
+    /// Set a value of the scene, preset or file, before anything else: KEY is a dotted path into
+    /// the scene file's structure (camera.vfov_deg, spheres.3.radius or spheres[3].radius,
+    /// render.samples_per_pixel), VALUE is JSON (a bare word is a string: lambertian).
+    /// Repeatable, applied in order; `rtow schema` lists every key
+    #[arg(long = "set", value_name = "KEY=VALUE")]
+    pub set: Vec<String>,
+}
+
+impl SetArgs {
+    /// The scene `spec` names (a preset or a scene file) with the assignments applied.
+    pub fn open(&self, spec: &str) -> Result<SceneSource> {
+        // Every assignment is checked before the scene is read: a typo in
+        // the last one is reported before a large file is parsed.
+        let assignments = self.assignments()?;
+        let mut source = SceneSource::open(spec)?;
+        source.scene = rtow::scene::apply_assignments(&source.scene, &assignments)?;
+        Ok(source)
+    }
+
+    /// The assignments, parsed.
+    fn assignments(&self) -> Result<Vec<Assignment>> {
+        self.set.iter().map(|a| Assignment::parse(a)).collect()
+    }
+
+    /// `source` (a scene not opened by name: a film's) with the assignments applied.
+    pub fn apply(&self, mut source: SceneSource) -> Result<SceneSource> {
+        if !self.set.is_empty() {
+            source.scene = rtow::scene::apply_assignments(&source.scene, &self.assignments()?)?;
+        }
+        Ok(source)
+    }
+}
+
 /// The image settings a render may override: size, depth, seed, samples, sampler.
 #[derive(Args, Clone, Debug)]
 pub struct ImageArgs {
+    #[command(flatten)]
+    pub set: SetArgs,
     #[command(flatten)]
     pub size: SizeArgs,
     /// Samples per pixel [default: the scene's]
@@ -65,9 +104,10 @@ pub struct ImageArgs {
 }
 
 impl ImageArgs {
-    /// The scene `spec` names (a preset or a scene file), tessellated if asked.
+    /// The scene `spec` names (a preset or a scene file), with the `--set`
+    /// assignments, tessellated if asked.
     pub fn open(&self, spec: &str) -> Result<SceneSource> {
-        let mut source = SceneSource::open(spec)?;
+        let mut source = self.set.open(spec)?;
         if let Some(level) = self.tessellate {
             source.scene = source.scene.tessellate(level)?;
         }

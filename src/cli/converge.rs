@@ -1,11 +1,11 @@
 //! `rtow converge`: run time against error.
 
-use super::args::{kernel_parser, RunArgs, SizeArgs};
+use super::args::{kernel_parser, RunArgs, SetArgs, SizeArgs};
 use super::{say, tell};
 use clap::Args;
 use rtow::instruments::converge::{self, ConvergeConfig, ConvergeSpec, Event, Reference, ReportFiles, Variant};
 use rtow::output::check_extension;
-use rtow::{Error, Job, KernelChoice, Result, Sampler, SceneSource, ADAPTIVE_MIN_SPP};
+use rtow::{Error, Job, KernelChoice, Result, Sampler, ADAPTIVE_MIN_SPP};
 use std::path::PathBuf;
 
 #[derive(Args)]
@@ -28,6 +28,8 @@ pub struct ConvergeArgs {
     /// Output folder for <scene>.csv, <scene>.md, <scene>.svg (and <scene>-reference.exr).
     #[arg(long, default_value = "converge")]
     out: PathBuf,
+    #[command(flatten)]
+    set: SetArgs,
     #[command(flatten)]
     size: SizeArgs,
     #[command(flatten)]
@@ -79,7 +81,7 @@ fn reference_spp_help() -> String {
 }
 
 pub fn run(a: ConvergeArgs) -> Result<()> {
-    let source = SceneSource::open(&a.scene)?;
+    let source = a.set.open(&a.scene)?;
     let job = Job::from_source(&source, &a.size.overrides(), &a.run.options(KernelChoice::Simd))?;
     let name = &source.name;
     let s = *job.settings();

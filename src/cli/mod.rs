@@ -79,6 +79,8 @@ enum Command {
         #[arg(long, value_name = "N")]
         tessellate: Option<u32>,
     },
+    /// Print the JSON Schema of scene files (JSON, and TOML of the same shape), derived from rtow's scene types.
+    Schema,
     /// Print a shell completion script: `rtow completions bash > ~/.local/share/bash-completion/completions/rtow`.
     Completions {
         /// The shell.
@@ -123,6 +125,10 @@ fn run(cli: Cli) -> Result<u8> {
                 }
             }
             Ok(0)
+        }
+        Command::Schema => {
+            let text = serde_json::to_string_pretty(&scene::scene_schema()).expect("a schema is JSON") + "\n";
+            write_stdout(text.as_bytes())
         }
         Command::Completions { shell } => {
             let mut out = Vec::new();

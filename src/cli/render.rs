@@ -148,7 +148,7 @@ fn scene_and_settings(a: &RenderArgs) -> Result<(rtow::SceneSource, Overrides, r
         (Some(spec), _) => Ok((a.image.open(spec)?, overrides, options)),
         (None, Some(film)) => {
             let f = rtow::shard::scene_of_film(film)?;
-            let mut source = f.source;
+            let mut source = a.image.set.apply(f.source)?;
             if let Some(level) = a.image.tessellate {
                 source.scene = source.scene.tessellate(level)?;
             }

@@ -87,7 +87,7 @@ pub fn scene_from_str(text: &str, format: Format, origin: &Path) -> Result<Scene
                 parse_err(format!(
                     "{}{} (line {}, column {})",
                     field_prefix(e.path()),
-                    strip_position(&inner.to_string()),
+                    super::suggest::did_you_mean(&strip_position(&inner.to_string())),
                     inner.line(),
                     inner.column()
                 ))
@@ -107,7 +107,7 @@ pub fn scene_from_str(text: &str, format: Format, origin: &Path) -> Result<Scene
 }
 
 fn toml_err(text: &str, e: &toml::de::Error, prefix: &str, mk: &dyn Fn(String) -> Error) -> Error {
-    let mut msg = e.message().trim().replace('\n', "; ");
+    let mut msg = super::suggest::did_you_mean(&e.message().trim().replace('\n', "; "));
     match e.span() {
         Some(span) => {
             let (l, c) = line_col(text, span.start);

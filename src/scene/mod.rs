@@ -7,22 +7,29 @@
 //! job is resolved from the scene (`crate::job`). Nothing here knows the
 //! kernels: the job module reads this side and lays it out for them.
 
+mod assignment;
 pub(crate) mod de;
 mod file;
 mod flatten;
 mod presets;
 mod render_table;
+#[cfg(feature = "schema")]
+mod schema;
 mod source;
+mod suggest;
 mod tessellate;
 mod validate;
 
 pub use crate::choice::Mode;
+pub use assignment::{apply as apply_assignments, Assignment};
 pub use file::{load_scene, save_meshes_obj, save_scene, scene_from_bytes, scene_from_str, scene_to_string, Format};
 #[cfg(test)]
 pub(crate) use flatten::FLATTENED;
 pub use flatten::{box_quads, Flat, FlatBoundary, FlatMedium, FlatMesh};
 pub use presets::{final_scene, preset, presets, Preset, PresetGroup};
 pub use render_table::{BookTable, RenderTable};
+#[cfg(feature = "schema")]
+pub use schema::scene_schema;
 pub use source::{nearest_preset, SceneSource};
 
 use serde::{Deserialize, Serialize};
@@ -33,6 +40,11 @@ use std::sync::Arc;
 /// (`"ior": "abc"`) would name neither the field nor its position.
 #[derive(Serialize, Deserialize, Clone, Debug, PartialEq)]
 #[serde(tag = "type", rename_all = "lowercase", try_from = "MaterialFields")]
+#[cfg_attr(
+    feature = "schema",
+    derive(schemars::JsonSchema),
+    schemars(!try_from, deny_unknown_fields, description = "A material: `type` and that type's fields.")
+)]
 pub enum Material {
     /// The albedo is a colour `[r, g, b]` or a texture ([`Texture`]).
     Lambertian {
@@ -297,6 +309,7 @@ impl Material {
 
 #[derive(Serialize, Deserialize, Clone, Debug, PartialEq)]
 #[serde(deny_unknown_fields)]
+#[cfg_attr(feature = "schema", derive(schemars::JsonSchema))]
 pub struct Sphere {
     /// The centre (at time 0, for a moving sphere).
     #[serde(deserialize_with = "de::vec3")]
@@ -316,6 +329,7 @@ pub struct Sphere {
 /// `a, b` in [0, 1]. Its normal, and so its front face, is `u x v`.
 #[derive(Serialize, Deserialize, Clone, Debug, PartialEq)]
 #[serde(deny_unknown_fields)]
+#[cfg_attr(feature = "schema", derive(schemars::JsonSchema))]
 pub struct Quad {
     #[serde(deserialize_with = "de::vec3")]
     pub q: [f32; 3],
@@ -331,6 +345,7 @@ pub struct Quad {
 /// "radius": ..}` (a static sphere; a negative radius is its size).
 #[derive(Serialize, Deserialize, Clone, Copy, Debug, PartialEq)]
 #[serde(tag = "type", rename_all = "lowercase", deny_unknown_fields)]
+#[cfg_attr(feature = "schema", derive(schemars::JsonSchema))]
 pub enum Shape {
     Quad {
         #[serde(deserialize_with = "de::vec3")]
@@ -352,6 +367,7 @@ pub enum Shape {
 /// `a` and `b`, as its six quads (faces outwards, in the book's order).
 #[derive(Serialize, Deserialize, Clone, Debug, PartialEq)]
 #[serde(deny_unknown_fields)]
+#[cfg_attr(feature = "schema", derive(schemars::JsonSchema))]
 pub struct QuadBox {
     #[serde(deserialize_with = "de::vec3")]
     pub a: [f32; 3],
@@ -367,6 +383,7 @@ pub struct QuadBox {
 /// sphere and a medium with the same boundary).
 #[derive(Serialize, Deserialize, Clone, Copy, Debug, PartialEq)]
 #[serde(deny_unknown_fields)]
+#[cfg_attr(feature = "schema", derive(schemars::JsonSchema))]
 pub struct Medium {
     pub boundary: MediumBoundary,
     #[serde(deserialize_with = "de::f32")]
@@ -380,6 +397,7 @@ pub struct Medium {
 /// corners `a`, `b`, turned and moved with its group): exactly one shape.
 #[derive(Serialize, Deserialize, Clone, Copy, Debug, PartialEq)]
 #[serde(rename_all = "lowercase", try_from = "BoundaryFields")]
+#[cfg_attr(feature = "schema", derive(schemars::JsonSchema), schemars(!try_from, deny_unknown_fields))]
 pub enum MediumBoundary {
     Sphere { center: [f32; 3], radius: f32 },
     Box { a: [f32; 3], b: [f32; 3] },
@@ -434,6 +452,7 @@ impl TryFrom<BoundaryFields> for MediumBoundary {
 /// s}}, "material": ..}`.
 #[derive(Serialize, Deserialize, Clone, Debug, PartialEq)]
 #[serde(deny_unknown_fields)]
+#[cfg_attr(feature = "schema", derive(schemars::JsonSchema))]
 pub struct Mesh {
     pub shape: MeshShape,
     pub material: Material,
@@ -442,6 +461,7 @@ pub struct Mesh {
 /// Where a mesh's triangles come from.
 #[derive(Serialize, Deserialize, Clone, Debug, PartialEq)]
 #[serde(rename_all = "lowercase", deny_unknown_fields)]
+#[cfg_attr(feature = "schema", derive(schemars::JsonSchema))]
 pub enum MeshShape {
     /// The sphere `(center, radius)` as a closed icosphere of `20 4^level`
     /// triangles (`crate::mesh::icosphere`), its vertices on the sphere,
@@ -534,6 +554,7 @@ impl ObjMeshes {
 /// prepared ([`Scene::flatten`]). Groups do not nest.
 #[derive(Serialize, Deserialize, Clone, Debug, PartialEq, Default)]
 #[serde(deny_unknown_fields)]
+#[cfg_attr(feature = "schema", derive(schemars::JsonSchema))]
 pub struct Group {
     #[serde(default, skip_serializing_if = "is_zero", deserialize_with = "de::f32")]
     pub rotate_y: f32,
@@ -592,6 +613,7 @@ fn default_vfov() -> f32 {
 
 #[derive(Serialize, Deserialize, Clone, Copy, Debug, PartialEq)]
 #[serde(deny_unknown_fields)]
+#[cfg_attr(feature = "schema", derive(schemars::JsonSchema))]
 pub struct Camera {
     #[serde(deserialize_with = "de::vec3")]
     pub look_from: [f32; 3],
@@ -648,6 +670,7 @@ impl Camera {
 
 #[derive(Serialize, Deserialize, Clone, Copy, Debug, PartialEq)]
 #[serde(deny_unknown_fields)]
+#[cfg_attr(feature = "schema", derive(schemars::JsonSchema))]
 pub struct Sky {
     #[serde(deserialize_with = "de::vec3")]
     pub horizon: [f32; 3],
@@ -673,6 +696,7 @@ fn is_default<T: Default + PartialEq>(v: &T) -> bool {
 
 #[derive(Serialize, Deserialize, Clone, Debug, PartialEq)]
 #[serde(deny_unknown_fields)]
+#[cfg_attr(feature = "schema", derive(schemars::JsonSchema))]
 pub struct Scene {
     #[serde(default, skip_serializing_if = "is_default")]
     pub mode: Mode,

@@ -12,6 +12,7 @@ use serde::{Deserialize, Serialize};
 /// Render settings a scene may carry (its `render` table).
 #[derive(Serialize, Deserialize, Clone, Copy, Debug, PartialEq, Default)]
 #[serde(deny_unknown_fields)]
+#[cfg_attr(feature = "schema", derive(schemars::JsonSchema))]
 pub struct RenderTable {
     #[serde(default, skip_serializing_if = "Option::is_none", deserialize_with = "de::opt_u32")]
     pub width: Option<u32>,
@@ -39,6 +40,7 @@ pub struct RenderTable {
 /// A scene's book settings (`render.book`): size, samples and depth.
 #[derive(Serialize, Deserialize, Clone, Copy, Debug, PartialEq)]
 #[serde(deny_unknown_fields)]
+#[cfg_attr(feature = "schema", derive(schemars::JsonSchema))]
 pub struct BookTable {
     #[serde(deserialize_with = "de::u32")]
     pub width: u32,

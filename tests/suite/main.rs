@@ -35,6 +35,8 @@ mod sampler;
 mod sampler_cli;
 mod scene_files;
 mod scene_format;
+mod schema_cli;
+mod set_cli;
 mod shards;
 mod split;
 mod stability;
