@@ -155,14 +155,11 @@ impl RoundsRequest {
     }
 }
 
-/// Where a render stopped by a signal writes its film: the output itself
-/// when it is a film, else the output with the extension `.rtfilm`.
+/// Where a render stopped by a signal writes its film when its output is
+/// an image: the output with the extension `.rtfilm` (a film output is
+/// written itself).
 pub fn interrupt_film_path(output: &Path) -> PathBuf {
-    if is_part_path(output) {
-        output.to_path_buf()
-    } else {
-        output.with_extension(part::EXTENSION)
-    }
+    output.with_extension(part::EXTENSION)
 }
 
 /// Refuses a time limit or previews that this render cannot honour.
@@ -352,14 +349,14 @@ fn render_in_rounds(
         let _graceful = graceful.then(Graceful::enter);
         let (w, h) = (req.job.settings().width, req.job.settings().height);
         let (outputs, main, gamma) = (&mut out.outputs, out.main, out.gamma);
-        let mut preview = |tiles: &[TileFilm], _spp: u32| -> Result<()> {
+        let mut preview = |tiles: &[TileFilm]| -> Result<()> {
             let mut image = Image::new(w, h);
             tiles.iter().for_each(|t| image.put_tile(t));
             outputs.publish(main, &image.file_bytes(&files.output, gamma, files.names.output)?)
         };
         let rr = &req.rounds;
-        let preview = rr.preview_every.map(|_| &mut preview as Preview);
-        let mut schedule = Schedule::new(req.job.settings().spp, rr.time_limit, rr.preview_every, preview, graceful);
+        let preview = rr.preview_every.map(|every| (every, &mut preview as Preview));
+        let mut schedule = Schedule::new(req.job.settings().spp, rr.time_limit, preview, graceful);
         let (rendered, part) = shard::render_part_in(film, Some(&mut schedule), files.stats.is_some(), progress)?;
         (rendered, part, schedule.report())
     };

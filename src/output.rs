@@ -136,7 +136,7 @@ fn signal_name(sig: i32) -> &'static str {
 
 /// While one is alive, the first SIGINT, SIGTERM or SIGHUP does not end the
 /// process (with [`install_signal_cleanup`]'s handler installed): it is
-/// recorded for [`Graceful::stop_requested`], and the run (a render in
+/// recorded for [`stop_signal`], and the run (a render in
 /// rounds) stops at its next safe point, writes what it has and exits with
 /// 128 + the signal itself. A second signal ends the process as usual.
 pub struct Graceful(());
@@ -147,11 +147,6 @@ impl Graceful {
         STOP.store(0, Ordering::SeqCst);
         GRACEFUL.store(true, Ordering::SeqCst);
         Graceful(())
-    }
-
-    /// The signal that asked to stop, if one did: its name and number.
-    pub fn stop_requested(&self) -> Option<(&'static str, i32)> {
-        stop_signal()
     }
 }
 

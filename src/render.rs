@@ -175,10 +175,23 @@ pub(crate) fn render_rounds(
     counted: bool,
     progress: Option<&(dyn Fn(Progress) + Sync)>,
 ) -> Result<(Rendered, Option<Film>)> {
+    render_maybe_counted(job, portion, true, Some(rounds), counted, progress)
+}
+
+/// [`render_inner`] with the plain probe, or (`counted`) with the counting
+/// one and its totals in `Stats::work`: the two probes every render has.
+fn render_maybe_counted(
+    job: &Job,
+    portion: Portion,
+    keep_film: bool,
+    rounds: Option<&mut (dyn Rounds + Send)>,
+    counted: bool,
+    progress: Option<&(dyn Fn(Progress) + Sync)>,
+) -> Result<(Rendered, Option<Film>)> {
     if !counted {
-        return render_inner(job, portion, true, Some(rounds), progress, &|| ()).map(|(r, _, f)| (r, f));
+        return render_inner(job, portion, keep_film, rounds, progress, &|| ()).map(|(r, _, f)| (r, f));
     }
-    let (mut r, probes, f) = render_inner(job, portion, true, Some(rounds), progress, &Observed::counting)?;
+    let (mut r, probes, f) = render_inner(job, portion, keep_film, rounds, progress, &Observed::counting)?;
     r.stats.work = Some(total_work(&probes));
     Ok((r, f))
 }
@@ -280,13 +293,7 @@ pub fn render_crop(
     let s = job.settings();
     crop.check(s.width, s.height)?;
     let portion = Portion { rows: Some(crop.y.clone()), cols: Some(crop.x.clone()), ..Default::default() };
-    let mut r = if counted {
-        let (mut r, probes, _) = render_inner(job, portion, false, None, progress, &Observed::counting)?;
-        r.stats.work = Some(total_work(&probes));
-        r
-    } else {
-        render_inner(job, portion, false, None, progress, &|| ())?.0
-    };
+    let (mut r, _) = render_maybe_counted(job, portion, false, None, counted, progress)?;
     r.image = r.image.crop(crop.x.clone(), crop.y.clone());
     r.stats.image_hash = format!("{:016x}", r.image.hash());
     r.stats.crop = Some(crop.clone());
@@ -457,9 +464,28 @@ fn render_prepared<P: Probe + Send>(
     // The film is gathered only for a caller that wants it (a partial film):
     // a plain render writes the image straight from the tiles.
     let film = work.keep_film.then(|| Film::new(s.width, s.height, work.rows.clone(), moments).scaled(scale));
-    let mut out = gather(films, Image::new(s.width, s.height), film);
-    out.traced = out.traced.map(|t| t - started);
-    Ok(Finished { rays: rays.into_inner(), probes, reached, ..out })
+    let (image, film, c) = gather(films, Image::new(s.width, s.height), film);
+    Ok(Finished {
+        image,
+        rays: rays.into_inner(),
+        shadow_rays: c.shadow_rays,
+        rejected: c.rejected,
+        rejected_out_of_range: c.rejected_out_of_range,
+        traced: Some(c.samples - started),
+        probes,
+        film,
+        reached,
+    })
+}
+
+/// What the tiles of a render hold, added up.
+#[derive(Default)]
+struct TileCounts {
+    rejected: u64,
+    rejected_out_of_range: u64,
+    shadow_rays: u64,
+    /// Every sample the tiles hold, accepted or rejected (resumed ones included).
+    samples: u64,
 }
 
 /// The gradient (a scene that traces no samples), as a finished render.
@@ -507,36 +533,24 @@ fn in_rounds<P>(
 }
 
 /// The tiles into the image (through `film`, when the caller keeps one),
-/// with their counts (`traced`: every sample the tiles hold, resumed ones
-/// included; no rays, probes or samples reached).
-fn gather<P>(films: Vec<TileFilm>, mut image: Image, mut film: Option<Film>) -> Finished<P> {
-    let (mut rejected, mut rejected_out_of_range, mut shadow_rays, mut traced) = (0, 0, 0, 0);
+/// and their counts added up.
+fn gather(films: Vec<TileFilm>, mut image: Image, mut film: Option<Film>) -> (Image, Option<Film>, TileCounts) {
+    let mut c = TileCounts::default();
     // Tiles are dropped as they are copied: the peak stays near one film.
     for t in films {
         match &mut film {
             Some(f) => f.put_tile(&t),
             None => image.put_tile(&t),
         }
-        rejected += t.rejected;
-        rejected_out_of_range += t.rejected_out_of_range;
-        shadow_rays += t.shadow_rays;
-        traced += t.rejected + t.count.iter().map(|&c| c as u64).sum::<u64>();
+        c.rejected += t.rejected;
+        c.rejected_out_of_range += t.rejected_out_of_range;
+        c.shadow_rays += t.shadow_rays;
+        c.samples += t.rejected + t.count.iter().map(|&n| n as u64).sum::<u64>();
     }
     if let Some(f) = &film {
         f.write_into(&mut image);
     }
-    let traced = Some(traced);
-    Finished {
-        image,
-        rays: 0,
-        shadow_rays,
-        rejected,
-        rejected_out_of_range,
-        traced,
-        probes: Vec::new(),
-        film,
-        reached: 0,
-    }
+    (image, film, c)
 }
 
 fn scalar_tiles<P: Probe + Send, S: PathSampler>(

@@ -6,16 +6,13 @@ use super::args::{choice, kernel_parser, EstimatorArgs, ImageArgs, OutputArgs, R
 use super::{say, tell};
 use clap::Args;
 use indicatif::{ProgressBar, ProgressStyle};
-use rtow::files::RoundsRequest;
-use rtow::files::{self, RenderRequest};
+use rtow::files::{self, RenderRequest, RoundsRequest};
 use rtow::rounds::Stopped;
 use rtow::shard::{Split, SplitKind};
-use rtow::{Job, KernelChoice, Progress, Result, Stats};
-use rtow::{OnInterrupt, Overrides};
+use rtow::{Job, KernelChoice, OnInterrupt, Overrides, Progress, Result, Stats};
 use std::io::IsTerminal;
 use std::path::PathBuf;
-use std::time::Duration;
-use std::time::Instant;
+use std::time::{Duration, Instant};
 
 #[derive(Args)]
 pub struct RenderArgs {

@@ -43,12 +43,7 @@ impl SceneSource {
 /// The preset a mistyped name most likely meant: the most similar name
 /// (Jaro-Winkler, as the command line's own suggestions), if similar enough.
 pub fn nearest_preset(spec: &str) -> Option<&'static str> {
-    presets()
-        .iter()
-        .map(|p| (strsim::jaro_winkler(spec, p.name), p.name))
-        .filter(|&(similarity, _)| similarity > 0.8)
-        .max_by(|a, b| a.0.total_cmp(&b.0))
-        .map(|(_, name)| name)
+    super::suggest::nearest(spec, presets().iter().map(|p| p.name))
 }
 
 #[cfg(test)]

@@ -5,7 +5,7 @@
 
 /// `message` with `, did you mean `name`?` appended when it is about an
 /// unknown field or variant and one of the names it expects is similar
-/// enough (Jaro-Winkler, as [`super::nearest_preset`]); else unchanged.
+/// enough ([`nearest`]); else unchanged.
 pub fn did_you_mean(message: &str) -> String {
     match nearest_expected(message) {
         Some(name) => format!("{message}, did you mean `{name}`?"),
@@ -23,8 +23,14 @@ fn nearest_expected(message: &str) -> Option<&str> {
     if let Some(name) = names().find(|n| n.contains('_') && initials(n) == unknown) {
         return Some(name);
     }
-    names()
-        .map(|name| (strsim::jaro_winkler(unknown, name), name))
+    nearest(unknown, names())
+}
+
+/// The name of `names` most similar to `word` (Jaro-Winkler, as the command
+/// line's own suggestions), if similar enough: what every "did you mean" says.
+pub fn nearest<'a>(word: &str, names: impl Iterator<Item = &'a str>) -> Option<&'a str> {
+    names
+        .map(|name| (strsim::jaro_winkler(word, name), name))
         .filter(|&(similarity, _)| similarity > 0.8)
         .max_by(|a, b| a.0.total_cmp(&b.0))
         .map(|(_, name)| name)
