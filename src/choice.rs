@@ -40,6 +40,16 @@ macro_rules! choice {
     };
 }
 
+/// The name of `names` most similar to `word` (Jaro-Winkler, as the command
+/// line's own suggestions), if similar enough: what every "did you mean" says.
+pub fn nearest<'a>(word: &str, names: impl Iterator<Item = &'a str>) -> Option<&'a str> {
+    names
+        .map(|name| (strsim::jaro_winkler(word, name), name))
+        .filter(|&(similarity, _)| similarity > 0.8)
+        .max_by(|a, b| a.0.total_cmp(&b.0))
+        .map(|(_, name)| name)
+}
+
 /// What the renderer computes for each camera ray.
 #[derive(Serialize, Deserialize, Clone, Copy, Debug, PartialEq, Eq, Default)]
 #[serde(rename_all = "lowercase")]

@@ -8,6 +8,7 @@
 use crate::choice::{EstimatorChoice, OnInterrupt, OnRejected};
 use crate::error::{Error, Result};
 use crate::estimator::{Adaptive, Estimator, Roulette};
+use crate::film::aov::{self, Aovs, Features};
 use crate::film::part::{self, is_part_path, Part, Split, SplitKind};
 use crate::film::{Image, TileFilm};
 use crate::job::Job;
@@ -15,7 +16,7 @@ use crate::output::{check_extension, Graceful, OutputId, Outputs};
 use crate::plan::Plan;
 use crate::probe::WorkCounters;
 use crate::provenance::Provenance;
-use crate::render::{render, render_counted, render_crop, Crop, Progress, Rendered, Stats};
+use crate::render::{render, render_counted, render_crop, render_features, AovReport, Crop, Progress, Rendered, Stats};
 use crate::rounds::{Preview, RoundsReport, Schedule, Stopped};
 use crate::sampling::Sampler;
 use crate::scene::SceneSource;
@@ -106,6 +107,10 @@ pub struct RenderRequest<'a> {
     /// Only this window of the image (an image of its size, its pixels
     /// those of the whole render); rendered in one go, to an image.
     pub crop: Option<Crop>,
+    /// Feature buffers to write beside the colour ([`crate::film::aov`]):
+    /// layers of the EXR the run writes (the output, else `--float`), else
+    /// PFM files beside the image.
+    pub aov: Aovs,
 }
 
 /// Refuses what a crop cannot be combined with.
@@ -227,7 +232,7 @@ pub fn render_to_files(req: &RenderRequest, progress: Option<&(dyn Fn(Progress) 
         None => None,
     };
     let mut out = Planned::new(req, in_rounds && graceful)?;
-    let r = match &film {
+    let mut r = match &film {
         Some(film) if in_rounds => match render_in_rounds(req, film, &mut out, graceful, progress)? {
             Ran::Done(r) => r,
             Ran::Stopped(stats) => return Ok(stats),
@@ -235,7 +240,7 @@ pub fn render_to_files(req: &RenderRequest, progress: Option<&(dyn Fn(Progress) 
         Some(film) => {
             let (r, part) = shard::render_part(film, progress)?;
             r.stats.rejected().check(req.on_rejected)?;
-            out.stage_main(req, &r, &part)?;
+            out.stage_film(req, &part)?;
             r
         }
         None => {
@@ -247,13 +252,11 @@ pub fn render_to_files(req: &RenderRequest, progress: Option<&(dyn Fn(Progress) 
                 None => render(req.job, progress)?,
             };
             r.stats.rejected().check(req.on_rejected)?;
-            out.outputs.stage(out.main, &r.image.file_bytes(&files.output, out.gamma, files.names.output)?)?;
             r
         }
     };
-    if let (Some(id), Some(f)) = (out.float, &files.float) {
-        out.outputs.stage(id, &r.image.file_bytes(f, 1.0, files.names.float)?)?;
-    }
+    let features = req.aov.any().then(|| features_of(req, &mut r.stats));
+    out.stage_images(req, &r, features.as_ref())?;
     if let Some(id) = out.stats {
         let mut file = StatsFile::of_render(&r.stats, req.split);
         file.verified = verified;
@@ -276,7 +279,32 @@ fn check_request(req: &RenderRequest) -> Result<()> {
         ));
     }
     check_crop(req)?;
-    check_rounds(req)
+    check_rounds(req)?;
+    check_aov(req)
+}
+
+/// Refuses feature buffers where no image is written.
+fn check_aov(req: &RenderRequest) -> Result<()> {
+    if !req.aov.any() {
+        return Ok(());
+    }
+    if req.files.writes_film() {
+        return Err(Error::invalid(
+            "aov",
+            "feature buffers come with an image: write a .png, .exr or .pfm (a partial film carries none)",
+        ));
+    }
+    if req.job.mode() == crate::choice::Mode::Gradient {
+        return Err(Error::invalid("aov", "this scene traces no rays (a gradient): it has no surfaces to describe"));
+    }
+    Ok(())
+}
+
+/// The EXR file that holds the feature buffers as layers: the output if it
+/// is one, else `--float` if it is one; `None`: they go to PFM files.
+fn layered_exr(files: &RenderFiles) -> Option<&Path> {
+    let exr = |p: &Path| p.extension().is_some_and(|e| e.eq_ignore_ascii_case("exr"));
+    Some(files.output.as_path()).filter(|p| exr(p)).or(files.float.as_deref().filter(|p| exr(p)))
 }
 
 /// A render's outputs, checked: the transaction and which output is which.
@@ -287,6 +315,8 @@ struct Planned {
     stats: Option<OutputId>,
     /// The film a signal leaves, when the output is not a film itself.
     interrupt: Option<(PathBuf, OutputId)>,
+    /// The feature buffers' PFM files ([`aov::beside`] the output).
+    aov: Vec<(PathBuf, OutputId)>,
     gamma: f32,
 }
 
@@ -311,20 +341,65 @@ impl Planned {
             Some(p) => Some((p.clone(), outputs.add(&p, INTERRUPT_FILM)?)),
             None => None,
         };
+        let mut aov = Vec::new();
+        if layered_exr(files).is_none() {
+            for name in req.aov.names() {
+                let p = aov::beside(&files.output, name);
+                aov.push((p.clone(), outputs.add(&p, "aov")?));
+            }
+        }
         let gamma = files.gamma.unwrap_or(req.job.default_gamma());
-        Ok(Planned { outputs, main, float, stats, interrupt, gamma })
+        Ok(Planned { outputs, main, float, stats, interrupt, aov, gamma })
     }
 
-    /// Stages the main output: the film, or the image.
-    fn stage_main(&mut self, req: &RenderRequest, r: &Rendered, part: &Part) -> Result<()> {
-        let files = &req.files;
-        let bytes = if files.writes_film() {
-            part.to_bytes()
-        } else {
-            r.image.file_bytes(&files.output, self.gamma, files.names.output)?
-        };
-        self.outputs.stage(self.main, &bytes)
+    /// Stages the main output if it is a film.
+    fn stage_film(&mut self, req: &RenderRequest, part: &Part) -> Result<()> {
+        match req.files.writes_film() {
+            true => self.outputs.stage(self.main, &part.to_bytes()),
+            false => Ok(()),
+        }
     }
+
+    /// Stages the images: the output (unless a film) and `--float`, the
+    /// feature buffers as layers of the one that is an EXR
+    /// ([`layered_exr`]) or as PFM files beside the output.
+    fn stage_images(&mut self, req: &RenderRequest, r: &Rendered, features: Option<&Features>) -> Result<()> {
+        let files = &req.files;
+        let layered = layered_exr(files);
+        let bytes = |path: &Path, gamma: f32, name: &str| -> Result<Vec<u8>> {
+            match features {
+                Some(f) if layered == Some(path) => Ok(f.exr_bytes(&r.image)),
+                _ => r.image.file_bytes(path, gamma, name),
+            }
+        };
+        if !files.writes_film() {
+            let b = bytes(&files.output, self.gamma, files.names.output)?;
+            self.outputs.stage(self.main, &b)?;
+        }
+        if let (Some(id), Some(f)) = (self.float, &files.float) {
+            let b = bytes(f, 1.0, files.names.float)?;
+            self.outputs.stage(id, &b)?;
+        }
+        if let Some(f) = features.filter(|_| layered.is_none()) {
+            for ((_, bytes), (_, id)) in f.pfm_files(&files.output).iter().zip(&self.aov) {
+                self.outputs.stage(*id, bytes)?;
+            }
+        }
+        Ok(())
+    }
+}
+
+/// The feature buffers of the render `req` (of the samples it reached:
+/// `stats.spp`), timed into `stats.aov`.
+fn features_of(req: &RenderRequest, stats: &mut Stats) -> Features {
+    let t = Instant::now();
+    let f = render_features(req.job, req.crop.as_ref(), stats.spp, req.aov);
+    let files = match layered_exr(&req.files) {
+        Some(p) => vec![p.to_path_buf()],
+        None => f.pfm_files(&req.files.output).into_iter().map(|(p, _)| p).collect(),
+    };
+    stats.aov = Some(AovReport { buffers: req.aov.names(), seconds: t.elapsed().as_secs_f64(), files });
+    f
 }
 
 /// How a render in rounds ended.
@@ -374,7 +449,8 @@ fn render_in_rounds(
             });
         }
         let (path, id) = out.interrupt.clone().unwrap_or_else(|| (files.output.clone(), out.main));
-        for other in [Some(out.main), out.float, out.stats].into_iter().flatten().filter(|&o| o != id) {
+        let aov = out.aov.iter().map(|&(_, o)| Some(o));
+        for other in [Some(out.main), out.float, out.stats].into_iter().chain(aov).flatten().filter(|&o| o != id) {
             out.outputs.forget(other);
         }
         let mut outputs = std::mem::take(&mut out.outputs);
@@ -387,7 +463,7 @@ fn render_in_rounds(
     if let Some((_, id)) = out.interrupt {
         out.outputs.forget(id);
     }
-    out.stage_main(req, &r, &part)?;
+    out.stage_film(req, &part)?;
     r.stats.rounds = Some(report);
     Ok(Ran::Done(r))
 }
@@ -458,6 +534,8 @@ pub struct StatsFile {
     /// The window rendered (`render --crop`: `width` and `height` are the
     /// whole image's, the hash the window's); `null`: the whole image.
     pub crop: Option<Crop>,
+    /// The feature buffers written (`render --aov`); `null`: none.
+    pub aov: Option<AovReport>,
     pub provenance: Provenance,
 }
 
@@ -511,6 +589,7 @@ impl StatsFile {
             verified: None,
             rounds: st.rounds.clone(),
             crop: st.crop.clone(),
+            aov: st.aov.clone(),
             provenance: Provenance::collect(),
         }
     }
@@ -557,6 +636,7 @@ impl StatsFile {
             verified: Some(st.verified),
             rounds: None,
             crop: None,
+            aov: None,
             provenance: Provenance::collect(),
         }
     }

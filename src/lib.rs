@@ -89,7 +89,9 @@ pub use estimator::{Adaptive, Roulette, ADAPTIVE_MIN_SPP, ROULETTE_AFTER_RAYS};
 pub use film::Image;
 pub use job::{Job, Overrides, RenderOptions, DEFAULT_TILE, IMAGES_ENV};
 pub use kernel::{build_description, isa, Kernel, HAS_SIMD16};
-pub use render::{render, render_counted, render_crop, render_probed, Crop, Progress, Rendered, Stats};
+pub use render::{
+    render, render_counted, render_crop, render_features, render_probed, AovReport, Crop, Progress, Rendered, Stats,
+};
 pub use sampling::Sampler;
 pub use scene::{Scene, SceneSource};
 pub use settings::Settings;

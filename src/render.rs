@@ -5,9 +5,10 @@ use crate::choice::{EstimatorChoice, Mode};
 use crate::error::{Error, Result};
 use crate::estimator::Adaptive;
 use crate::film::accum::Scale;
+use crate::film::aov::{Aovs, Features};
 use crate::film::{Film, Image, TileFilm};
 use crate::job::Job;
-use crate::kernel::{gradient, isa, scalar, wavefront, Kernel};
+use crate::kernel::{first_hit, gradient, isa, scalar, wavefront, Kernel};
 use crate::plan::{Plan, Prepared};
 use crate::probe::{Observed, Probe, WorkCounters};
 use crate::real::Wide;
@@ -80,6 +81,19 @@ pub struct Stats {
     /// The window rendered ([`render_crop`]; `width` and `height` are the
     /// whole image's); `None`: the whole image.
     pub crop: Option<Crop>,
+    /// The feature buffers written (`--aov`); `None`: none asked for.
+    pub aov: Option<AovReport>,
+}
+
+/// The feature buffers a render wrote ([`render_features`]).
+#[derive(Clone, Debug, Serialize)]
+pub struct AovReport {
+    /// Their names (`albedo`, `normal`, `depth`).
+    pub buffers: Vec<&'static str>,
+    /// The time their first-hit pass took (apart from `seconds`).
+    pub seconds: f64,
+    /// Where they went: the EXR holding them as layers, or the PFM files beside the image.
+    pub files: Vec<std::path::PathBuf>,
 }
 
 impl Stats {
@@ -230,6 +244,18 @@ pub fn render_pixels(job: &Job, pixels: &[(u32, u32)], samples: Range<u32>) -> V
         });
     }
     tiles
+}
+
+/// The feature buffers `aovs` of `job`'s image (of the window `crop`),
+/// each pixel the mean over its samples `0..spp` of its camera rays' first
+/// hits ([`crate::kernel::first_hit`]): the same for every kernel.
+pub fn render_features(job: &Job, crop: Option<&Crop>, spp: u32, aovs: Aovs) -> Features {
+    let prep = job.prepared();
+    let (w, h) = (prep.settings.width, prep.settings.height);
+    let (cols, rows) = crop.map_or((0..w, 0..h), |c| (c.x.clone(), c.y.clone()));
+    with_path_sampler!(prep.settings.sampler, sampler => {
+        first_hit::features(prep, sampler, cols.clone(), rows.clone(), 0..spp, aovs)
+    })
 }
 
 /// A window of the image, in pixels: columns `x` and rows `y` (pbrt's crop
@@ -385,6 +411,7 @@ impl Stats {
             plan: job.plan().clone(),
             rounds: None,
             crop: None,
+            aov: None,
         }
     }
 }

@@ -618,6 +618,7 @@ fn check_film(films: &Films, which: usize, bytes: &[u8]) -> Result<&'static str,
             on_rejected: rtow::OnRejected::Warn,
             rounds: Default::default(),
             crop: None,
+            aov: Default::default(),
         };
         files::render_to_files(&req, None).map(|_| "resumed")
     } else {

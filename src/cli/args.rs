@@ -280,6 +280,7 @@ pub fn flag_of(field: &str) -> Option<&'static str> {
         "time_limit" => "--time-limit",
         "preview_every" => "--preview-every",
         "crop" => "--crop",
+        "aov" => "--aov",
         "trace_pixel" => "--trace-pixel",
         "trace_samples" => "--trace-samples",
         "gamma" => "--gamma",

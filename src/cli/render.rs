@@ -61,6 +61,13 @@ pub struct RenderArgs {
     /// those of the whole render. In one go, to an image.
     #[arg(long, value_name = "x0,x1,y0,y1", allow_hyphen_values = true)]
     crop: Option<String>,
+    /// Feature buffers for a denoiser, each pixel the mean over its samples
+    /// of its camera rays' first surface: albedo (after textures), normal
+    /// (unit, facing the camera), depth (distance). Written as layers of the
+    /// EXR the run writes (-o or --float), else as PFM files beside the
+    /// image (x.png: x.albedo.pfm, x.normal.pfm, x.depth.pfm).
+    #[arg(long, value_name = "LIST")]
+    aov: Option<String>,
     /// Print the paths of pixel (x, y) event by event (hits, materials,
     /// normals, scattered directions with their densities and attenuations,
     /// the terms added to the radiance) for --trace-samples samples, and the
@@ -69,7 +76,7 @@ pub struct RenderArgs {
         long,
         value_name = "x,y",
         allow_hyphen_values = true,
-        conflicts_with_all = ["output", "shard", "resume", "crop", "time_limit", "preview_every", "float", "stats_json"]
+        conflicts_with_all = ["output", "shard", "resume", "crop", "aov", "time_limit", "preview_every", "float", "stats_json"]
     )]
     trace_pixel: Option<String>,
     /// How many samples --trace-pixel follows (its first ones, 1 to 64).
@@ -189,6 +196,7 @@ pub fn run(a: RenderArgs) -> Result<u8> {
             on_interrupt: a.on_interrupt,
         },
         crop: a.crop.as_deref().map(rtow::Crop::parse).transpose()?,
+        aov: a.aov.as_deref().map(rtow::film::aov::Aovs::parse).transpose()?.unwrap_or_default(),
     };
     if a.explain {
         say!("{}", job.explain());
@@ -262,5 +270,12 @@ fn summary(name: &str, st: &Stats, req: &RenderRequest, output: &std::path::Path
         st.kernel,
         st.threads,
         st.isa,
-    )
+    ) + &aov_summary(st)
+}
+
+/// The feature buffers written, for the summary line (empty: none).
+fn aov_summary(st: &Stats) -> String {
+    let Some(a) = &st.aov else { return String::new() };
+    let files: Vec<String> = a.files.iter().map(|f| f.display().to_string()).collect();
+    format!("; {} -> {} in {:.3} s", a.buffers.join(", "), files.join(", "), a.seconds)
 }

@@ -7,6 +7,7 @@
 //! ([`TileFilm::moments`]) and `estimator.rs` turns them into an error estimate.
 
 pub mod accum;
+pub mod aov;
 pub mod part;
 
 use crate::error::{Error, Result};

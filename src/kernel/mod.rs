@@ -3,6 +3,7 @@
 //! and what they share: the sky, the debug shadings; which kernel runs
 //! ([`Kernel`]) and what this build's SIMD is ([`isa`]).
 
+pub mod first_hit;
 pub mod scalar;
 pub mod wavefront;
 

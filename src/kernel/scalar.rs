@@ -174,11 +174,7 @@ fn scatter(
     rng.seek(prep.bounces.scatter(v.depth));
     Some(match mat.kind {
         Kind::Lambertian => {
-            let tex = m.lambertian_tex[row];
-            let albedo = match tex.kind {
-                TexKind::Solid => m.lambertian[row],
-                kind => texture_albedo(prep, kind, srf.p, |_| hit, |_| tex.row as usize).to_array(),
-            };
+            let albedo = lambertian_albedo(prep, row, hit, srf.p);
             let dir = lambertian(srf.n, rng);
             let vx = v.how.at(v.toward(), srf.p, dir, |d| cosine_pdf(srf.n, d), v.nee, rng);
             let shadow = shadow_ray(vx.light, srf.p, Some(srf), albedo);
@@ -433,35 +429,10 @@ fn shade<P: Probe, const M: bool>(
     probe: &mut P,
 ) -> Result<Scattered, V3<f32>> {
     let (prep, o, d, id) = (v.prep, path.o, path.d, path.id);
-    let sp = &prep.shapes.spheres;
-    let Hit { kind: hit_kind, index: i } = Hit::of(hit);
-    let (srf, kind, row) = match hit_kind {
-        HitKind::Sphere => {
-            let srf = surface(o, d, t, V3::new(sp.cx[i], sp.cy[i], sp.cz[i]), sp.r[i]);
-            if P::PATHS && probe.paths() {
-                probe.shaded(id, hit, sp.r[i], srf.n, srf.front, 1);
-            }
-            (srf, sp.kind[i], sp.row[i] as usize)
-        }
-        HitKind::Moving if M => {
-            let m = &prep.shapes.moving;
-            let r = m.s.r[i];
-            let srf = surface(o, d, t, m.centre(i, path.time), r);
-            if P::PATHS && probe.paths() {
-                probe.shaded(id, hit, r, srf.n, srf.front, 1);
-            }
-            (srf, m.s.kind[i], m.s.row[i] as usize)
-        }
-        _ => {
-            let qs = &prep.shapes.quads;
-            let [nx, ny, nz, dn, ..] = qs.shade[i].0;
-            let srf = quad_surface(o, d, t, V3::new(nx, ny, nz), dn);
-            if P::PATHS && probe.paths() {
-                probe.shaded(id, hit, 0.0, srf.n, srf.front, 1);
-            }
-            (srf, qs.kind[i], qs.row[i] as usize)
-        }
-    };
+    let (srf, kind, row, radius) = hit_surface::<M>(prep, o, d, t, hit, path.time);
+    if P::PATHS && probe.paths() {
+        probe.shaded(id, hit, radius, srf.n, srf.front, 1);
+    }
     let m = &prep.materials;
     let dir_atten = match prep.plan.mode {
         Mode::Normals => return Err(normal_colour(srf.n)),
@@ -481,4 +452,48 @@ fn shade<P: Probe, const M: bool>(
     };
     let (dir, atten, dir_pdf, shadow) = dir_atten;
     Ok((dir, atten, srf, dir_pdf, shadow, kind))
+}
+
+/// The surface of hit `hit` at `t` along the ray (`o`, `d`) at `time`
+/// (scenes with moving spheres, `M`): the surface, its material's kind and
+/// row, and the sphere's signed radius (0 for a planar record).
+#[inline(always)]
+pub(super) fn hit_surface<const M: bool>(
+    prep: &Prepared,
+    o: V3<f32>,
+    d: V3<f32>,
+    t: f32,
+    hit: u32,
+    time: f32,
+) -> (Surface<f32>, Kind, usize, f32) {
+    let sp = &prep.shapes.spheres;
+    let Hit { kind: hit_kind, index: i } = Hit::of(hit);
+    match hit_kind {
+        HitKind::Sphere => {
+            let srf = surface(o, d, t, V3::new(sp.cx[i], sp.cy[i], sp.cz[i]), sp.r[i]);
+            (srf, sp.kind[i], sp.row[i] as usize, sp.r[i])
+        }
+        HitKind::Moving if M => {
+            let m = &prep.shapes.moving;
+            let r = m.s.r[i];
+            (surface(o, d, t, m.centre(i, time), r), m.s.kind[i], m.s.row[i] as usize, r)
+        }
+        _ => {
+            let qs = &prep.shapes.quads;
+            let [nx, ny, nz, dn, ..] = qs.shade[i].0;
+            (quad_surface(o, d, t, V3::new(nx, ny, nz), dn), qs.kind[i], qs.row[i] as usize, 0.0)
+        }
+    }
+}
+
+/// The albedo of Lambertian material row `row` at `p` on hit `hit`: its
+/// colour, or its texture's there.
+#[inline(always)]
+pub(super) fn lambertian_albedo(prep: &Prepared, row: usize, hit: u32, p: V3<f32>) -> [f32; 3] {
+    let m = &prep.materials;
+    let tex = m.lambertian_tex[row];
+    match tex.kind {
+        TexKind::Solid => m.lambertian[row],
+        kind => texture_albedo(prep, kind, p, |_| hit, |_| tex.row as usize).to_array(),
+    }
 }

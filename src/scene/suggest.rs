@@ -3,6 +3,8 @@
 //! of `a`, `b`", and rtow's own "unknown field `x` for a metal material,
 //! expected `albedo` and `fuzz`").
 
+pub use crate::choice::nearest;
+
 /// `message` with `, did you mean `name`?` appended when it is about an
 /// unknown field or variant and one of the names it expects is similar
 /// enough ([`nearest`]); else unchanged.
@@ -24,16 +26,6 @@ fn nearest_expected(message: &str) -> Option<&str> {
         return Some(name);
     }
     nearest(unknown, names())
-}
-
-/// The name of `names` most similar to `word` (Jaro-Winkler, as the command
-/// line's own suggestions), if similar enough: what every "did you mean" says.
-pub fn nearest<'a>(word: &str, names: impl Iterator<Item = &'a str>) -> Option<&'a str> {
-    names
-        .map(|name| (strsim::jaro_winkler(word, name), name))
-        .filter(|&(similarity, _)| similarity > 0.8)
-        .max_by(|a, b| a.0.total_cmp(&b.0))
-        .map(|(_, name)| name)
 }
 
 /// `samples_per_pixel` -> `spp`.

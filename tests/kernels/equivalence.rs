@@ -317,3 +317,50 @@ proptest! {
         }
     }
 }
+
+/// The feature buffers' pass (`render --aov`) traces its camera rays in
+/// packets of 8; each pixel's mean is, bit for bit, that of the scalar
+/// kernel's first hits of the same samples (one ray at a time), on every
+/// preset: moving spheres, textures, quads, media, meshes, lights.
+#[test]
+fn the_feature_buffers_packets_give_the_scalar_first_hits() {
+    use rtow::film::aov::Aovs;
+    use rtow::internals::kernel::first_hit::{features, first_hit};
+    use rtow::internals::sampling::Sobol;
+    for p in scene::presets() {
+        let sc = self_contained(&(p.build)());
+        if sc.generated_triangles() > 10_000 {
+            continue; // the trees' hits are brute force's bit for bit (triangles.rs)
+        }
+        let d = scene_settings(&sc);
+        // 11 samples: a full packet and a short one per pixel.
+        let (w, h, spp) = (13, 7, 11);
+        let s = Settings { estimator: d.estimator, ..settings(w, h, spp, d.max_depth, 5) };
+        let job = job(&sc, s, Default::default());
+        let prep = job.prepared();
+        let rtow::Sampler::Sobol { dims } = prep.settings.sampler else {
+            panic!("{}: the default sampler is Sobol", p.name)
+        };
+        let sampler = Sobol { dims };
+        let all = Aovs { albedo: true, normal: true, depth: true };
+        let f = features(prep, sampler, 2..w, 1..h, 0..spp, all);
+        for y in 1..h {
+            for x in 2..w {
+                let hits: Vec<_> = (0..spp).map(|k| first_hit(prep, sampler, x, y, k)).collect();
+                let n = spp as f64;
+                let mean3 = |g: fn(&rtow::internals::kernel::first_hit::FirstHit) -> [f32; 3]| {
+                    let mut a = [0f64; 3];
+                    hits.iter().for_each(|h| (0..3).for_each(|c| a[c] += g(h)[c] as f64));
+                    a.map(|v| (v / n) as f32)
+                };
+                let depth = (hits.iter().map(|h| h.depth as f64).sum::<f64>() / n) as f32;
+                let i = ((y - 1) * (w - 2) + x - 2) as usize;
+                let at = |img: &Option<rtow::Image>| img.as_ref().unwrap().data[i].map(f32::to_bits);
+                let what = format!("{} ({x}, {y})", p.name);
+                assert_eq!(at(&f.albedo), mean3(|h| h.albedo).map(f32::to_bits), "{what}: albedo");
+                assert_eq!(at(&f.normal), mean3(|h| h.normal).map(f32::to_bits), "{what}: normal");
+                assert_eq!(f.depth.as_ref().unwrap()[i].to_bits(), depth.to_bits(), "{what}: depth");
+            }
+        }
+    }
+}

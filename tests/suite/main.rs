@@ -12,6 +12,7 @@ mod bad_input;
 #[path = "../common/mod.rs"]
 mod common;
 
+mod aov;
 mod architecture;
 mod bench_cli;
 mod cli;
