@@ -419,8 +419,6 @@ impl Estimator {
 #[cfg(test)]
 mod tests {
     use super::*;
-    use crate::sampling::{path_state, ScalarStream, Xoshiro128PlusX8};
-    use wide::{f32x8, u32x8};
 
     #[test]
     fn descriptions_read_back() {
@@ -479,52 +477,5 @@ mod tests {
         }
         let e = Adaptive::new(0.1, 1).unwrap_err().to_string();
         assert!(e.starts_with("adaptive.min_spp:"), "{e}");
-    }
-
-    #[test]
-    fn roulette_agrees_across_widths_and_keeps_the_mean() {
-        let thr: [[f32; 3]; 8] = [
-            [0.5, 0.25, 0.1],
-            [1.0, 0.0, 0.0],
-            [2.0, 3.0, 0.5],
-            [0.0, 0.0, 0.0],
-            [1e-6, 2e-6, 0.0],
-            [0.9, 0.9, 0.9],
-            [0.3, 0.7, 0.2],
-            [0.99999, 0.5, 0.5],
-        ];
-        let mut x8 = Xoshiro128PlusX8 {
-            s: std::array::from_fn(|w| u32x8::new(std::array::from_fn(|k| path_state(3, k as u64, 0)[w]))),
-        };
-        let mut sc: Vec<ScalarStream> = (0..8).map(|k| ScalarStream::for_path(3, k, 0)).collect();
-        let t8 = V3::new(f32x8::new(thr.map(|t| t[0])), f32x8::new(thr.map(|t| t[1])), f32x8::new(thr.map(|t| t[2])));
-        let mut mean = [[0.0f64; 3]; 8];
-        let n = 20_000;
-        for _ in 0..n {
-            let (w, live8) = roulette(t8, &mut x8);
-            let live8 = live8.to_bitmask();
-            for k in 0..8 {
-                let (s, live) = roulette(V3::from_array(thr[k]), &mut sc[k]);
-                assert_eq!(live, live8 & (1 << k) != 0);
-                if live {
-                    assert_eq!(s.x.to_bits(), w.x.to_array()[k].to_bits());
-                    assert_eq!(s.y.to_bits(), w.y.to_array()[k].to_bits());
-                    assert_eq!(s.z.to_bits(), w.z.to_array()[k].to_bits());
-                    for (m, v) in mean[k].iter_mut().zip(s.to_array()) {
-                        *m += v as f64 / n as f64;
-                    }
-                }
-            }
-        }
-        for k in 0..8 {
-            for c in 0..3 {
-                // Survival is Bernoulli(p) and a survivor carries thr / p: the
-                // mean is thr, with standard error thr sqrt((1 - p) / (p n)).
-                let t = thr[k][c] as f64;
-                let p = thr[k].iter().fold(0.0f32, |a, &b| a.max(b)).min(1.0) as f64;
-                let se = if p > 0.0 { t * ((1.0 - p) / (p * n as f64)).sqrt() } else { 0.0 };
-                assert!((mean[k][c] - t).abs() <= 5.0 * se + 1e-9 * t, "lane {k} channel {c}: {} vs {t}", mean[k][c]);
-            }
-        }
     }
 }

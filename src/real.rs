@@ -747,34 +747,3 @@ macro_rules! impl_wide {
 impl_wide!(f32x8, u32x8, i32x8, 8, from_i32x8);
 impl_wide!(f32x16, u32x16, i32x16, 16, from_i32x16);
 const _: () = assert!(<f32x8 as Real>::LANES <= MAX_LANES && <f32x16 as Real>::LANES <= MAX_LANES);
-
-#[cfg(test)]
-mod tests {
-    use super::*;
-
-    #[test]
-    fn unit_from_bits_agrees_across_widths() {
-        let words = [0u32, 1, 255, 256, 0x8000_0000, u32::MAX, 0xdead_beef, 12345];
-        let wide = f32x8::unit_from_bits(u32x8::new(words)).to_array();
-        for (k, w) in words.iter().enumerate() {
-            let s = f32::unit_from_bits(*w);
-            assert_eq!(s.to_bits(), wide[k].to_bits());
-            assert!((0.0..1.0).contains(&s));
-        }
-    }
-
-    #[test]
-    fn min_max_copysign_agree_across_widths() {
-        let a = [1.0f32, -2.0, 0.0, -0.0, 3.5, f32::INFINITY, -1e-30, 7.0];
-        let b = [2.0f32, -3.0, -0.0, 0.0, 3.5, 1.0, 1e-30, -7.0];
-        let (wa, wb) = (f32x8::new(a), f32x8::new(b));
-        let mn = Real::min(wa, wb).to_array();
-        let mx = Real::max(wa, wb).to_array();
-        let cs = Real::copysign(wa, wb).to_array();
-        for k in 0..8 {
-            assert_eq!(Real::min(a[k], b[k]).to_bits(), mn[k].to_bits());
-            assert_eq!(Real::max(a[k], b[k]).to_bits(), mx[k].to_bits());
-            assert_eq!(Real::copysign(a[k], b[k]).to_bits(), cs[k].to_bits());
-        }
-    }
-}

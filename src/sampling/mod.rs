@@ -496,12 +496,6 @@ pub fn in_unit_disk<R: Real, S: Stream<R>>(rng: &mut S) -> (R, R) {
 #[cfg(test)]
 mod tests {
     use super::*;
-    use wide::f32x8;
-
-    fn lanes(keys: [(u64, u64, u64); 8]) -> Xoshiro128PlusX8 {
-        let st: Vec<[u32; 4]> = keys.iter().map(|&(a, b, c)| path_state(a, b, c)).collect();
-        Xoshiro128PlusX8 { s: std::array::from_fn(|w| u32x8::new(std::array::from_fn(|k| st[k][w]))) }
-    }
 
     #[test]
     fn a_pixels_shared_words_give_every_paths_state() {
@@ -519,38 +513,6 @@ mod tests {
     }
 
     #[test]
-    fn lanes_draw_exactly_what_rand_xoshiro_draws() {
-        let keys: [(u64, u64, u64); 8] = std::array::from_fn(|k| (7, 1000 + k as u64 * 13, k as u64 % 3));
-        let mut x8 = lanes(keys);
-        let mut scalar: Vec<Xoshiro128Plus> =
-            keys.iter().map(|&(a, b, c)| Xoshiro128Plus::seed_from_u64(path_key(a, b, c))).collect();
-        for _ in 0..1000 {
-            let w = x8.next_u32().to_array();
-            for k in 0..8 {
-                assert_eq!(w[k], scalar[k].next_u32());
-            }
-        }
-    }
-
-    #[test]
-    fn float_streams_agree() {
-        let keys: [(u64, u64, u64); 8] = std::array::from_fn(|k| (42, k as u64, 5));
-        let mut x8 = lanes(keys);
-        let mut sc: Vec<ScalarStream> = keys.iter().map(|&(a, b, c)| ScalarStream::for_path(a, b, c)).collect();
-        for _ in 0..200 {
-            let w: f32x8 = x8.next();
-            let v3: V3<f32x8> = unit_vector(&mut x8);
-            for (k, sk) in sc.iter_mut().enumerate() {
-                assert_eq!(w.to_array()[k].to_bits(), Stream::<f32>::next(sk).to_bits());
-                let s: V3<f32> = unit_vector(sk);
-                assert_eq!(s.x.to_bits(), v3.x.to_array()[k].to_bits());
-                assert_eq!(s.y.to_bits(), v3.y.to_array()[k].to_bits());
-                assert_eq!(s.z.to_bits(), v3.z.to_array()[k].to_bits());
-            }
-        }
-    }
-
-    #[test]
     fn cos_sin_is_accurate() {
         // Every u the streams can draw (k 2^-24). The bound is the polynomials'
         // 1e-7 plus the rounding of the f32 angle near +-pi (see cos_sin_turn).
@@ -560,36 +522,6 @@ mod tests {
             let a = (u as f64 - 0.5) * 2.0 * std::f64::consts::PI;
             assert!((c as f64 - a.cos()).abs() < 2.5e-7, "cos at {u}");
             assert!((s as f64 - a.sin()).abs() < 2.5e-7, "sin at {u}");
-        }
-    }
-
-    #[test]
-    fn sobol_streams_agree_across_widths() {
-        let x8 = |sample0: u32| SobolStream {
-            key: u32x8::new(std::array::from_fn(|k| sobol::pixel_key(42, k as u64))),
-            index: u32x8::new(std::array::from_fn(|k| sample0 + k as u32)),
-            dim: 0,
-            sobol_dims: sobol::SOBOL_DIMS as u32,
-        };
-        for sample0 in [0u32, 100, 1 << 20] {
-            let mut w = x8(sample0);
-            let mut sc: Vec<SobolStream<u32>> =
-                (0..8).map(|k| SobolStream::for_path(42, k, sample0 + k as u32, sobol::SOBOL_DIMS as u32)).collect();
-            for depth in [0u32, 1, 7, 39, 40, 41, 1000] {
-                Stream::<f32x8>::seek(&mut w, layout::scatter(depth));
-                let v3: V3<f32x8> = unit_vector(&mut w);
-                let r: f32x8 = w.next();
-                for (k, s) in sc.iter_mut().enumerate() {
-                    Stream::<f32>::seek(s, layout::scatter(depth));
-                    let v: V3<f32> = unit_vector(s);
-                    let rs: f32 = s.next();
-                    assert_eq!(v.x.to_bits(), v3.x.to_array()[k].to_bits());
-                    assert_eq!(v.y.to_bits(), v3.y.to_array()[k].to_bits());
-                    assert_eq!(v.z.to_bits(), v3.z.to_array()[k].to_bits());
-                    assert_eq!(rs.to_bits(), r.to_array()[k].to_bits());
-                    assert_eq!(s.dim, layout::roulette(depth) + 1);
-                }
-            }
         }
     }
 

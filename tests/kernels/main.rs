@@ -1,4 +1,4 @@
-//! The kernels' tests, one binary: bit-identical images across kernels,
+//! The kernels' tests, one binary: lanes against one lane (`lanes`), bit-identical images across kernels,
 //! widths and accelerators (`equivalence`), the BVH against brute force
 //! (`bvh`), the width-generic numerics against f64 (`math`), triangles
 //! against an f64 oracle, watertight, and their tree (`triangles`). CI runs them
@@ -9,5 +9,6 @@ mod common;
 
 mod bvh;
 mod equivalence;
+mod lanes;
 mod math;
 mod triangles;
