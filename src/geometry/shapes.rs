@@ -17,6 +17,7 @@ use super::hit::Closest;
 use super::moving::{LeafMoving, MovingSpheres};
 use super::primitive::Primitive;
 use super::quads::{LeafQuad, Quads};
+use super::smooth::Smooth;
 use super::spheres::{LeafSphere, Spheres};
 use super::triangles::{LeafTriangle, Triangles};
 use super::work::Counter;
@@ -34,6 +35,9 @@ pub struct Shapes {
     pub moving: MovingSpheres,
     /// The meshes' triangles (world space).
     pub triangles: Triangles,
+    /// The vertex normals of the planar records of meshes that give them
+    /// (empty: every surface shades with its geometric normal).
+    pub smooth: Smooth,
     /// Each kind's tree, where the plan chose one (else brute force).
     pub trees: Trees,
     /// Some kind beyond the spheres has primitives to search.
@@ -96,7 +100,16 @@ impl Shapes {
         triangles: Triangles,
     ) -> Shapes {
         let others = quads.count() > 0 || cuboids.count() > 0 || moving.count() > 0 || triangles.count() > 0;
-        Shapes { spheres, quads, cuboids, moving, triangles, trees: Trees::default(), others }
+        Shapes {
+            spheres,
+            quads,
+            cuboids,
+            moving,
+            triangles,
+            smooth: Smooth::default(),
+            trees: Trees::default(),
+            others,
+        }
     }
 
     /// Builds the trees `choice` asks for; `extent` bounds every ray origin

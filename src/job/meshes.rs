@@ -20,8 +20,8 @@
 //! `crate::mesh::obj`'s rules). The bytes of every file are hashed into the
 //! job's identity (the setting `meshes`), as image textures' are.
 //!
-//! Vertex normals in a file are read and checked, not used: meshes are
-//! shaded flat (the geometric normal).
+//! Vertex normals, when the file gives every vertex one, are kept: the
+//! mesh is shaded smooth (`geometry::smooth`); else flat.
 
 use crate::error::{Error, Result};
 use crate::film::part::fnv1a;
@@ -80,6 +80,7 @@ pub(crate) fn load(scene: &Scene, origin: Option<&Path>) -> Result<ObjMeshes> {
             hash: fnv1a(&bytes),
             positions: Arc::new(mesh.positions),
             triangles: Arc::new(mesh.triangles),
+            normals: mesh.normals.map(Arc::new),
             bounds,
         };
         meshes.insert(obj.clone());

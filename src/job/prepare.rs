@@ -11,8 +11,8 @@ use crate::estimator::Estimator;
 use crate::film::accum::Scale;
 use crate::geometry::triangles::plane;
 use crate::geometry::{
-    Boundary, Cuboids, Emitters, LightQuad, LightSphere, Lights, Media, MovingSpheres, Quads, Shade, Shapes, Spheres,
-    TreeChoice, Triangles, Walk,
+    Boundary, Cuboids, Emitters, LightQuad, LightSphere, Lights, Media, MovingSpheres, Quads, Shade, Shapes, Smooth,
+    Spheres, TreeChoice, Triangles, Walk,
 };
 use crate::handle::Kind;
 use crate::material::MaterialTables;
@@ -182,10 +182,11 @@ pub(super) fn prepare(
     let mut tables = Tables { images, materials: MaterialTables::default(), textures: TextureTables::default() };
     let (spheres, moving) = spheres(flat, &mut tables);
     let (mut quads, cuboids) = quads(flat, extent, &mut tables);
-    let triangles = triangles(flat, &mut quads, &mut tables);
+    let (triangles, smooth) = triangles(flat, &mut quads, &mut tables);
     let Tables { materials, textures, .. } = tables;
     let media = if plan.kinds.contains(Kind::Isotropic) { media(flat) } else { Media::default() };
-    let shapes = shapes(Kinds { spheres, quads, cuboids, moving, triangles }, &materials, &plan, extent);
+    let mut shapes = shapes(Kinds { spheres, quads, cuboids, moving, triangles }, &materials, &plan, extent);
+    shapes.smooth = smooth;
     let camera =
         PreparedCamera { lens: plan.lens, ..PreparedCamera::new(&view, settings.width, settings.height, plan.jitter) };
     let mut lights = Lights::default();
@@ -328,18 +329,29 @@ fn quads(flat: &Flat, extent: f32, tables: &mut Tables) -> (Quads, Cuboids) {
 
 /// The meshes' triangles, in mesh order, each with its planar record among
 /// the quads' (after every quad: [`Quads::push_plane`]) and its mesh's
-/// material row.
-fn triangles(flat: &Flat, quads: &mut Quads, tables: &mut Tables) -> Triangles {
+/// material row; and, when some mesh gives vertex normals, every planar
+/// record's smooth-shading record (flat for the quads and the other meshes).
+fn triangles(flat: &Flat, quads: &mut Quads, tables: &mut Tables) -> (Triangles, Smooth) {
     let mut triangles = Triangles::default();
+    let mut smooth = Smooth::default();
+    let smooth_meshes = flat.meshes.iter().any(|m| m.normals.is_some());
+    if smooth_meshes {
+        (0..quads.planes).for_each(|_| smooth.push_flat());
+    }
     for m in &flat.meshes {
         let (kind, row) = (kind(&m.material), tables.row_of(&m.material));
         for k in 0..m.triangles.len() {
             let v = m.triangle(k);
             let (n, dn) = plane(v);
             triangles.push(v, quads.push_plane(n, dn, kind, row));
+            match m.triangle_normals(k) {
+                Some(n) => smooth.push(v, n),
+                None if smooth_meshes => smooth.push_flat(),
+                None => {}
+            }
         }
     }
-    triangles
+    (triangles, smooth)
 }
 
 /// The constant media (where paths are traced).

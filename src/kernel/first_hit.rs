@@ -17,8 +17,9 @@
 //!   albedo; 1 for a dielectric (clear glass reflects and transmits all);
 //!   a light's colour scaled to a largest channel of 1 (0 seen from the
 //!   back of a one-sided light); the background seen, clamped to [0, 1].
-//! * **normal**: the unit shading normal, facing against the camera ray
-//!   (world space); 0 where the ray leaves the scene.
+//! * **normal**: the unit shading normal (a smooth mesh's interpolated
+//!   one), facing against the camera ray (world space); 0 where the ray
+//!   leaves the scene.
 //! * **depth**: the distance along the (unit) camera ray; 0 where it leaves
 //!   the scene.
 //!
@@ -26,7 +27,7 @@
 //! fog (a denoiser's albedo and normal are a surface's).
 
 use super::background;
-use super::scalar::{hit_surface, lambertian_albedo};
+use super::scalar::{hit_surface, lambertian_albedo, shading};
 use crate::film::aov::{Aovs, Features};
 use crate::film::Image;
 use crate::geometry::{emission, MISS};
@@ -131,7 +132,7 @@ fn surface_of<const M: bool>(prep: &Prepared, o: V3<f32>, d: V3<f32>, index: u32
             }
         }
     };
-    FirstHit { albedo, normal: srf.n.to_array(), depth: t }
+    FirstHit { albedo, normal: shading(prep, index, &srf).to_array(), depth: t }
 }
 
 /// The buffers `aovs` of the window of columns `cols` and rows `rows`, each

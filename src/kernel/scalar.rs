@@ -8,7 +8,8 @@ use crate::estimator::{
 };
 use crate::film::TileFilm;
 use crate::geometry::{
-    emission, quad_surface, sample_media, spawn, surface, transmittance, Hit, HitKind, Surface, MEDIUM_BASE, MISS,
+    below, emission, quad_surface, sample_media, shading_normal, spawn, surface, transmittance, Hit, HitKind, Surface,
+    MEDIUM_BASE, MISS,
 };
 use crate::handle::Kind;
 use crate::material::{dielectric, lambertian, metal};
@@ -166,30 +167,35 @@ fn scatter(
     hit: u32,
     mat: Material,
     d: V3<f32>,
-    srf: &Surface<f32>,
+    (srf, n): (&Surface<f32>, V3<f32>),
     rng: &mut impl Stream<f32>,
 ) -> Option<Scatter> {
     let (prep, row) = (v.prep, mat.row);
     let m = &prep.materials;
+    // With smooth shading (`n`, the shading normal), what leaves under the
+    // geometric surface (`srf.n`) ends there (`geometry::smooth`).
+    let smooth = !prep.shapes.smooth.is_empty();
     rng.seek(prep.bounces.scatter(v.depth));
     Some(match mat.kind {
         Kind::Lambertian => {
             let albedo = lambertian_albedo(prep, row, hit, srf.p);
-            let dir = lambertian(srf.n, rng);
-            let vx = v.how.at(v.toward(), srf.p, dir, |d| cosine_pdf(srf.n, d), v.nee, rng);
-            let shadow = shadow_ray(vx.light, srf.p, Some(srf), albedo);
-            let pdf = if v.how == Directions::Book { 0.0 } else { cosine_pdf(srf.n, vx.dir) };
-            (vx.dir, albedo.map(|a| a * vx.weight), pdf, shadow)
+            let dir = lambertian(n, rng);
+            let vx = v.how.at(v.toward(), srf.p, dir, |d| cosine_pdf(n, d), v.nee, rng);
+            let light = if smooth { vx.light.filter(|l| !below(srf.n, l.0)) } else { vx.light };
+            let shadow = shadow_ray(light, srf.p, Some(srf), albedo);
+            let pdf = if v.how == Directions::Book { 0.0 } else { cosine_pdf(n, vx.dir) };
+            let atten = if smooth && below(srf.n, vx.dir) { [0.0; 3] } else { albedo.map(|a| a * vx.weight) };
+            (vx.dir, atten, pdf, shadow)
         }
         Kind::Metal => {
             let (albedo, fuzz) = m.metal[row];
-            let (dir, alive) = metal(d, srf.n, fuzz, rng);
-            if !alive {
+            let (dir, alive) = metal(d, n, fuzz, rng);
+            if !alive || (smooth && below(srf.n, dir)) {
                 return None;
             }
             (dir, albedo, 0.0, None)
         }
-        Kind::Dielectric => (dielectric(d, srf.n, srf.front, m.dielectric[row], rng), [1.0; 3], 0.0, None),
+        Kind::Dielectric => (dielectric(d, n, srf.front, m.dielectric[row], rng), [1.0; 3], 0.0, None),
         // Lights end the path before scattering (`trace`); media scatter in `trace`.
         Kind::DiffuseLight | Kind::Isotropic => return None,
     })
@@ -434,8 +440,9 @@ fn shade<P: Probe, const M: bool>(
         probe.shaded(id, hit, radius, srf.n, srf.front, 1);
     }
     let m = &prep.materials;
+    let n = shading(prep, hit, &srf);
     let dir_atten = match prep.plan.mode {
-        Mode::Normals => return Err(normal_colour(srf.n)),
+        Mode::Normals => return Err(normal_colour(n)),
         Mode::Flat | Mode::Gradient => return Err(V3::from_array(m.flat_colour(kind, row as u32))),
         Mode::Path if kind == Kind::DiffuseLight => {
             let (emit, one_sided) = m.light[row];
@@ -445,7 +452,7 @@ fn shade<P: Probe, const M: bool>(
             }
             return Err(e * mis_bsdf(path.pdf, prep.emitters.pdf_of(o, d, prep.emitters.of_row[row])));
         }
-        Mode::Path => match scatter(v, hit, Material { kind, row }, d, &srf, rng) {
+        Mode::Path => match scatter(v, hit, Material { kind, row }, d, (&srf, n), rng) {
             Some(s) => s,
             None => return Err(V3::new(0.0, 0.0, 0.0)),
         },
@@ -483,6 +490,16 @@ pub(super) fn hit_surface<const M: bool>(
             let [nx, ny, nz, dn, ..] = qs.shade[i].0;
             (quad_surface(o, d, t, V3::new(nx, ny, nz), dn), qs.kind[i], qs.row[i] as usize, 0.0)
         }
+    }
+}
+
+/// The shading normal of hit `hit` at `srf`: the geometric normal, or a
+/// smooth mesh's interpolated one ([`shading_normal`]).
+#[inline(always)]
+pub(super) fn shading(prep: &Prepared, hit: u32, srf: &Surface<f32>) -> V3<f32> {
+    match prep.shapes.smooth.is_empty() {
+        true => srf.n,
+        false => shading_normal(&prep.shapes.smooth, |_| hit, srf),
     }
 }
 

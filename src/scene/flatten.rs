@@ -43,6 +43,9 @@ pub struct Flat {
 pub struct FlatMesh {
     pub positions: Vec<[f32; 3]>,
     pub triangles: Arc<Vec<[u32; 3]>>,
+    /// A unit normal per position (world space), for smooth shading: an
+    /// OBJ file's, turned by its group; `None` for flat shading.
+    pub normals: Option<Vec<[f32; 3]>>,
     pub material: Material,
 }
 
@@ -50,6 +53,11 @@ impl FlatMesh {
     /// Triangle `k`'s vertices.
     pub fn triangle(&self, k: usize) -> [[f32; 3]; 3] {
         self.triangles[k].map(|i| self.positions[i as usize])
+    }
+
+    /// Triangle `k`'s vertex normals, if the mesh has them.
+    pub fn triangle_normals(&self, k: usize) -> Option<[[f32; 3]; 3]> {
+        self.normals.as_ref().map(|n| self.triangles[k].map(|i| n[i as usize]))
     }
 }
 
@@ -217,7 +225,7 @@ fn mesh(t: Option<&Transform>, m: &Mesh, icospheres: &mut Icospheres, objs: &Obj
                     unit.iter().map(|u| f32s(t.point(std::array::from_fn(|i| c[i] + r * u[i])))).collect()
                 }
             };
-            FlatMesh { positions, triangles: triangles.clone(), material: m.material.clone() }
+            FlatMesh { positions, triangles: triangles.clone(), normals: None, material: m.material.clone() }
         }
         MeshShape::Obj { ref file, scale } => {
             let obj = objs.get(file).expect("Scene::flatten_with: every OBJ file the scene names is read first");
@@ -227,7 +235,23 @@ fn mesh(t: Option<&Transform>, m: &Mesh, icospheres: &mut Icospheres, objs: &Obj
                 (None, false) => obj.positions.iter().map(|p| f32s(f64s(*p).map(|x| s * x))).collect(),
                 (Some(t), _) => obj.positions.iter().map(|p| f32s(t.point(f64s(*p).map(|x| s * x)))).collect(),
             };
-            FlatMesh { positions, triangles: obj.triangles.clone(), material: m.material.clone() }
+            // Normals turn with the group (a uniform scale leaves them be),
+            // normalized in f64; a zero normal stays zero.
+            let turn = t.copied().unwrap_or(Transform::IDENTITY);
+            let normals = obj.normals.as_ref().map(|ns| {
+                ns.iter()
+                    .map(|n| {
+                        let v = turn.vector(f64s(*n));
+                        let len = (v[0] * v[0] + v[1] * v[1] + v[2] * v[2]).sqrt();
+                        if len > 0.0 {
+                            f32s(v.map(|x| x / len))
+                        } else {
+                            [0.0; 3]
+                        }
+                    })
+                    .collect()
+            });
+            FlatMesh { positions, triangles: obj.triangles.clone(), normals, material: m.material.clone() }
         }
     }
 }

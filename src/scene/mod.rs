@@ -523,6 +523,9 @@ pub struct ObjMesh {
     pub hash: u64,
     pub positions: Arc<Vec<[f32; 3]>>,
     pub triangles: Arc<Vec<[u32; 3]>>,
+    /// A normal per position, when the file gives every vertex one
+    /// (smooth shading); as the file writes them (not normalized).
+    pub normals: Option<Arc<Vec<[f32; 3]>>>,
     /// The smallest box holding every position, `(min, max)`.
     pub bounds: ([f32; 3], [f32; 3]),
 }

@@ -39,6 +39,7 @@ mod scene_format;
 mod schema_cli;
 mod set_cli;
 mod shards;
+mod smooth;
 mod split;
 mod stability;
 mod textures;

@@ -118,6 +118,9 @@ pub(super) fn debug_shade<W: Wide, P: Probe, const M: bool>(
 ) {
     let hits = surfaces::<W, P, M>(prep, ws, at, probe);
     let c = match mode {
+        Mode::Normals if !prep.shapes.smooth.is_empty() => {
+            normal_colour(super::scatter::smooth_normals::<W>(prep, ws, at, &hits.srf))
+        }
         Mode::Normals => normal_colour(hits.srf.n),
         // The flat colour (`MaterialTables::flat_colour`): the albedo, white for glass.
         Mode::Flat | Mode::Gradient | Mode::Path => hits.albedo,

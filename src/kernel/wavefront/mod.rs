@@ -50,8 +50,8 @@ use crate::estimator::{
 };
 use crate::film::TileFilm;
 use crate::geometry::{
-    centre_at, emission, quad_surface, sample_media, spawn, surface, transmittance, Shade, Surface, MEDIUM_BASE, MISS,
-    MOVING_BASE, QUAD_BASE,
+    below, centre_at, emission, quad_surface, sample_media, shading_normal, spawn, surface, transmittance, Shade,
+    Surface, MEDIUM_BASE, MISS, MOVING_BASE, QUAD_BASE,
 };
 use crate::handle::Kind;
 use crate::kernel::{background, normal_colour, texture_albedo};

@@ -31,24 +31,33 @@ pub(super) fn scatter<W: Wide, P: Probe, S: PathSampler, const M: bool>(
     rng.seek(dims.scatter(depth));
     let all = W::mask_from_bits(u32::MAX);
     let thr = at.v3(&ws.cur.thr);
+    // With smooth shading (`n`, the shading normal), what leaves under the
+    // geometric surface (`srf.n`) ends there (`geometry::smooth`), as in the
+    // scalar kernel.
+    let smooth = !prep.shapes.smooth.is_empty();
+    let n = if smooth { smooth_normals::<W>(prep, ws, at, &srf) } else { srf.n };
     let (dir, alive, albedo) = match kind {
         Kind::Lambertian => {
-            let dir = lambertian(srf.n, &mut rng);
+            let dir = lambertian(n, &mut rng);
             let toward = Toward { lights: &prep.lights, emitters: &prep.emitters, dim: dims.light(depth) };
             let send = depth + 1 < prep.settings.max_depth;
-            let vx = dirs.at(toward, srf.p, dir, |d| cosine_pdf(srf.n, d), send, &mut rng);
+            let vx = dirs.at(toward, srf.p, dir, |d| cosine_pdf(n, d), send, &mut rng);
             if let Some((ld, t, carry)) = vx.light {
+                let carry = if smooth { V3::select(below(srf.n, ld), V3::splat3([0.0; 3]), carry) } else { carry };
                 let c = thr.mul_elem(albedo.mul_elem(carry));
                 let shadow = Shadow { o: spawn(&srf, ld), d: ld, tmax: shadow_tmax(t, srf.offset), c };
                 queue_shadow::<W, M>(ws, at, shadow);
             }
-            (vx.dir, all, albedo * vx.weight)
+            let atten = albedo * vx.weight;
+            let atten = if smooth { V3::select(below(srf.n, vx.dir), V3::splat3([0.0; 3]), atten) } else { atten };
+            (vx.dir, all, atten)
         }
         Kind::Metal => {
-            let (dir, alive) = metal(d, srf.n, param, &mut rng);
+            let (dir, alive) = metal(d, n, param, &mut rng);
+            let alive = if smooth { alive & !below(srf.n, dir) } else { alive };
             (dir, alive, albedo)
         }
-        Kind::Dielectric => (dielectric(d, srf.n, srf.front, param, &mut rng), all, albedo),
+        Kind::Dielectric => (dielectric(d, n, srf.front, param, &mut rng), all, albedo),
         // Lights and media have their own passes (`bounce`).
         Kind::DiffuseLight | Kind::Isotropic => (d, !all, albedo),
     };
@@ -57,10 +66,17 @@ pub(super) fn scatter<W: Wide, P: Probe, S: PathSampler, const M: bool>(
     // Under nee-mis, the density of the direction, for the weight of a light
     // it reaches: the cosine lobe's, 0 for a specular bounce.
     let pdf =
-        (dirs == Directions::Nee)
-            .then(|| if kind == Kind::Lambertian { cosine_pdf(srf.n, dir) } else { W::splat(0.0) });
+        (dirs == Directions::Nee).then(|| if kind == Kind::Lambertian { cosine_pdf(n, dir) } else { W::splat(0.0) });
     let next = Scattered { thr, alive, o: spawn(&srf, dir), dir, pdf };
     continue_paths::<W, S, M>(prep, ws, at, depth, dims, rng, next);
+}
+
+/// The shading normals of a packet's surfaces `srf` in a scene with smooth
+/// meshes ([`shading_normal`]; out of line: only such scenes call it).
+#[inline(never)]
+pub(super) fn smooth_normals<W: Wide>(prep: &Prepared, ws: &Workspace, at: impl Packet<W>, srf: &Surface<W>) -> V3<W> {
+    let hit = at.u(&ws.hit);
+    shading_normal(&prep.shapes.smooth, |k| W::lane_u(hit, k), srf)
 }
 
 /// A packet's scattered paths: their throughput after the vertex, which
