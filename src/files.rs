@@ -315,8 +315,9 @@ struct Planned {
     stats: Option<OutputId>,
     /// The film a signal leaves, when the output is not a film itself.
     interrupt: Option<(PathBuf, OutputId)>,
-    /// The feature buffers' PFM files ([`aov::beside`] the output).
-    aov: Vec<(PathBuf, OutputId)>,
+    /// The feature buffers' PFM files ([`aov::beside`] the output), in
+    /// [`Aovs::names`] order.
+    aov: Vec<OutputId>,
     gamma: f32,
 }
 
@@ -344,8 +345,7 @@ impl Planned {
         let mut aov = Vec::new();
         if layered_exr(files).is_none() {
             for name in req.aov.names() {
-                let p = aov::beside(&files.output, name);
-                aov.push((p.clone(), outputs.add(&p, "aov")?));
+                aov.push(outputs.add(&aov::beside(&files.output, name), "aov")?);
             }
         }
         let gamma = files.gamma.unwrap_or(req.job.default_gamma());
@@ -381,7 +381,7 @@ impl Planned {
             self.outputs.stage(id, &b)?;
         }
         if let Some(f) = features.filter(|_| layered.is_none()) {
-            for ((_, bytes), (_, id)) in f.pfm_files(&files.output).iter().zip(&self.aov) {
+            for ((_, bytes), id) in f.pfm_files(&files.output).iter().zip(&self.aov) {
                 self.outputs.stage(*id, bytes)?;
             }
         }
@@ -396,7 +396,7 @@ fn features_of(req: &RenderRequest, stats: &mut Stats) -> Features {
     let f = render_features(req.job, req.crop.as_ref(), stats.spp, req.aov);
     let files = match layered_exr(&req.files) {
         Some(p) => vec![p.to_path_buf()],
-        None => f.pfm_files(&req.files.output).into_iter().map(|(p, _)| p).collect(),
+        None => req.aov.names().into_iter().map(|name| aov::beside(&req.files.output, name)).collect(),
     };
     stats.aov = Some(AovReport { buffers: req.aov.names(), seconds: t.elapsed().as_secs_f64(), files });
     f
@@ -449,7 +449,7 @@ fn render_in_rounds(
             });
         }
         let (path, id) = out.interrupt.clone().unwrap_or_else(|| (files.output.clone(), out.main));
-        let aov = out.aov.iter().map(|&(_, o)| Some(o));
+        let aov = out.aov.iter().map(|&o| Some(o));
         for other in [Some(out.main), out.float, out.stats].into_iter().chain(aov).flatten().filter(|&o| o != id) {
             out.outputs.forget(other);
         }

@@ -40,7 +40,7 @@ use rayon::prelude::*;
 use std::ops::Range;
 use wide::f32x8;
 
-/// What one camera ray meets first.
+/// What one camera ray meets first (or, for a pixel, the mean over its samples).
 #[derive(Clone, Copy, Debug, PartialEq)]
 pub struct FirstHit {
     pub albedo: [f32; 3],
@@ -80,7 +80,7 @@ fn pixel_mean<W: Wide, S: PathSampler, const M: bool>(
     sampler: S,
     (x, y): (u32, u32),
     samples: Range<u32>,
-) -> Mean {
+) -> FirstHit {
     debug_assert!(W::LANES <= 16, "a packet's words fit 16 lanes");
     let st = &prep.settings;
     let pixel_words = sampler.pixel_words(st.seed, y as u64 * st.width as u64 + x as u64);
@@ -149,7 +149,7 @@ pub fn features<S: PathSampler>(
 ) -> Features {
     let (w, h) = (cols.len() as u32, rows.len() as u32);
     let moving = !prep.shapes.moving.is_empty();
-    let per_row: Vec<Vec<Mean>> = rows
+    let per_row: Vec<Vec<FirstHit>> = rows
         .into_par_iter()
         .map(|y| {
             let at = |x| match moving {
@@ -160,18 +160,15 @@ pub fn features<S: PathSampler>(
         })
         .collect();
     let pixels = || per_row.iter().flatten();
-    let image = |f: fn(&Mean) -> [f32; 3]| Image { width: w, height: h, data: pixels().map(f).collect() };
+    let image = |f: fn(&FirstHit) -> [f32; 3]| Image { width: w, height: h, data: pixels().map(f).collect() };
     Features {
         width: w,
         height: h,
-        albedo: aovs.albedo.then(|| image(|p| p.0)),
-        normal: aovs.normal.then(|| image(|p| p.1)),
-        depth: aovs.depth.then(|| pixels().map(|p| p.2).collect()),
+        albedo: aovs.albedo.then(|| image(|p| p.albedo)),
+        normal: aovs.normal.then(|| image(|p| p.normal)),
+        depth: aovs.depth.then(|| pixels().map(|p| p.depth).collect()),
     }
 }
-
-/// A pixel's mean albedo, normal and depth.
-type Mean = ([f32; 3], [f32; 3], f32);
 
 /// First hits added up in f64, in the order given.
 #[derive(Default)]
@@ -191,8 +188,9 @@ impl Sum {
     }
 
     /// The mean over `n` hits (0 for none).
-    fn mean(&self, n: usize) -> Mean {
+    fn mean(&self, n: usize) -> FirstHit {
         let n = n.max(1) as f64;
-        (self.albedo.map(|v| (v / n) as f32), self.normal.map(|v| (v / n) as f32), (self.depth / n) as f32)
+        let f = |v: f64| (v / n) as f32;
+        FirstHit { albedo: self.albedo.map(f), normal: self.normal.map(f), depth: f(self.depth) }
     }
 }
