@@ -27,8 +27,9 @@
 
 use super::hit::{MOVING_BASE, QUAD_BASE};
 use super::surface::Surface;
-use crate::real::Real;
+use crate::real::{Real, MAX_LANES};
 use crate::vec3::V3;
+use glam::DVec3;
 
 /// The vertex normals of a scene's planar records (by record: quads, then
 /// triangles), or none when no mesh gives normals (then no kernel reads it).
@@ -54,20 +55,18 @@ impl Smooth {
     /// The record of the triangle `v` with unit vertex normals `n` (world
     /// space); flat if the triangle has no area.
     pub fn push(&mut self, v: [[f32; 3]; 3], n: [[f32; 3]; 3]) {
-        let f = |a: [f32; 3]| a.map(f64::from);
-        let (v0, v1, v2) = (f(v[0]), f(v[1]), f(v[2]));
-        let sub = |a: [f64; 3], b: [f64; 3]| [a[0] - b[0], a[1] - b[1], a[2] - b[2]];
-        let dot = |a: [f64; 3], b: [f64; 3]| a[0] * b[0] + a[1] * b[1] + a[2] * b[2];
-        let (e1, e2) = (sub(v1, v0), sub(v2, v0));
-        let (d11, d22, d12) = (dot(e1, e1), dot(e2, e2), dot(e1, e2));
+        let d = |a: [f32; 3]| DVec3::from_array(a.map(f64::from));
+        let v0 = d(v[0]);
+        let (e1, e2) = (d(v[1]) - v0, d(v[2]) - v0);
+        let (d11, d22, d12) = (e1.dot(e1), e2.dot(e2), e1.dot(e2));
         let det = d11 * d22 - d12 * d12;
         if !(det > 0.0 && det.is_finite()) {
             return self.push_flat();
         }
-        let a1: [f64; 3] = std::array::from_fn(|i| (e1[i] * d22 - e2[i] * d12) / det);
-        let a2: [f64; 3] = std::array::from_fn(|i| (e2[i] * d11 - e1[i] * d12) / det);
-        let (n0, n1, n2) = (f(n[0]), f(n[1]), f(n[2]));
-        let parts = [v0, a1, a2, n0, sub(n1, n0), sub(n2, n0)];
+        let a1 = (e1 * d22 - e2 * d12) / det;
+        let a2 = (e2 * d11 - e1 * d12) / det;
+        let n0 = d(n[0]);
+        let parts = [v0, a1, a2, n0, d(n[1]) - n0, d(n[2]) - n0];
         self.rec.push(std::array::from_fn(|j| parts[j / 3][j % 3] as f32));
     }
 }
@@ -82,8 +81,7 @@ pub fn shading_normal<R: Real>(smooth: &Smooth, hit: impl Fn(usize) -> u32, srf:
         let h = hit(k);
         (QUAD_BASE..MOVING_BASE).contains(&h).then(|| smooth.rec.get((h - QUAD_BASE) as usize)).flatten()
     };
-    debug_assert!(R::LANES <= 16);
-    let recs: [[f32; 18]; 16] = std::array::from_fn(|k| match k < R::LANES {
+    let recs: [[f32; 18]; MAX_LANES] = std::array::from_fn(|k| match k < R::LANES {
         true => rec(k).copied().unwrap_or([0.0; 18]),
         false => [0.0; 18],
     });

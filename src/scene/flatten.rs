@@ -241,12 +241,12 @@ fn mesh(t: Option<&Transform>, m: &Mesh, icospheres: &mut Icospheres, objs: &Obj
             let normals = obj.normals.as_ref().map(|ns| {
                 ns.iter()
                     .map(|n| {
+                        // (From f32 values: no square underflows in f64.)
                         let v = turn.vector(f64s(*n));
-                        let len = (v[0] * v[0] + v[1] * v[1] + v[2] * v[2]).sqrt();
-                        if len > 0.0 {
-                            f32s(v.map(|x| x / len))
-                        } else {
+                        if v == [0.0; 3] {
                             [0.0; 3]
+                        } else {
+                            f32s(crate::mesh::unit(v))
                         }
                     })
                     .collect()
