@@ -159,12 +159,15 @@ fn count_instructions(a: &BenchArgs, source: &SceneSource, job: &Job) -> Result<
         instructions::check_reason(r)?;
     }
     rtow::instruments::callgrind::valgrind_version()?;
+    // The baseline file is read first, whichever build counts: one that is
+    // not an instruction baseline is refused here, before a build for
+    // valgrind is looked for (that build checks it against its own run).
+    let baseline = a.baseline.as_deref().map(InstructionsBaseline::load).transpose()?;
     if cfg!(target_feature = "avx512f") {
         if let Some(v3) = countable_build()? {
             return delegate(&v3);
         }
     }
-    let baseline = a.baseline.as_deref().map(InstructionsBaseline::load).transpose()?;
     if let Some(b) = &baseline {
         b.check(&source.name, job.settings(), job.threads(), &a.kernels)?;
     }
@@ -246,7 +249,10 @@ fn delegate(v3: &Path) -> Result<bool> {
     match status.code() {
         Some(0) => Ok(true),
         Some(1) => Ok(false),
-        _ => Err(Error::System(format!("{} ended with {status} (its messages are above)", v3.display()))),
+        // Any other status (2: a refused input) is passed on as it is; the
+        // build that counted already said why.
+        Some(code) => std::process::exit(code),
+        None => Err(Error::System(format!("{} ended with {status} (its messages are above)", v3.display()))),
     }
 }
 

@@ -675,6 +675,40 @@ impl<L: Leaf> Bvh<L> {
     }
 }
 
+impl<L: Leaf> Bvh<L> {
+    /// Every leaf record whose box the line `o + t d` (`t >= 0`) enters,
+    /// each once, in no particular order: not the closest hit but all of
+    /// them (a light mesh's density sums over every triangle a direction
+    /// meets, [`super::LightMesh`]). One ray, one box at a time; the tree
+    /// must keep its leaf records (not [`Bvh::keep_lanes_only`]).
+    #[inline]
+    pub fn visit(&self, o: V3<f32>, d: V3<f32>, mut f: impl FnMut(&L)) {
+        if self.leaf.is_empty() {
+            return;
+        }
+        let (inv, noi) = slab_ray(o, d);
+        let mut stack = Stack::new(0u32);
+        while let Some(ni) = stack.pop() {
+            let node = &self.nodes[ni as usize];
+            for k in 0..node.kids() {
+                let bmin = V3::new(node.min[0][k], node.min[1][k], node.min[2][k]);
+                let bmax = V3::new(node.max[0][k], node.max[1][k], node.max[2][k]);
+                let (near, far) = slab(bmin, bmax, inv, noi, 0.0);
+                if !(near <= far * EXIT_SCALE) {
+                    continue;
+                }
+                match node.count[k] {
+                    0 => stack.push(node.child[k]),
+                    count => {
+                        let start = node.child[k] as usize;
+                        self.leaf[start..start + count as usize].iter().for_each(&mut f);
+                    }
+                }
+            }
+        }
+    }
+}
+
 impl Bvh<LeafSphere> {
     /// The tree over `s` for `walk` ([`Bvh::build`]), with the spheres' SoA
     /// in leaf order for the one-ray walk ([`Bvh::closest_hit_wide`]).

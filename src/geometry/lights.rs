@@ -48,11 +48,16 @@
 //! weighted down: at most the band's solid angle times the background, a
 //! relative `~1e-4` of the light's own contribution at `r / d = 1e-4`.
 //!
+//! - a mesh of `diffuse_light`: a point uniform over its surface, with
+//!   the densities of [`super::light_mesh`] (of a point for `nee-mis`, of
+//!   a direction, summed over the triangles along it, for `book`).
+//!
 //! A list samples one of its shapes, uniformly (its density is the average
 //! of the shapes'). The shapes' densities are evaluated for every lane and
 //! each lane keeps its own: the list is short (at most
 //! [`crate::limits::MAX_SAMPLED_SHAPES`]) and the same for every lane.
 
+use super::light_mesh::LightMesh;
 use super::spheres::{sphere_disc, sphere_t};
 use crate::real::Real;
 use crate::sampling::cos_sin_turn;
@@ -92,12 +97,13 @@ pub struct LightSphere {
     pub r: f32,
 }
 
-/// The shapes a scene samples toward: quads first, then spheres (the order
-/// a uniform pick counts them in).
+/// The shapes a scene samples toward: quads first, then spheres, then
+/// meshes (the order a uniform pick counts them in).
 #[derive(Clone, Debug, Default, PartialEq)]
 pub struct Lights {
     pub quads: Vec<LightQuad>,
     pub spheres: Vec<LightSphere>,
+    pub meshes: Vec<LightMesh>,
 }
 
 impl LightQuad {
@@ -126,7 +132,7 @@ impl LightQuad {
 
 impl Lights {
     pub fn len(&self) -> usize {
-        self.quads.len() + self.spheres.len()
+        self.quads.len() + self.spheres.len() + self.meshes.len()
     }
 
     pub fn is_empty(&self) -> bool {
@@ -155,7 +161,36 @@ impl Lights {
             let toward = sphere_sample(s, x, u1, u2);
             dir = V3::select(which.eq(R::splat((base + k) as f32)), toward, dir);
         }
+        if !self.meshes.is_empty() {
+            dir = self.toward_meshes(x, (pick, which), u1, u2, dir);
+        }
         dir
+    }
+
+    /// [`Lights::sample`]'s meshes: the lanes whose pick `which` is a mesh
+    /// get a direction toward a point on it (out of line: the scenes
+    /// without mesh lights keep the code they had).
+    #[inline(never)]
+    #[cold]
+    fn toward_meshes<R: Real>(&self, x: V3<R>, (pick, which): (R, R), u1: R, u2: R, mut dir: V3<R>) -> V3<R> {
+        // What is left of `pick` past the choice of shape picks the triangle.
+        let base = self.quads.len() + self.spheres.len();
+        let sub = pick * R::splat(self.len() as f32) - which;
+        for (k, m) in self.meshes.iter().enumerate() {
+            let (p, nm) = m.points(sub, u1, u2);
+            let to = p - x;
+            let len2 = to.length_squared();
+            let toward = V3::select(len2.gt(R::splat(0.0)), to * (R::splat(1.0) / len2.sqrt()), nm);
+            dir = V3::select(which.eq(R::splat((base + k) as f32)), toward, dir);
+        }
+        dir
+    }
+
+    /// The sum of the meshes' densities of `dir` from `x` (out of line).
+    #[inline(never)]
+    #[cold]
+    fn meshes_pdf<R: Real>(&self, x: V3<R>, dir: V3<R>) -> R {
+        self.meshes.iter().fold(R::splat(0.0), |sum, m| sum + m.pdf_lines(x, dir))
     }
 
     /// The density (solid angle, at `x`) of the unit direction `dir` under
@@ -169,14 +204,18 @@ impl Lights {
         for s in &self.spheres {
             sum = sum + sphere_pdf(s, x, dir);
         }
+        if !self.meshes.is_empty() {
+            sum = sum + self.meshes_pdf(x, dir);
+        }
         sum * R::splat(1.0 / self.len() as f32)
     }
 }
 
 /// The emitters the `nee-mis` estimator samples (next-event estimation):
-/// the scene's static light spheres and quads as shapes (in [`Lights`]'
-/// order: quads, then spheres), each one's radiance and sidedness, and the
-/// way back from a light primitive that a path hits to its shape.
+/// the scene's static light spheres, quads and meshes as shapes (in
+/// [`Lights`]' order: quads, spheres, meshes), each one's radiance and
+/// sidedness, and the way back from a light primitive that a path hits to
+/// its shape.
 #[derive(Clone, Debug, Default, PartialEq)]
 pub struct Emitters {
     pub shapes: Lights,
@@ -230,22 +269,8 @@ impl Emitters {
         let lights = &self.shapes;
         for (k, l) in lights.quads.iter().enumerate() {
             let p = V3::splat3(l.q) + V3::splat3(l.u) * u1 + V3::splat3(l.v) * u2;
-            let to = p - x;
-            let len2 = to.length_squared();
-            let t = len2.sqrt();
-            let dir = to * (one / t);
-            let nl = V3::splat3(l.n);
-            let cos = nl.dot(dir);
-            let pdf = len2 / (cos.abs() * R::splat(l.area));
-            let ok = len2.gt(zero) & pdf.is_finite();
-            let emit = emission(V3::splat3(self.emit[k]), mask::<R>(self.one_sided[k]), cos.lt(zero));
             let take = which.eq(R::splat(k as f32));
-            out = LightSample {
-                dir: V3::select(take & ok, dir, out.dir),
-                t: R::select(take, t, out.t),
-                pdf: R::select(take, R::select(ok, pdf, zero), out.pdf),
-                emit: V3::select(take, emit, out.emit),
-            };
+            out = self.toward_point(x, Drawn { shape: k, p, n: V3::splat3(l.n), area: l.area }, take, out);
         }
         let base = lights.quads.len();
         for (k, s) in lights.spheres.iter().enumerate() {
@@ -269,18 +294,85 @@ impl Emitters {
                 emit: V3::select(take, emit, out.emit),
             };
         }
+        if !lights.meshes.is_empty() {
+            out = self.sample_meshes(x, (pick, which), u1, u2, out);
+        }
         out.pdf = out.pdf * R::splat(1.0 / n as f32);
         out
+    }
+
+    /// [`Emitters::sample`]'s meshes: the lanes whose pick `which` is a
+    /// mesh get a point on it (out of line: the scenes without mesh lights
+    /// keep the code they had).
+    #[inline(never)]
+    #[cold]
+    fn sample_meshes<R: Real>(
+        &self,
+        x: V3<R>,
+        (pick, which): (R, R),
+        u1: R,
+        u2: R,
+        mut out: LightSample<R>,
+    ) -> LightSample<R> {
+        // What is left of `pick` past the choice of shape picks the triangle.
+        let lights = &self.shapes;
+        let base = lights.quads.len() + lights.spheres.len();
+        let sub = pick * R::splat(self.len() as f32) - which;
+        for (k, m) in lights.meshes.iter().enumerate() {
+            let (p, nm) = m.points(sub, u1, u2);
+            let take = which.eq(R::splat((base + k) as f32));
+            out = self.toward_point(x, Drawn { shape: base + k, p, n: nm, area: m.area }, take, out);
+        }
+        out
+    }
+
+    /// [`Emitters::pdf_of`]'s meshes: the density of the point hit, in the
+    /// lanes whose shape is a mesh (out of line).
+    #[inline(never)]
+    #[cold]
+    fn meshes_pdf_of<R: Real>(&self, x: V3<R>, dir: V3<R>, (shape, hit): (R::U32, R::U32), mut pdf: R) -> R {
+        let lights = &self.shapes;
+        let base = lights.quads.len() + lights.spheres.len();
+        for (k, m) in lights.meshes.iter().enumerate() {
+            let mine = R::u_eq(shape, R::u_splat((base + k) as u32));
+            pdf = R::select(mine, m.pdf_hits(x, dir, hit, mine), pdf);
+        }
+        pdf
+    }
+
+    /// A light sample from `x` toward the point drawn on a quad or a mesh,
+    /// in the lanes of `take` (`out` in the others): density `t^2 / (|cos|
+    /// area)`, 0 where that is not finite (`x` on the light, an edge-on
+    /// direction, no area).
+    #[inline(always)]
+    fn toward_point<R: Real>(&self, x: V3<R>, drawn: Drawn<R>, take: R::Mask, out: LightSample<R>) -> LightSample<R> {
+        let Drawn { shape: k, p, n, area } = drawn;
+        let (zero, one) = (R::splat(0.0), R::splat(1.0));
+        let to = p - x;
+        let len2 = to.length_squared();
+        let t = len2.sqrt();
+        let dir = to * (one / t);
+        let cos = n.dot(dir);
+        let pdf = len2 / (cos.abs() * R::splat(area));
+        let ok = len2.gt(zero) & pdf.is_finite();
+        let emit = emission(V3::splat3(self.emit[k]), mask::<R>(self.one_sided[k]), cos.lt(zero));
+        LightSample {
+            dir: V3::select(take & ok, dir, out.dir),
+            t: R::select(take, t, out.t),
+            pdf: R::select(take, R::select(ok, pdf, zero), out.pdf),
+            emit: V3::select(take, emit, out.emit),
+        }
     }
 
     /// The density (solid angle, at `x`, over the whole list) with which
     /// [`Emitters::sample`] draws the unit direction `dir` toward shape
     /// `shape` (per lane; [`Emitters::UNSAMPLED`]: 0): the density of the
-    /// light a path hit, for the weight of its emission. Only that shape's:
-    /// a light sample toward another shape along the same line would be
-    /// blocked by this one.
+    /// light a path hit (hit index `hit`: a mesh's density is that of the
+    /// point on the triangle hit), for the weight of its emission. Only that
+    /// shape's: a light sample toward another shape along the same line
+    /// would be blocked by this one.
     #[inline(always)]
-    pub fn pdf_of<R: Real>(&self, x: V3<R>, dir: V3<R>, shape: R::U32) -> R {
+    pub fn pdf_of<R: Real>(&self, x: V3<R>, dir: V3<R>, shape: R::U32, hit: R::U32) -> R {
         let zero = R::splat(0.0);
         let mut pdf = zero;
         let lights = &self.shapes;
@@ -291,8 +383,20 @@ impl Emitters {
         for (k, s) in lights.spheres.iter().enumerate() {
             pdf = R::select(R::u_eq(shape, R::u_splat((base + k) as u32)), sphere_pdf(s, x, dir), pdf);
         }
+        if !lights.meshes.is_empty() {
+            pdf = self.meshes_pdf_of(x, dir, (shape, hit), pdf);
+        }
         pdf * R::splat(1.0 / self.len().max(1) as f32)
     }
+}
+
+/// A point drawn on shape `shape` of the list (a quad or a mesh), the unit
+/// normal there, and the shape's whole area.
+struct Drawn<R: Real> {
+    shape: usize,
+    p: V3<R>,
+    n: V3<R>,
+    area: f32,
 }
 
 /// The radiance a light emits towards a ray that hit it: `emit`, or 0 on the

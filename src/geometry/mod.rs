@@ -24,12 +24,14 @@
 //!   in one closest-hit and one any-hit search.
 //! - [`media`]: constant media (a sphere or box boundary), sampled after the
 //!   closest hit; not in a tree. [`lights`]: the shapes the `book` and
-//!   `nee-mis` estimators sample (static spheres and quads), their points
-//!   and densities, and what a light emits toward a ray (front face or both).
+//!   `nee-mis` estimators sample (static spheres and quads, and meshes:
+//!   [`light_mesh`]), their points and densities, and what a light emits
+//!   toward a ray (front face or both).
 
 pub mod bvh;
 pub mod cuboids;
 pub mod hit;
+pub mod light_mesh;
 pub mod lights;
 pub mod media;
 pub mod moving;
@@ -46,6 +48,7 @@ pub mod work;
 pub use bvh::{Bvh, SahCost, Walk, Walker};
 pub use cuboids::{cuboid_hit, CuboidRec, Cuboids, LeafCuboid};
 pub use hit::{Closest, Hit, HitKind, MEDIUM_BASE, MISS, MOVING_BASE, QUAD_BASE};
+pub use light_mesh::LightMesh;
 pub use lights::{emission, Emitters, LightQuad, LightSample, LightSphere, Lights};
 pub use media::{sample_media, transmittance, Boundary, Media};
 pub use moving::{centre_at, LeafMoving, MovingSpheres};

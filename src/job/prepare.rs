@@ -11,14 +11,14 @@ use crate::estimator::Estimator;
 use crate::film::accum::Scale;
 use crate::geometry::triangles::plane;
 use crate::geometry::{
-    Boundary, Cuboids, Emitters, LightQuad, LightSphere, Lights, Media, MovingSpheres, Quads, Shade, Shapes, Smooth,
-    Spheres, TreeChoice, Triangles, Walk,
+    Boundary, Cuboids, Emitters, LightMesh, LightQuad, LightSphere, Lights, Media, MovingSpheres, Quads, Shade, Shapes,
+    Smooth, Spheres, TreeChoice, Triangles, Walk, QUAD_BASE,
 };
 use crate::handle::Kind;
 use crate::material::MaterialTables;
 use crate::plan::{Accel, KindSet, Plan, Prepared, SkyColours};
 use crate::sampling::layout::Bounces;
-use crate::scene::{Background, Camera, Flat, FlatBoundary, Material, Scene, Shape, Texture};
+use crate::scene::{Background, Camera, Flat, FlatBoundary, FlatMesh, Material, Scene, Shape, Texture};
 use crate::settings::Settings;
 use crate::texture::{Checker, Noise, Perlin, TexKind, TexRef, TexSet, TextureTables, PERLIN_SEED};
 use glam::DVec3;
@@ -75,11 +75,11 @@ fn choose_quad_accel(choice: AccelChoice, quads: usize, mode: Mode) -> Option<Ac
 /// The plan (cheap: no geometry is built).
 pub(super) fn plan(scene: &Scene, flat: &Flat, settings: &Settings, accel: AccelChoice) -> Plan {
     let sample_toward = match (scene.mode, settings.estimator) {
-        (Mode::Path, EstimatorChoice::Book) => scene.sampled_shapes(flat).len(),
+        (Mode::Path, EstimatorChoice::Book) => scene.sampled_count(flat),
         _ => 0,
     };
     let nee = match (scene.mode, settings.estimator) {
-        (Mode::Path, EstimatorChoice::NeeMis) => Scene::emitter_shapes(flat).len(),
+        (Mode::Path, EstimatorChoice::NeeMis) => Scene::emitter_count(flat),
         _ => 0,
     };
     let kinds: KindSet = match scene.mode {
@@ -182,7 +182,7 @@ pub(super) fn prepare(
     let mut tables = Tables { images, materials: MaterialTables::default(), textures: TextureTables::default() };
     let (spheres, moving) = spheres(flat, &mut tables);
     let (mut quads, cuboids) = quads(flat, extent, &mut tables);
-    let (triangles, smooth) = triangles(flat, &mut quads, &mut tables);
+    let (triangles, smooth, placed) = triangles(flat, &mut quads, &mut tables);
     let Tables { materials, textures, .. } = tables;
     let media = if plan.kinds.contains(Kind::Isotropic) { media(flat) } else { Media::default() };
     let mut shapes = shapes(Kinds { spheres, quads, cuboids, moving, triangles }, &materials, &plan, extent);
@@ -190,6 +190,12 @@ pub(super) fn prepare(
     let camera =
         PreparedCamera { lens: plan.lens, ..PreparedCamera::new(&view, settings.width, settings.height, plan.jitter) };
     let mut lights = Lights::default();
+    // A light mesh, and its material's row.
+    let light_mesh = |m: &FlatMesh| {
+        let at = flat.meshes.iter().position(|f| std::ptr::eq(f, m)).expect("a mesh of `flat`");
+        let v: Vec<_> = (0..m.triangles.len()).map(|k| m.triangle(k)).collect();
+        (LightMesh::new(&v, placed[at].first, extent), placed[at].row)
+    };
     if plan.sample_toward > 0 {
         for shape in scene.sampled_shapes(flat) {
             match shape {
@@ -197,9 +203,13 @@ pub(super) fn prepare(
                 Shape::Sphere { center, radius } => lights.spheres.push(LightSphere { c: center, r: radius.abs() }),
             }
         }
+        lights.meshes = scene.sampled_meshes(flat).map(|m| light_mesh(m).0).collect();
     }
-    let emitters =
-        if plan.nee > 0 { emitters(&shapes.spheres, &shapes.quads, &materials) } else { Emitters::default() };
+    let emitters = if plan.nee > 0 {
+        emitters(&shapes.spheres, &shapes.quads, &materials, Scene::light_meshes(flat).map(light_mesh))
+    } else {
+        Emitters::default()
+    };
     debug_assert_eq!(emitters.len(), plan.nee);
     Prepared {
         plan,
@@ -331,15 +341,17 @@ fn quads(flat: &Flat, extent: f32, tables: &mut Tables) -> (Quads, Cuboids) {
 /// the quads' (after every quad: [`Quads::push_plane`]) and its mesh's
 /// material row; and, when some mesh gives vertex normals, every planar
 /// record's smooth-shading record (flat for the quads and the other meshes).
-fn triangles(flat: &Flat, quads: &mut Quads, tables: &mut Tables) -> (Triangles, Smooth) {
+fn triangles(flat: &Flat, quads: &mut Quads, tables: &mut Tables) -> (Triangles, Smooth, Vec<Placed>) {
     let mut triangles = Triangles::default();
     let mut smooth = Smooth::default();
+    let mut placed = Vec::with_capacity(flat.meshes.len());
     let smooth_meshes = flat.meshes.iter().any(|m| m.normals.is_some());
     if smooth_meshes {
         (0..quads.planes).for_each(|_| smooth.push_flat());
     }
     for m in &flat.meshes {
         let (kind, row) = (kind(&m.material), tables.row_of(&m.material));
+        placed.push(Placed { first: QUAD_BASE + quads.planes as u32, row });
         for k in 0..m.triangles.len() {
             let v = m.triangle(k);
             let (n, dn) = plane(v);
@@ -351,7 +363,14 @@ fn triangles(flat: &Flat, quads: &mut Quads, tables: &mut Tables) -> (Triangles,
             }
         }
     }
-    (triangles, smooth)
+    (triangles, smooth, placed)
+}
+
+/// Where a mesh's triangles went: the hit index of its first, and its
+/// material's row.
+struct Placed {
+    first: u32,
+    row: u32,
 }
 
 /// The constant media (where paths are traced).
@@ -437,8 +456,14 @@ fn push<T>(table: &mut Vec<T>, v: T) -> u32 {
 
 /// The lights `nee-mis` samples, from the prepared primitives: the static
 /// quads, then the static spheres, of the light kind, in primitive order (as
-/// [`Scene::emitter_shapes`] lists them), with their rows' radiance.
-fn emitters(spheres: &Spheres, quads: &Quads, materials: &MaterialTables) -> Emitters {
+/// [`Scene::emitter_shapes`] lists them), then the light meshes (with their
+/// rows), with their rows' radiance.
+fn emitters(
+    spheres: &Spheres,
+    quads: &Quads,
+    materials: &MaterialTables,
+    meshes: impl Iterator<Item = (LightMesh, u32)>,
+) -> Emitters {
     let mut e = Emitters { of_row: vec![Emitters::UNSAMPLED; materials.light.len()], ..Emitters::default() };
     let add = |e: &mut Emitters, row: u32| {
         let (emit, one_sided) = materials.light[row as usize];
@@ -460,6 +485,10 @@ fn emitters(spheres: &Spheres, quads: &Quads, materials: &MaterialTables) -> Emi
                 .push(LightSphere { c: [spheres.cx[i], spheres.cy[i], spheres.cz[i]], r: spheres.r[i].abs() });
             add(&mut e, spheres.row[i]);
         }
+    }
+    for (mesh, row) in meshes {
+        e.shapes.meshes.push(mesh);
+        add(&mut e, row);
     }
     e
 }

@@ -450,7 +450,7 @@ fn shade<P: Probe, const M: bool>(
             if prep.plan.nee == 0 {
                 return Err(e);
             }
-            return Err(e * mis_bsdf(path.pdf, prep.emitters.pdf_of(o, d, prep.emitters.of_row[row])));
+            return Err(e * mis_bsdf(path.pdf, prep.emitters.pdf_of(o, d, prep.emitters.of_row[row], hit)));
         }
         Mode::Path => match scatter(v, hit, Material { kind, row }, d, (&srf, n), rng) {
             Some(s) => s,

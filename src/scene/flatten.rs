@@ -347,11 +347,12 @@ pub(super) fn mesh_reach(g: &Group, m: &Mesh) -> Option<f64> {
 }
 
 impl Scene {
-    /// The shapes the `book` estimator samples toward: the scene's
-    /// `sample_toward` list, else its lights (static spheres and quads of
-    /// `diffuse_light`, groups' included, in world space, from `flat`, this
-    /// scene's [`Scene::flatten`]). Possibly more than
-    /// [`crate::limits::MAX_SAMPLED_SHAPES`]: a render job refuses that.
+    /// The spheres and quads the `book` estimator samples toward: the
+    /// scene's `sample_toward` list, else its lights' (static spheres and
+    /// quads of `diffuse_light`, groups' included, in world space, from
+    /// `flat`, this scene's [`Scene::flatten`]). Without a `sample_toward`
+    /// list the light meshes are sampled too, after them
+    /// ([`Scene::sampled_count`]).
     pub fn sampled_shapes(&self, flat: &Flat) -> Vec<Shape> {
         if !self.sample_toward.is_empty() {
             return self.sample_toward.clone();
@@ -359,9 +360,38 @@ impl Scene {
         Scene::emitter_shapes(flat)
     }
 
-    /// The scene's lights that can be sampled: its static spheres and quads
-    /// of `diffuse_light` (groups' included, in world space, from `flat`),
-    /// quads first. Moving lights are reached by scattered directions only.
+    /// The light meshes the `book` estimator samples toward: none with a
+    /// `sample_toward` list, else the scene's ([`Scene::light_meshes`]).
+    pub fn sampled_meshes<'a>(&self, flat: &'a Flat) -> impl Iterator<Item = &'a FlatMesh> {
+        let all = self.sample_toward.is_empty();
+        Scene::light_meshes(flat).filter(move |_| all)
+    }
+
+    /// How many shapes the `book` estimator samples toward: the spheres and
+    /// quads of [`Scene::sampled_shapes`] and the meshes of
+    /// [`Scene::sampled_meshes`]. Possibly more than
+    /// [`crate::limits::MAX_SAMPLED_SHAPES`]: a render job refuses that.
+    pub fn sampled_count(&self, flat: &Flat) -> usize {
+        self.sampled_shapes(flat).len() + self.sampled_meshes(flat).count()
+    }
+
+    /// How many lights the `nee-mis` estimator samples: the spheres and
+    /// quads of [`Scene::emitter_shapes`] and the meshes of
+    /// [`Scene::light_meshes`], each one light.
+    pub fn emitter_count(flat: &Flat) -> usize {
+        Scene::emitter_shapes(flat).len() + Scene::light_meshes(flat).count()
+    }
+
+    /// The meshes of `diffuse_light` (groups' included, in world space, in
+    /// `flat`'s order): lights sampled by area, after the quads and spheres.
+    pub fn light_meshes(flat: &Flat) -> impl Iterator<Item = &FlatMesh> {
+        flat.meshes.iter().filter(|m| matches!(m.material, Material::DiffuseLight { .. }))
+    }
+
+    /// The scene's static spheres and quads of `diffuse_light` (groups'
+    /// included, in world space, from `flat`), quads first: lights that can
+    /// be sampled, with the light meshes ([`Scene::light_meshes`]). Moving
+    /// lights are reached by scattered directions only.
     pub fn emitter_shapes(flat: &Flat) -> Vec<Shape> {
         let light = |m: &Material| matches!(m, Material::DiffuseLight { .. });
         let quads = flat.quads.iter().filter(|q| light(&q.material)).map(|q| Shape::Quad { q: q.q, u: q.u, v: q.v });
@@ -388,9 +418,9 @@ impl Scene {
             return EstimatorChoice::Bsdf;
         }
         let fits = |n: usize| n > 0 && n <= crate::limits::MAX_SAMPLED_SHAPES;
-        if fits(Scene::emitter_shapes(flat).len()) {
+        if fits(Scene::emitter_count(flat)) {
             EstimatorChoice::NeeMis
-        } else if fits(self.sampled_shapes(flat).len()) {
+        } else if fits(self.sampled_count(flat)) {
             EstimatorChoice::Book
         } else {
             EstimatorChoice::Bsdf

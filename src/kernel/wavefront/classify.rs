@@ -161,5 +161,5 @@ pub(super) fn light_weight<W: Wide, const M: bool>(prep: &Prepared, ws: &Workspa
     let shape = W::u_from_fn(|k| e.of_row[material_row::<M>(prep, W::lane_u(hit, k))]);
     let o = at.v3(&ws.cur.o);
     let d = at.v3(&ws.cur.d);
-    mis_bsdf(at.f(&ws.cur.pdf), e.pdf_of(o, d, shape))
+    mis_bsdf(at.f(&ws.cur.pdf), e.pdf_of(o, d, shape, hit))
 }
