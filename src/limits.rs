@@ -67,8 +67,8 @@ pub const MAX_MEDIA: usize = 64;
 pub const MAX_MESHES: usize = 1 << 16;
 /// The most triangles a scene may hold once flattened (every mesh, each
 /// group's copy included), checked before any is made: 2^23. Preparing a
-/// scene peaks at about 340 bytes a triangle (the tree's build included:
-/// 805 MiB measured for 2,488,320 triangles), about 2.7 GB at the limit.
+/// scene peaks at about 216 bytes a triangle (the tree's build included:
+/// 518 MiB measured for 2,488,320 triangles), about 1.8 GB at the limit.
 /// Also bounds the planar hit indices (quads and triangles below 2^29).
 pub const MAX_SCENE_TRIANGLES: u64 = 1 << 23;
 /// Shapes the `book` estimator samples toward, at most (its `sample_toward`

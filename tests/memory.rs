@@ -197,3 +197,29 @@ fn one_image_under_many_names_is_decoded_once() {
     assert!(many < 160 * 1024, "64 names of one 2048 x 2048 file peak at {many} KiB");
     assert!(big < 96 * 1024, "a refusal over the budget peaks at {big} KiB");
 }
+
+/// What a triangle costs at its peak: book one's final scene with its spheres
+/// as icospheres of level 2 and of level 3 (155,520 and 622,080 triangles),
+/// peak memory of the whole render, per triangle added. The difference
+/// leaves out what does not grow with the mesh (the binary, the image, and
+/// this test process's own resident set, which a child's peak counts). The
+/// peak is while the triangles' tree is built: a triangle's record (56
+/// bytes, dropped after the build), the tree's lanes (56 bytes) and nodes,
+/// and the triangle's planar record (37 bytes, in arrays a power of two
+/// long). 216 bytes measured (348 before the tree's build made its lanes
+/// without leaf records and the arrays were sized exactly).
+#[test]
+fn a_mesh_triangle_costs_a_bounded_number_of_bytes_at_the_peak() {
+    let dir = tempfile::tempdir().unwrap();
+    let peak = |level: u32| {
+        let args =
+            format!("render final --tessellate {level} --width 32 --height 18 --spp 1 --threads 2 -o l{level}.png -q");
+        let (code, kib) = rtow_peak_rss(dir.path(), &args.split(' ').map(String::from).collect::<Vec<_>>());
+        assert_eq!(code, 0, "tessellate {level}");
+        kib
+    };
+    let (two, three) = (peak(2), peak(3));
+    let per_triangle = (three.saturating_sub(two) * 1024) as f64 / (622_080 - 155_520) as f64;
+    println!("peak RSS: level 2 {two} KiB, level 3 {three} KiB: {per_triangle:.1} bytes a triangle");
+    assert!(per_triangle < 240.0, "a triangle costs {per_triangle:.1} bytes at the peak ({two} and {three} KiB)");
+}

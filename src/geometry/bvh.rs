@@ -328,18 +328,9 @@ impl<L: Leaf> Bvh<L> {
     /// which the kind's [`Primitive::extent`] pads the boxes by
     /// `2 extent 2^-19` on every side (see the module's bounds).
     pub fn build<K: Primitive<Leaf = L> + Sync>(prims: &K, extent: f32, walk: Walk) -> Bvh<L> {
-        use rayon::prelude::*;
-        let pad = 2.0 * prims.extent(extent) * PAD;
-        let n = prims.count();
-        let boxes: Vec<Aabb> = (0..n).into_par_iter().map(|k| prims.bounds(k, pad)).collect();
-        let centroid = (0..n).into_par_iter().map(|k| prims.centroid(k, pad)).collect();
-        let (bnodes, order) = build_binary(&boxes, centroid, walk);
-        let leaf = order.iter().map(|&k| prims.leaf(k as usize)).collect();
-        let mut bvh =
-            Bvh { nodes: vec![Node8::EMPTY], leaf, walk, lanes: SphereLanes::default(), wide: L::Lanes::default() };
-        if n > 0 {
-            bvh.collapse(&bnodes, 0, 0);
-        }
+        let (mut bvh, order) = Bvh::nodes_of(prims, extent, walk);
+        bvh.leaf = order.iter().map(|&k| prims.leaf(k as usize)).collect();
+        drop(order);
         for node in 0..bvh.nodes.len() {
             for k in 0..bvh.nodes[node].kids() {
                 let (start, count) = (bvh.nodes[node].child[k] as usize, bvh.nodes[node].count[k] as usize);
@@ -348,16 +339,46 @@ impl<L: Leaf> Bvh<L> {
                 }
             }
         }
-        bvh.wide = L::lanes(&bvh.leaf);
+        bvh.wide = L::lanes(bvh.leaf.iter().copied(), bvh.leaf.len());
         bvh
     }
 
-    /// Drops the leaf records of a kind that has lanes ([`Leaf::Lanes`]):
-    /// its one-ray walk ([`Bvh::walk_one_wide`]) reads the lanes alone, and
-    /// is then the only walk the tree takes (the meshes' triangles keep 56
-    /// bytes a triangle fewer).
-    pub fn keep_lanes_only(&mut self) {
-        self.leaf = Vec::new();
+    /// [`Bvh::build`] for a kind walked one ray at a time from its lanes
+    /// alone ([`Primitive::WALK_ONE_RAY`], [`Leaf::Lanes`]): the lanes are
+    /// made straight from the primitives in leaf order, and no leaf record
+    /// is kept (the meshes' triangles: 56 bytes a triangle fewer, and never
+    /// a second copy of them while the tree is built). Such a kind does not
+    /// [`Leaf::arrange`]. The tree then serves [`Bvh::walk_one_wide`] alone.
+    pub fn build_lanes_only<K: Primitive<Leaf = L> + Sync>(prims: &K, extent: f32, walk: Walk) -> Bvh<L> {
+        let (mut bvh, order) = Bvh::nodes_of(prims, extent, walk);
+        bvh.wide = L::lanes(order.iter().map(|&k| prims.leaf(k as usize)), order.len());
+        bvh
+    }
+
+    /// The tree's nodes over `prims` (no leaf records yet) and the
+    /// primitives' leaf order. The build's temporaries (boxes, centroids,
+    /// the binary tree) are dropped before the leaves are made.
+    fn nodes_of<K: Primitive<Leaf = L> + Sync>(prims: &K, extent: f32, walk: Walk) -> (Bvh<L>, Vec<u32>) {
+        use rayon::prelude::*;
+        let pad = 2.0 * prims.extent(extent) * PAD;
+        let n = prims.count();
+        let (bnodes, order) = {
+            let boxes: Vec<Aabb> = (0..n).into_par_iter().map(|k| prims.bounds(k, pad)).collect();
+            let centroid = (0..n).into_par_iter().map(|k| prims.centroid(k, pad)).collect();
+            build_binary(&boxes, centroid, walk)
+        };
+        let mut bvh = Bvh {
+            nodes: vec![Node8::EMPTY],
+            leaf: Vec::new(),
+            walk,
+            lanes: SphereLanes::default(),
+            wide: L::Lanes::default(),
+        };
+        if n > 0 {
+            bvh.collapse(&bnodes, 0, 0);
+        }
+        bvh.nodes.shrink_to_fit();
+        (bvh, order)
     }
 
     /// The walk the tree was built for.
@@ -680,7 +701,8 @@ impl<L: Leaf> Bvh<L> {
     /// each once, in no particular order: not the closest hit but all of
     /// them (a light mesh's density sums over every triangle a direction
     /// meets, [`super::LightMesh`]). One ray, one box at a time; the tree
-    /// must keep its leaf records (not [`Bvh::keep_lanes_only`]).
+    /// must keep its leaf records (built by [`Bvh::build`], not
+    /// [`Bvh::build_lanes_only`]).
     #[inline]
     pub fn visit(&self, o: V3<f32>, d: V3<f32>, mut f: impl FnMut(&L)) {
         if self.leaf.is_empty() {

@@ -79,7 +79,9 @@ pub trait Leaf: Copy + std::fmt::Debug {
     }
 
     /// Sorts a leaf after the build (the quads: into runs of one form of
-    /// the test). Nothing by default.
+    /// the test). Nothing by default; a kind with [`Leaf::Lanes`] keeps the
+    /// build's order ([`super::Bvh::build_lanes_only`] makes its lanes
+    /// without leaf records to sort).
     fn arrange(_leaf: &mut [Self]) {}
 
     /// A tree's leaf records again as lanes (structure of arrays in leaf
@@ -87,8 +89,9 @@ pub trait Leaf: Copy + std::fmt::Debug {
     /// for a kind whose one-ray walk tests one primitive at a time.
     type Lanes: Clone + std::fmt::Debug + Default;
 
-    /// The lanes of a tree's leaf records ([`Leaf::Lanes`]).
-    fn lanes(_leaf: &[Self]) -> Self::Lanes {
+    /// The lanes of a tree's `len` leaf records, given in leaf order
+    /// ([`Leaf::Lanes`]).
+    fn lanes(_leaf: impl Iterator<Item = Self>, _len: usize) -> Self::Lanes {
         Self::Lanes::default()
     }
 

@@ -247,6 +247,16 @@ impl Quads {
         self.planes += 1;
     }
 
+    /// Room for `n` more planar records (a scene's triangles), exactly as
+    /// many as [`Quads::pad`] makes of them: a mesh's planar records are the
+    /// next largest part of its memory after its tree's lanes.
+    pub fn reserve_planes(&mut self, n: usize) {
+        let room = (self.kind.len() + n).max(8).next_power_of_two() - self.kind.len();
+        self.kind.reserve_exact(room);
+        self.row.reserve_exact(room);
+        self.shade.reserve_exact(room);
+    }
+
     /// Appends a triangle's planar record: its plane's unit normal `n` and
     /// `dn = n.p` ([`super::triangles::plane`]) and its material's handle;
     /// returns the triangle's hit index (`QUAD_BASE + row`). After every
@@ -295,6 +305,10 @@ impl Quads {
             });
         }
         let target = self.kind.len().max(8).next_power_of_two();
+        let room = target - self.kind.len();
+        self.kind.reserve_exact(room);
+        self.row.reserve_exact(room);
+        self.shade.reserve_exact(room);
         while self.kind.len() < target {
             self.kind.push(Kind::Lambertian);
             self.row.push(0);

@@ -122,13 +122,11 @@ impl Shapes {
             quads: choice.quads.then(|| Bvh::build(&self.quads, extent, one)),
             cuboids: choice.cuboids.then(|| Bvh::build(&self.cuboids, extent, one)),
             moving: choice.moving.then(|| Bvh::build(&self.moving, extent, one)),
-            // Walked one ray at a time, 8 boxes and 8 triangles a test.
-            triangles: choice.triangles.then(|| Bvh::build(&self.triangles, extent, Walk::Wide8)),
+            // Walked one ray at a time (`Primitive::WALK_ONE_RAY`), 8 boxes
+            // and 8 triangles a test, from the tree's lanes alone.
+            triangles: choice.triangles.then(|| Bvh::build_lanes_only(&self.triangles, extent, Walk::Wide8)),
         };
-        if let Some(tree) = &mut self.trees.triangles {
-            // Walked one ray at a time (`Primitive::WALK_ONE_RAY`), from the
-            // tree's lanes alone.
-            tree.keep_lanes_only();
+        if self.trees.triangles.is_some() {
             self.triangles.release();
         }
     }

@@ -47,6 +47,11 @@ impl Smooth {
         self.rec.is_empty()
     }
 
+    /// Room for `n` more records, exactly.
+    pub fn reserve(&mut self, n: usize) {
+        self.rec.reserve_exact(n);
+    }
+
     /// A record shaded with its geometric normal.
     pub fn push_flat(&mut self) {
         self.rec.push([0.0; 18]);

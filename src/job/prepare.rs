@@ -346,7 +346,13 @@ fn triangles(flat: &Flat, quads: &mut Quads, tables: &mut Tables) -> (Triangles,
     let mut smooth = Smooth::default();
     let mut placed = Vec::with_capacity(flat.meshes.len());
     let smooth_meshes = flat.meshes.iter().any(|m| m.normals.is_some());
+    // Every array exactly as long as it will be: at a mesh's scale a
+    // doubling Vec would hold up to twice its triangles' records.
+    let count: usize = flat.meshes.iter().map(|m| m.triangles.len()).sum();
+    triangles.reserve(count);
+    quads.reserve_planes(count);
     if smooth_meshes {
+        smooth.reserve(quads.planes + count);
         (0..quads.planes).for_each(|_| smooth.push_flat());
     }
     for m in &flat.meshes {
