@@ -305,10 +305,7 @@ impl Quads {
             });
         }
         let target = self.kind.len().max(8).next_power_of_two();
-        let room = target - self.kind.len();
-        self.kind.reserve_exact(room);
-        self.row.reserve_exact(room);
-        self.shade.reserve_exact(room);
+        self.reserve_planes(0);
         while self.kind.len() < target {
             self.kind.push(Kind::Lambertian);
             self.row.push(0);

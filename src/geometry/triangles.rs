@@ -94,17 +94,17 @@ impl Triangles {
     /// `i` its planar record's row); its plane is computed from the f32
     /// vertices in f64 ([`plane`]). A degenerate triangle (zero area) has no
     /// normal and is never hit.
-    /// Room for `n` more triangles, exactly (a mesh's records are its
-    /// largest allocation while its tree is built).
-    pub fn reserve(&mut self, n: usize) {
-        self.rec.reserve_exact(n);
-    }
-
     pub fn push(&mut self, v: [[f32; 3]; 3], index: u32) {
         debug_assert!(index >= QUAD_BASE);
         let (n, dn) = plane(v);
         self.rec.push(LeafTriangle { v, n, dn, index });
         self.len += 1;
+    }
+
+    /// Room for `n` more triangles, exactly (a mesh's records are its
+    /// largest allocation while its tree is built).
+    pub fn reserve(&mut self, n: usize) {
+        self.rec.reserve_exact(n);
     }
 
     /// Drops the records once a tree holds them (the tree is then the only
@@ -222,12 +222,14 @@ impl Leaf for LeafTriangle {
     type Lanes = TriangleLanes;
 
     fn lanes(leaf: impl Iterator<Item = Self>, len: usize) -> TriangleLanes {
-        let mut l = TriangleLanes::default();
         // Each array exactly its length: a mesh's lanes are most of its memory.
         let with_len = || Vec::with_capacity(len + 8);
-        l.v = std::array::from_fn(|_| std::array::from_fn(|_| with_len()));
-        l.n = std::array::from_fn(|_| with_len());
-        (l.dn, l.index) = (with_len(), Vec::with_capacity(len + 8));
+        let mut l = TriangleLanes {
+            v: std::array::from_fn(|_| std::array::from_fn(|_| with_len())),
+            n: std::array::from_fn(|_| with_len()),
+            dn: with_len(),
+            index: Vec::with_capacity(len + 8),
+        };
         let pad = LeafTriangle { index: MISS, ..LeafTriangle::default() };
         for t in leaf.chain(std::iter::repeat_n(pad, 8)) {
             for k in 0..3 {

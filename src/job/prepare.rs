@@ -190,9 +190,8 @@ pub(super) fn prepare(
     let camera =
         PreparedCamera { lens: plan.lens, ..PreparedCamera::new(&view, settings.width, settings.height, plan.jitter) };
     let mut lights = Lights::default();
-    // A light mesh, and its material's row.
-    let light_mesh = |m: &FlatMesh| {
-        let at = flat.meshes.iter().position(|f| std::ptr::eq(f, m)).expect("a mesh of `flat`");
+    // The light mesh `flat.meshes[at]`, and its material's row.
+    let light_mesh = |(at, m): (usize, &FlatMesh)| {
         let v: Vec<_> = (0..m.triangles.len()).map(|k| m.triangle(k)).collect();
         (LightMesh::new(&v, placed[at].first, extent), placed[at].row)
     };

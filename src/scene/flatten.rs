@@ -362,7 +362,7 @@ impl Scene {
 
     /// The light meshes the `book` estimator samples toward: none with a
     /// `sample_toward` list, else the scene's ([`Scene::light_meshes`]).
-    pub fn sampled_meshes<'a>(&self, flat: &'a Flat) -> impl Iterator<Item = &'a FlatMesh> {
+    pub fn sampled_meshes<'a>(&self, flat: &'a Flat) -> impl Iterator<Item = (usize, &'a FlatMesh)> {
         let all = self.sample_toward.is_empty();
         Scene::light_meshes(flat).filter(move |_| all)
     }
@@ -383,9 +383,10 @@ impl Scene {
     }
 
     /// The meshes of `diffuse_light` (groups' included, in world space, in
-    /// `flat`'s order): lights sampled by area, after the quads and spheres.
-    pub fn light_meshes(flat: &Flat) -> impl Iterator<Item = &FlatMesh> {
-        flat.meshes.iter().filter(|m| matches!(m.material, Material::DiffuseLight { .. }))
+    /// `flat`'s order), each with its place in `flat.meshes`: lights sampled
+    /// by area, after the quads and spheres.
+    pub fn light_meshes(flat: &Flat) -> impl Iterator<Item = (usize, &FlatMesh)> {
+        flat.meshes.iter().enumerate().filter(|(_, m)| matches!(m.material, Material::DiffuseLight { .. }))
     }
 
     /// The scene's static spheres and quads of `diffuse_light` (groups'
