@@ -21,7 +21,7 @@
 //! Any of the four may be either kind (a `.ppm` is read as the book's, anything else as
 //! rtow's), to compare two rtow renders, or two of the book's, the same way.
 //!
-//! Usage: `cargo run --release --example compare_regions -- [--regions K] [--noise] BOOK1.ppm
+//! Usage: `cargo run --release -p rtow-tools --bin compare_regions -- [--regions K] [--noise] BOOK1.ppm
 //! BOOK2.ppm RTOW1.pfm RTOW2.pfm` (K defaults to 6; `--noise` adds each side's `s`, the standard
 //! error of its two-seed mean, per channel). Prints a Markdown table, then a summary: the
 //! number of |z| > 3, the root mean square of z (about 1 when the two agree within noise).

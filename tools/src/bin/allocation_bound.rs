@@ -14,7 +14,7 @@
 //! - equal relative error: `n_i` proportional to `sigma_i^2 / max(m_i, floor)^2`
 //!   (what `--adaptive` tends to).
 //!
-//! Usage: `cargo run --release --example allocation_bound -- [SCENE] [WIDTH] [HEIGHT] [SPP] [SEED]`
+//! Usage: `cargo run --release -p rtow-tools --bin allocation_bound -- [SCENE] [WIDTH] [HEIGHT] [SPP] [SEED]`
 //! (defaults: final 200 113 128 77).
 
 use rtow::instruments::probe::PathId;
