@@ -8,7 +8,7 @@
 //! wavefront's camera rays and closest hit), their surfaces one at a time
 //! with the scalar kernel's code; [`first_hit`] is the same for one ray with
 //! the scalar kernel alone, and the two agree bit for bit (as the kernels
-//! do; `tests/kernels`). So the buffers are those of the render's own
+//! do; `tests/suite/kernels`). So the buffers are those of the render's own
 //! camera rays, whatever kernel renders the colour, and the same bits for
 //! every kernel.
 //!

@@ -51,7 +51,7 @@ proptest! {
 
     /// The sphere's (u, v) within a derived bound of the book's formula in
     /// f64 at the same (f32) normal: atan2 and acos are within 2.5e-7 of
-    /// their true values (tests/kernels/math.rs), adding pi rounds by at most half
+    /// their true values (tests/suite/kernels/math.rs), adding pi rounds by at most half
     /// an ulp of 2 pi (2.4e-7), and the scaling by 1 / 2 pi or 1 / pi adds
     /// one rounding (6e-8 at most): |du| <= (2.5e-7 + 2.4e-7) / 2 pi + 6e-8
     /// + the constants' own rounding, below 2e-7; |dv| <= 2.5e-7 / pi + 6e-8, below 2e-7.

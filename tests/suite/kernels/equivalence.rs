@@ -39,7 +39,7 @@ fn every_preset_is_bit_identical_across_kernels() {
         let s = Settings { estimator: d.estimator, ..settings(40, 24, 3, d.max_depth, 11) };
         // Brute force over a mesh of hundreds of thousands of triangles takes
         // minutes: there the scalar tree is the reference (the trees find
-        // brute force's hits bit for bit: tests/kernels/triangles.rs).
+        // brute force's hits bit for bit: tests/suite/kernels/triangles.rs).
         let big = sc.generated_triangles() > 10_000;
         let reference = if big { AccelChoice::Bvh } else { AccelChoice::Brute };
         let a = render_accel(&sc, s, Scalar, 2, 16, reference);
