@@ -34,6 +34,17 @@
 //!   (`t_in = t_out` exactly) is a hit; a ray passing within rounding of an
 //!   edge outside may miss it, where the quad test's widened edges would take
 //!   it: a grazing ray that does not enter the box, either way.
+//! * **Axis-aligned boxes** (the book's own `box(a, b)` outside a turned
+//!   group: the ground of The Next Week's final scene) skip the axes. The
+//!   general form's `1 / d.a_k` does not depend on the box when `a_k` is the
+//!   unit axis `e_k`: it is computed once per search (the leaf's setup,
+//!   [`Leaf::setup`], with the same operations) instead of once per box and
+//!   axis. And `f.a_k` is `f_k` exactly (a product by 1 and sums with
+//!   zeros), but for the sign of a zero, which `-h - f.a_k` and `h - f.a_k`
+//!   do not keep when `h > 0`: a box takes the aligned form when its axes
+//!   are the world's and every half size is positive. So both forms give the
+//!   same hits, faces and `t`, bit for bit (`tests/suite/nextweek.rs`
+//!   compares them, rays in the faces' planes included).
 //! * **Self-hits** are prevented as for every quad, by where a new ray
 //!   starts: the face's surface ([`super::quad_surface`]) offsets it by
 //!   `32u (|p|_inf + |n.q|)`, far above the difference between the face's
@@ -63,12 +74,18 @@ pub struct CuboidRec {
     /// The hit index (`QUAD_BASE + i`) of the face at `-half[k]` and at
     /// `+half[k]` along axis `k`.
     pub faces: [[u32; 2]; 3],
+    /// The axes are the world's x, y and z, exactly, and every half size is
+    /// positive (the test's aligned form; set by [`Cuboids::push`]).
+    pub aligned: bool,
 }
 
 /// The scene's cuboids, in the order of their first faces.
 #[derive(Clone, Debug, Default)]
 pub struct Cuboids {
     pub rec: Vec<CuboidRec>,
+    /// Some cuboid is axis-aligned: brute force then computes the aligned
+    /// form's setup ([`cuboid_setup`]), which the other boxes do not read.
+    any_aligned: bool,
     /// Per cuboid, the union of its faces' boxes ([`Cuboids::bound_faces`]).
     faces_box: Vec<Aabb>,
 }
@@ -88,12 +105,15 @@ impl Cuboids {
     pub fn push(&mut self, c: [f64; 3], axes: [[f64; 3]; 3], half: [f64; 3], first: u32) {
         let f = |v: [f64; 3]| v.map(|x| x as f32);
         let face = |k: u32| QUAD_BASE + first + k;
+        let (axes, half) = (axes.map(f), f(half));
         self.rec.push(CuboidRec {
             c: f(c),
-            axes: axes.map(f),
-            half: f(half),
+            axes,
+            half,
             faces: [[face(3), face(1)], [face(5), face(4)], [face(2), face(0)]],
+            aligned: axes == WORLD_AXES && half.iter().all(|&h| h > 0.0),
         });
+        self.any_aligned |= self.rec.last().is_some_and(|r| r.aligned);
     }
 
     /// Records each cuboid's box for a tree's build: the union of its faces'
@@ -115,13 +135,34 @@ impl Cuboids {
     }
 }
 
-/// A cuboid against the rays ([`cuboid_hit`]), improving `best`: its faces'
-/// hit indices enter the tie rule as any quad's.
+/// A cuboid against the rays ([`cuboid_hit_with`], `inv` their
+/// [`cuboid_setup`]), improving `best`: its faces' hit indices enter the tie
+/// rule as any quad's.
 #[inline(always)]
-pub fn test_cuboid<R: Real, C: Counter>(best: &mut Closest<R>, o: V3<R>, d: V3<R>, b: &CuboidRec, counter: &mut C) {
+pub fn test_cuboid<R: Real, C: Counter>(
+    best: &mut Closest<R>,
+    o: V3<R>,
+    d: V3<R>,
+    inv: &V3<R>,
+    b: &CuboidRec,
+    counter: &mut C,
+) {
     counter.work(Work::Cuboid, 1);
-    let (hit, t, index) = cuboid_hit(o, d, b);
+    let (hit, t, index) = cuboid_hit_with(o, d, inv, b);
     best.offer(hit, t, index);
+}
+
+/// The world's axes: an aligned box's.
+const WORLD_AXES: [[f32; 3]; 3] = [[1.0, 0.0, 0.0], [0.0, 1.0, 0.0], [0.0, 0.0, 1.0]];
+
+/// What the aligned form of the test reads of the rays, once per search:
+/// the general form's `1 / d.a_k` (as [`inv_lanes`] keeps it from 0) for
+/// the world's axes, computed as it computes it (the dot product's sign of
+/// zero included).
+#[inline(always)]
+pub fn cuboid_setup<R: Real>(d: V3<R>) -> V3<R> {
+    let inv = |k: usize| inv_lanes(d.dot(V3::splat3(WORLD_AXES[k])));
+    V3::new(inv(0), inv(1), inv(2))
 }
 
 /// A leaf's cuboid (its record holds its faces' hit indices).
@@ -132,10 +173,12 @@ pub struct LeafCuboid {
 }
 
 impl Leaf for LeafCuboid {
-    type Setup<R: Real> = ();
+    type Setup<R: Real> = V3<R>;
     type Lanes = ();
     #[inline(always)]
-    fn setup<R: Real>(_o: V3<R>, _d: V3<R>) {}
+    fn setup<R: Real>(_o: V3<R>, d: V3<R>) -> V3<R> {
+        cuboid_setup(d)
+    }
 
     #[inline(always)]
     fn test<R: Real, C: Counter>(
@@ -143,11 +186,11 @@ impl Leaf for LeafCuboid {
         o: V3<R>,
         d: V3<R>,
         _time: R,
-        _setup: &(),
+        inv: &V3<R>,
         best: &mut Closest<R>,
         counter: &mut C,
     ) {
-        test_cuboid(best, o, d, &self.rec, counter);
+        test_cuboid(best, o, d, inv, &self.rec, counter);
     }
 }
 
@@ -182,31 +225,55 @@ impl Primitive for Cuboids {
         best: &mut Closest<R>,
         counter: &mut C,
     ) {
+        // (A few turned boxes, as the Cornell box's two: three divides per
+        // search that no box reads were 1-2% of the box scenes' instructions.)
+        let inv = if self.any_aligned { cuboid_setup(d) } else { V3::splat3([0.0; 3]) };
         brute::<R, C, ANY>(self.rec.len(), best, counter, |i, best, tally| {
-            test_cuboid(best, o, d, &self.rec[i], tally)
+            test_cuboid(best, o, d, &inv, &self.rec[i], tally)
         });
     }
 }
 
 /// The cuboid test: the hit mask, `t` and the hit index of the face, for the
-/// rays `o + t d` against `b` (broadcast), as the module describes. The
-/// minima and maxima take one instruction each: no distance is NaN, and the
-/// sign of a zero distance (which is never a hit) is all they may change.
+/// rays `o + t d` against `b` (broadcast), as the module describes.
 #[inline(always)]
 pub fn cuboid_hit<R: Real>(o: V3<R>, d: V3<R>, b: &CuboidRec) -> (R::Mask, R, R::U32) {
+    cuboid_hit_with(o, d, &cuboid_setup(d), b)
+}
+
+/// [`cuboid_hit`] given the rays' [`cuboid_setup`] (`inv`), which an aligned
+/// box reads instead of its axes. The minima and maxima take one
+/// instruction each: no distance is NaN, and the sign of a zero distance
+/// (which is never a hit) is all they may change.
+#[inline(always)]
+pub fn cuboid_hit_with<R: Real>(o: V3<R>, d: V3<R>, inv: &V3<R>, b: &CuboidRec) -> (R::Mask, R, R::U32) {
     let f = o - V3::splat3(b.c);
-    let axis = |k: usize| {
-        let a = V3::splat3(b.axes[k]);
-        let r = inv_lanes(d.dot(a));
-        let fa = f.dot(a);
+    // Axis `k`'s entry and exit and whether the ray runs along it (then it
+    // enters through the `-h` face), from `f.a_k` and `1 / d.a_k`.
+    let slab = |k: usize, fa: R, r: R| {
         let h = R::splat(b.half[k]);
         let (t_lo, t_hi) = ((-h - fa) * r, (h - fa) * r);
-        // Entering through the `-h` face when the ray runs along the axis.
         (t_lo.fast_min(t_hi), t_lo.fast_max(t_hi), r.gt(R::splat(0.0)))
     };
-    let (nx, fx, px) = axis(0);
-    let (ny, fy, py) = axis(1);
-    let (nz, fz, pz) = axis(2);
+    if b.aligned {
+        return cuboid_faces(b, slab(0, f.x, inv.x), slab(1, f.y, inv.y), slab(2, f.z, inv.z));
+    }
+    let axis = |k: usize| {
+        let a = V3::splat3(b.axes[k]);
+        slab(k, f.dot(a), inv_lanes(d.dot(a)))
+    };
+    cuboid_faces(b, axis(0), axis(1), axis(2))
+}
+
+/// The end of the cuboid test, from each axis's entry, exit and direction:
+/// the hit, its `t` and its face.
+#[inline(always)]
+fn cuboid_faces<R: Real>(
+    b: &CuboidRec,
+    (nx, fx, px): (R, R, R::Mask),
+    (ny, fy, py): (R, R, R::Mask),
+    (nz, fz, pz): (R, R, R::Mask),
+) -> (R::Mask, R, R::U32) {
     let t_in = nx.fast_max(ny).fast_max(nz);
     let t_out = fx.fast_min(fy).fast_min(fz);
     let zero = R::splat(0.0);
