@@ -5,9 +5,9 @@
 //! and numerics tests, which CI also runs on the baseline instruction set
 //! with debug assertions: built with `RUSTFLAGS="--cfg rtow_kernel_tests"`,
 //! the suite holds them alone (and leaves out the dev-dependencies only the
-//! other subjects use: Cargo.toml). `tests/fuzz.rs` stays its own binary for
-//! long fuzzing runs and its own process's peak memory; `tests/memory.rs`
-//! runs the binary alone.
+//! other subjects use: Cargo.toml). `tests/memory.rs` runs the binary alone.
+//! `fuzz` is the fuzzer: `cargo test` runs it 3 seconds a target, a long run
+//! `RTOW_FUZZ_SECS=3600 cargo test --release --test suite fuzz::`.
 //!
 //! One subject: `cargo test --release --test suite estimator::`.
 
@@ -39,6 +39,7 @@ subjects!(
     diff_cli,
     estimator,
     film_range,
+    fuzz,
     hostile,
     images,
     lambertian,
