@@ -329,12 +329,19 @@ fn peak_rss_kib() -> Option<u64> {
     line.split_whitespace().nth(1)?.parse().ok()
 }
 
-#[test]
-fn fuzz_the_input_path() {
-    let secs: u64 = std::env::var("RTOW_FUZZ_SECS").ok().and_then(|v| v.parse().ok()).unwrap_or(3);
-    let seed: u64 = std::env::var("RTOW_FUZZ_SEED").ok().and_then(|v| v.parse().ok()).unwrap_or_else(|| {
+/// How long each target runs (`RTOW_FUZZ_SECS`, 3 s) and from which seed
+/// (`RTOW_FUZZ_SEED`, the clock's nanoseconds).
+fn run_settings() -> (u64, u64) {
+    let secs = std::env::var("RTOW_FUZZ_SECS").ok().and_then(|v| v.parse().ok()).unwrap_or(3);
+    let seed = std::env::var("RTOW_FUZZ_SEED").ok().and_then(|v| v.parse().ok()).unwrap_or_else(|| {
         std::time::SystemTime::now().duration_since(std::time::UNIX_EPOCH).map_or(1, |d| d.as_nanos() as u64)
     });
+    (secs, seed)
+}
+
+#[test]
+fn fuzz_the_input_path() {
+    let (secs, seed) = run_settings();
     let corpus = corpus();
     let mut rng = Rng(seed | 1);
     let start = Instant::now();
@@ -425,10 +432,7 @@ fn check_baseline(
 
 #[test]
 fn fuzz_the_baselines() {
-    let secs: u64 = std::env::var("RTOW_FUZZ_SECS").ok().and_then(|v| v.parse().ok()).unwrap_or(3);
-    let seed: u64 = std::env::var("RTOW_FUZZ_SEED").ok().and_then(|v| v.parse().ok()).unwrap_or_else(|| {
-        std::time::SystemTime::now().duration_since(std::time::UNIX_EPOCH).map_or(1, |d| d.as_nanos() as u64)
-    });
+    let (secs, seed) = run_settings();
     let (base, report, settings, threads) = baseline_corpus();
     assert_eq!(check_baseline(&base, &report, &settings, threads), Ok("compared"));
     let corpus = vec![(base.clone(), Format::Json)];
@@ -646,10 +650,7 @@ fn check_film(films: &Films, which: usize, bytes: &[u8]) -> Result<&'static str,
 
 #[test]
 fn fuzz_the_films() {
-    let secs: u64 = std::env::var("RTOW_FUZZ_SECS").ok().and_then(|v| v.parse().ok()).unwrap_or(3);
-    let seed: u64 = std::env::var("RTOW_FUZZ_SEED").ok().and_then(|v| v.parse().ok()).unwrap_or_else(|| {
-        std::time::SystemTime::now().duration_since(std::time::UNIX_EPOCH).map_or(1, |d| d.as_nanos() as u64)
-    });
+    let (secs, seed) = run_settings();
     let films = film_corpus();
     for (i, (name, bytes)) in films.parts.iter().enumerate() {
         let ok = if *name == "whole.rtfilm" { "resumed" } else { "merged" };
