@@ -150,10 +150,7 @@ impl Lights {
         let mut dir = V3::new(R::splat(0.0), R::splat(1.0), R::splat(0.0));
         for (k, l) in self.quads.iter().enumerate() {
             let p = V3::splat3(l.q) + V3::splat3(l.u) * u1 + V3::splat3(l.v) * u2;
-            let to = p - x;
-            let len2 = to.length_squared();
-            // `x` on the quad itself: any direction (its density is 0 there).
-            let toward = V3::select(len2.gt(R::splat(0.0)), to * (R::splat(1.0) / len2.sqrt()), V3::splat3(l.n));
+            let toward = unit_toward(x, p, V3::splat3(l.n));
             dir = V3::select(which.eq(R::splat(k as f32)), toward, dir);
         }
         let base = self.quads.len();
@@ -178,9 +175,7 @@ impl Lights {
         let sub = pick * R::splat(self.len() as f32) - which;
         for (k, m) in self.meshes.iter().enumerate() {
             let (p, nm) = m.points(sub, u1, u2);
-            let to = p - x;
-            let len2 = to.length_squared();
-            let toward = V3::select(len2.gt(R::splat(0.0)), to * (R::splat(1.0) / len2.sqrt()), nm);
+            let toward = unit_toward(x, p, nm);
             dir = V3::select(which.eq(R::splat((base + k) as f32)), toward, dir);
         }
         dir
@@ -409,6 +404,16 @@ pub fn emission<R: Real>(emit: V3<R>, one_sided: R::Mask, front: R::Mask) -> V3<
 }
 
 /// A mask of every lane set to `b`.
+/// The unit direction from `x` toward the drawn point `p`, or `fallback`
+/// (the shape's normal) where `x` is `p` itself: any direction does there,
+/// its density being 0.
+#[inline(always)]
+fn unit_toward<R: Real>(x: V3<R>, p: V3<R>, fallback: V3<R>) -> V3<R> {
+    let to = p - x;
+    let len2 = to.length_squared();
+    V3::select(len2.gt(R::splat(0.0)), to * (R::splat(1.0) / len2.sqrt()), fallback)
+}
+
 #[inline(always)]
 fn mask<R: Real>(b: bool) -> R::Mask {
     R::splat(if b { 1.0 } else { 0.0 }).gt(R::splat(0.5))
