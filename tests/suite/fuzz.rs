@@ -329,6 +329,16 @@ fn peak_rss_kib() -> Option<u64> {
     line.split_whitespace().nth(1)?.parse().ok()
 }
 
+/// Fails the run: writes the failing input to `name` in the tests' scratch
+/// folder (to be replayed) and panics with `what`, the file's path and, for
+/// text (`show`), its first 4,000 bytes.
+fn fail(input: &[u8], name: &str, what: String, show: bool) -> ! {
+    let path = Path::new(env!("CARGO_TARGET_TMPDIR")).join(name);
+    let _ = std::fs::write(&path, input);
+    let text = if show { format!(":\n{}", String::from_utf8_lossy(&input[..input.len().min(4000)])) } else { String::new() };
+    panic!("{what}\ninput written to {}{text}", path.display());
+}
+
 /// How long each target runs (`RTOW_FUZZ_SECS`, 3 s) and from which seed
 /// (`RTOW_FUZZ_SEED`, the clock's nanoseconds).
 fn run_settings() -> (u64, u64) {
@@ -365,13 +375,7 @@ fn fuzz_the_input_path() {
         let failure = tally_outcome(&mut tally, || check(&input, format));
         if let Some(why) = failure {
             let ext = if format == Format::Json { "json" } else { "toml" };
-            let path = Path::new(env!("CARGO_TARGET_TMPDIR")).join(format!("fuzz-failure.{ext}"));
-            let _ = std::fs::write(&path, &input);
-            panic!(
-                "fuzz seed {seed}, execution {execs}: {why}\ninput written to {}:\n{}",
-                path.display(),
-                String::from_utf8_lossy(&input[..input.len().min(4000)])
-            );
+            fail(&input, &format!("fuzz-failure.{ext}"), format!("fuzz seed {seed}, execution {execs}: {why}"), true);
         }
         execs += 1;
     }
@@ -447,13 +451,7 @@ fn fuzz_the_baselines() {
         }
         let failure = tally_outcome(&mut tally, || check_baseline(&data, &report, &settings, threads));
         if let Some(why) = failure {
-            let path = Path::new(env!("CARGO_TARGET_TMPDIR")).join("fuzz-failure-baseline.json");
-            let _ = std::fs::write(&path, &data);
-            panic!(
-                "fuzz seed {seed}, baseline execution {execs}: {why}\ninput written to {}:\n{}",
-                path.display(),
-                String::from_utf8_lossy(&data[..data.len().min(4000)])
-            );
+            fail(&data, "fuzz-failure-baseline.json", format!("fuzz seed {seed}, baseline execution {execs}: {why}"), true);
         }
         execs += 1;
     }
@@ -669,13 +667,8 @@ fn fuzz_the_films() {
         }
         let failure = tally_outcome(&mut tally, || check_film(&films, which, &data));
         if let Some(why) = failure {
-            let path = Path::new(env!("CARGO_TARGET_TMPDIR")).join("fuzz-failure.rtfilm");
-            let _ = std::fs::write(&path, &data);
-            panic!(
-                "fuzz seed {seed}, film execution {execs} ({}): {why}\ninput written to {}",
-                films.parts[which].0,
-                path.display()
-            );
+            let what = format!("fuzz seed {seed}, film execution {execs} ({}): {why}", films.parts[which].0);
+            fail(&data, "fuzz-failure.rtfilm", what, false);
         }
         execs += 1;
     }
