@@ -106,14 +106,15 @@ impl Cuboids {
         let f = |v: [f64; 3]| v.map(|x| x as f32);
         let face = |k: u32| QUAD_BASE + first + k;
         let (axes, half) = (axes.map(f), f(half));
+        let aligned = axes == WORLD_AXES && half.iter().all(|&h| h > 0.0);
+        self.any_aligned |= aligned;
         self.rec.push(CuboidRec {
             c: f(c),
             axes,
             half,
             faces: [[face(3), face(1)], [face(5), face(4)], [face(2), face(0)]],
-            aligned: axes == WORLD_AXES && half.iter().all(|&h| h > 0.0),
+            aligned,
         });
-        self.any_aligned |= self.rec.last().is_some_and(|r| r.aligned);
     }
 
     /// Records each cuboid's box for a tree's build: the union of its faces'

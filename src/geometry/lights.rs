@@ -403,7 +403,6 @@ pub fn emission<R: Real>(emit: V3<R>, one_sided: R::Mask, front: R::Mask) -> V3<
     V3::select(one_sided & !front, V3::splat3([0.0; 3]), emit)
 }
 
-/// A mask of every lane set to `b`.
 /// The unit direction from `x` toward the drawn point `p`, or `fallback`
 /// (the shape's normal) where `x` is `p` itself: any direction does there,
 /// its density being 0.
@@ -414,6 +413,7 @@ fn unit_toward<R: Real>(x: V3<R>, p: V3<R>, fallback: V3<R>) -> V3<R> {
     V3::select(len2.gt(R::splat(0.0)), to * (R::splat(1.0) / len2.sqrt()), fallback)
 }
 
+/// A mask of every lane set to `b`.
 #[inline(always)]
 fn mask<R: Real>(b: bool) -> R::Mask {
     R::splat(if b { 1.0 } else { 0.0 }).gt(R::splat(0.5))

@@ -6,7 +6,8 @@
 //! generator of scenes with extreme but finite values. Every input must:
 //!
 //! - never panic;
-//! - be refused with exit status 2 and a one-line message, or be accepted;
+//! - be refused with exit status 2 and a one-line message (at most 1,000
+//!   bytes), or be accepted;
 //! - when accepted, render with both kernels within a time bound, with no NaN
 //!   or infinity in the image, the same image from both kernels, and either
 //!   few rejected samples or a `check_finite` error (exit status 2);
@@ -253,20 +254,22 @@ fn generated(rng: &mut Rng) -> (Vec<u8>, Format) {
     (json.into_bytes(), Format::Json)
 }
 
+/// A refusal as every input path owes it: exit status 2 and one line of at
+/// most 1,000 bytes.
+fn refused(e: rtow::Error) -> Result<&'static str, String> {
+    let msg = e.to_string();
+    if e.exit_code() != 2 || msg.is_empty() || msg.lines().count() != 1 || msg.len() > 1000 {
+        return Err(format!("bad refusal (exit {}): {msg:?}", e.exit_code()));
+    }
+    Ok("refused")
+}
+
 /// Runs one input through the whole path; `Err` describes a broken promise.
 fn check(bytes: &[u8], format: Format) -> Result<&'static str, String> {
     let origin = Path::new(if format == Format::Json { "fuzz.json" } else { "fuzz.toml" });
-    // A refusal is exit status 2 with a one-line message.
-    let refusal = |e: rtow::Error| {
-        let msg = e.to_string();
-        if e.exit_code() != 2 || msg.is_empty() || msg.lines().count() != 1 {
-            return Err(format!("bad refusal (exit {}): {msg:?}", e.exit_code()));
-        }
-        Ok("refused")
-    };
     let scene = match scene::scene_from_bytes(bytes, format, origin) {
         Ok(s) => s,
-        Err(e) => return refusal(e),
+        Err(e) => return refused(e),
     };
     let o = Overrides { width: Some(8), height: Some(5), spp: Some(2), max_depth: Some(6), ..Default::default() };
     let mut hashes = Vec::new();
@@ -276,7 +279,7 @@ fn check(bytes: &[u8], format: Format) -> Result<&'static str, String> {
         // Resolving the job checks the scene's values (and the tiny settings).
         let job = match Job::new(&scene, &o, &opts) {
             Ok(j) => j,
-            Err(e) => return refusal(e),
+            Err(e) => return refused(e),
         };
         let r = match rtow::render(&job, None) {
             Ok(r) => r,
@@ -409,19 +412,12 @@ fn check_baseline(
     threads: usize,
 ) -> Result<&'static str, String> {
     use rtow::instruments::bench::{compare, Baseline, Gate};
-    let refusal = |e: rtow::Error| {
-        let msg = e.to_string();
-        if e.exit_code() != 2 || msg.is_empty() || msg.lines().count() != 1 || msg.len() > 1000 {
-            return Err(format!("bad refusal (exit {}): {msg:?}", e.exit_code()));
-        }
-        Ok("refused")
-    };
     let b = match Baseline::from_bytes(bytes, Path::new("fuzz-baseline.json")) {
         Ok(b) => b,
-        Err(e) => return refusal(e),
+        Err(e) => return refused(e),
     };
     if let Err(e) = b.check("ch08-fuzz", s, threads, &[KernelChoice::Scalar, KernelChoice::Simd8]) {
-        return refusal(e);
+        return refused(e);
     }
     for gate in [Gate::Time, Gate::Work] {
         for c in compare(report, &b, 5.0, gate) {
@@ -607,13 +603,6 @@ fn check_film(films: &Films, which: usize, bytes: &[u8]) -> Result<&'static str,
     use rtow::shard::{Split, Verify};
     let d = films.dir.path();
     std::fs::write(d.join("fuzz.rtfilm"), bytes).unwrap();
-    let refusal = |e: rtow::Error| {
-        let msg = e.to_string();
-        if e.exit_code() != 2 || msg.is_empty() || msg.lines().count() != 1 || msg.len() > 1000 {
-            return Err(format!("bad refusal (exit {}): {msg:?}", e.exit_code()));
-        }
-        Ok("refused")
-    };
     let t = Instant::now();
     let out = RenderFiles { output: d.join("out.png"), ..Default::default() };
     let verify = Verify { pixels: 8, seed: 1 };
@@ -642,7 +631,7 @@ fn check_film(films: &Films, which: usize, bytes: &[u8]) -> Result<&'static str,
     }
     match result {
         Ok(kind) => Ok(kind),
-        Err(e) => refusal(e),
+        Err(e) => refused(e),
     }
 }
 
