@@ -73,18 +73,38 @@ pub struct Node8 {
     count: [u8; 8],
     /// Children (non-empty slots, which come first), 1 to 8; 0 for the root of an empty tree.
     nkids: u8,
+    /// Bit `k` set where slot `k` is an inner node (`count[k] == 0`): the
+    /// one-ray walks part the children a ray enters with one `and`.
+    inner: u8,
 }
 
 const EMPTY: u8 = u8::MAX;
 
 impl Node8 {
-    const EMPTY: Node8 = Node8 { min: [[0.0; 8]; 3], max: [[0.0; 8]; 3], child: [0; 8], count: [EMPTY; 8], nkids: 0 };
+    const EMPTY: Node8 =
+        Node8 { min: [[0.0; 8]; 3], max: [[0.0; 8]; 3], child: [0; 8], count: [EMPTY; 8], nkids: 0, inner: 0 };
 
     /// The number of children, known to the compiler to be at most 8 (so
     /// indexing the slot arrays below it needs no bounds check).
     #[inline(always)]
     fn kids(&self) -> usize {
         (self.nkids as usize).min(8)
+    }
+
+    /// One ray (`inv8`, `noi8` its [`slab_ray`] over 8 lanes) against the
+    /// node's 8 boxes at once, its closest hit so far at `best`: the leaves
+    /// and the inner nodes it enters (bit `k` for slot `k`; pruned as the
+    /// module's bounds say) and each box's entry distance.
+    #[inline(always)]
+    fn enter8(&self, inv8: V3<f32x8>, noi8: V3<f32x8>, best: f32) -> (u32, u32, f32x8) {
+        let bmin = V3::new(f32x8::new(self.min[0]), f32x8::new(self.min[1]), f32x8::new(self.min[2]));
+        let bmax = V3::new(f32x8::new(self.max[0]), f32x8::new(self.max[1]), f32x8::new(self.max[2]));
+        let (near, far) = slab(bmin, bmax, inv8, noi8, f32x8::splat(0.0));
+        let ok = near.le(far * f32x8::splat(EXIT_SCALE)) & near.le(f32x8::splat(best * PRUNE_SCALE));
+        // The empty slots (the last ones) hold zero boxes that a ray may enter.
+        let live = ok.to_bitmask() & ((1u32 << self.kids()) - 1);
+        let inner = u32::from(self.inner);
+        (live & !inner, live & inner, near)
     }
 }
 
@@ -416,6 +436,7 @@ impl<L: Leaf> Bvh<L> {
                 self.nodes.push(Node8::EMPTY);
                 self.nodes[at].child[slot] = child as u32;
                 self.nodes[at].count[slot] = 0;
+                self.nodes[at].inner |= 1 << slot;
                 self.collapse(bn, k, child);
             } else {
                 self.nodes[at].child[slot] = node.start;
@@ -614,19 +635,17 @@ impl<W: Wide> Walker for W {
         counter: &mut C,
     ) {
         let mut m = W::mask_bits(best.t.gt(W::splat(f32::NEG_INFINITY)));
-        let (mut index, mut t) = ([MISS; MAX_LANES], [0.0f32; MAX_LANES]);
-        for k in 0..W::LANES {
-            (index[k], t[k]) = (W::lane_u(best.index, k), best.t.lane(k));
-        }
+        let (mut index, mut t) = ([MISS; MAX_LANES], lanes_of(best.t));
+        W::store_u(best.index, &mut index, 0);
+        let [ox, oy, oz, dx, dy, dz, time] = [o.x, o.y, o.z, d.x, d.y, d.z, time].map(lanes_of);
         while m != 0 {
             let k = m.trailing_zeros() as usize & (MAX_LANES - 1);
             m &= m - 1;
-            let lane = |v: V3<W>| V3::new(v.x.lane(k), v.y.lane(k), v.z.lane(k));
-            let from = Closest { t: t[k], index: index[k] };
-            let b = bvh.walk_one_wide::<C, ANY>(lane(o), lane(d), time.lane(k), from, counter);
+            let (o, d) = (V3::new(ox[k], oy[k], oz[k]), V3::new(dx[k], dy[k], dz[k]));
+            let b = bvh.walk_one_wide::<C, ANY>(o, d, time[k], Closest { t: t[k], index: index[k] }, counter);
             (index[k], t[k]) = (b.index, b.t);
         }
-        *best = Closest { t: W::from_fn(|k| t[k]), index: W::u_from_fn(|k| index[k]) };
+        *best = Closest { t: W::load(&t, 0), index: W::load_u(&index, 0) };
     }
 }
 
@@ -647,52 +666,58 @@ impl<L: Leaf> Bvh<L> {
         counter: &mut C,
     ) -> Closest<f32> {
         let mut tally = WorkTally::<C>::new();
-        let (inv, noi) = slab_ray(o, d);
         let ray = OneRay::<L>::new(o, d, time);
-        let (inv8, noi8) = (splat3(inv), splat3(noi));
-        let mut stack = Stack::new((0, 0.0));
-        while let Some((ni, entry)) = stack.pop() {
-            if entry > best.t * PRUNE_SCALE {
-                continue;
-            }
-            tally.work(Work::Node, 1);
-            tally.work(Work::Box, 8);
-            let node = &self.nodes[ni as usize];
-            let bmin = V3::new(f32x8::new(node.min[0]), f32x8::new(node.min[1]), f32x8::new(node.min[2]));
-            let bmax = V3::new(f32x8::new(node.max[0]), f32x8::new(node.max[1]), f32x8::new(node.max[2]));
-            let (near, far) = slab(bmin, bmax, inv8, noi8, f32x8::splat(0.0));
-            let ok = near.le(far * f32x8::splat(EXIT_SCALE)) & near.le(f32x8::splat(best.t * PRUNE_SCALE));
-            // The empty slots (the last ones) hold zero boxes that a ray may enter.
-            let mut mask = ok.to_bitmask() & ((1u32 << node.kids()) - 1);
-            let near = near.to_array();
-            // Leaves first (they tighten `best.t`), inner nodes pushed far-to-near.
-            let mut inner: [(u32, f32); 8] = [(0, 0.0); 8];
-            let mut ninner = 0;
-            while mask != 0 {
-                let k = mask.trailing_zeros() as usize;
-                mask &= mask - 1;
-                match node.count[k] {
-                    0 => {
-                        inner[ninner] = (node.child[k], near[k]);
-                        ninner += 1;
-                    }
-                    cnt => {
-                        let start = node.child[k] as usize;
-                        L::test_lanes(&self.wide, &self.leaf, start, cnt as usize, &ray, &mut best, &mut tally);
-                        if ANY && best.index != MISS {
-                            tally.flush(counter);
-                            return best;
-                        }
-                    }
-                }
-            }
-            inner[..ninner].sort_unstable_by(|a, b| b.1.total_cmp(&a.1));
-            for &e in &inner[..ninner] {
-                stack.push(e);
-            }
-        }
+        self.walk8(o, d, &mut best, &mut tally, |start, cnt, best, tally| {
+            L::test_lanes(&self.wide, &self.leaf, start, cnt, &ray, best, tally);
+            ANY && best.index != MISS
+        });
         tally.flush(counter);
         best
+    }
+
+    /// The one-ray walks' loop, written once ([`Bvh::walk_one_wide`],
+    /// [`Bvh::closest_hit_wide`]): per node the ray against its 8 boxes at
+    /// once; the leaves it enters first (they tighten `best.t`), each by
+    /// `leaf(start, count, best, tally)`, which says whether to stop (an
+    /// any-hit found); then the nearest inner child it enters is walked
+    /// next, the others pushed to pop nearest first.
+    #[inline(always)]
+    fn walk8<C: Counter>(
+        &self,
+        o: V3<f32>,
+        d: V3<f32>,
+        best: &mut Closest<f32>,
+        tally: &mut WorkTally<C>,
+        mut leaf: impl FnMut(usize, usize, &mut Closest<f32>, &mut WorkTally<C>) -> bool,
+    ) {
+        let (inv, noi) = slab_ray(o, d);
+        let (inv8, noi8) = (splat3(inv), splat3(noi));
+        let mut stack = Stack::empty();
+        let mut key = node_key(0, 0.0);
+        loop {
+            let (ni, entry) = node_of(key);
+            if entry <= best.t * PRUNE_SCALE {
+                tally.work(Work::Node, 1);
+                tally.work(Work::Box, 8);
+                let node = &self.nodes[ni as usize];
+                let (mut leaves, inner, near) = node.enter8(inv8, noi8, best.t);
+                while leaves != 0 {
+                    let k = leaves.trailing_zeros() as usize & 7;
+                    leaves &= leaves - 1;
+                    if leaf(node.child[k] as usize, node.count[k] as usize, best, tally) {
+                        return;
+                    }
+                }
+                if let Some(nearest) = stack.nearest_pushing_rest(inner, near, &node.child) {
+                    key = nearest;
+                    continue;
+                }
+            }
+            match stack.pop() {
+                Some(popped) => key = popped,
+                None => return,
+            }
+        }
     }
 }
 
@@ -758,44 +783,12 @@ impl Bvh<LeafSphere> {
     /// The closest hit of one ray: 8 child boxes, or 8 leaf spheres, per `f32x8` test.
     pub fn closest_hit_wide<C: Counter>(&self, o: V3<f32>, d: V3<f32>, counter: &mut C) -> (u32, f32) {
         let mut tally = WorkTally::<C>::new();
-        let (inv, noi) = slab_ray(o, d);
         let (o8, d8) = (splat3(o), splat3(d));
-        let (inv8, noi8) = (splat3(inv), splat3(noi));
         let mut best = Closest::<f32>::none();
-        let mut stack = Stack::new((0, 0.0));
-        while let Some((ni, entry)) = stack.pop() {
-            if entry > best.t * PRUNE_SCALE {
-                continue;
-            }
-            tally.work(Work::Node, 1);
-            tally.work(Work::Box, 8);
-            let node = &self.nodes[ni as usize];
-            let bmin = V3::new(f32x8::new(node.min[0]), f32x8::new(node.min[1]), f32x8::new(node.min[2]));
-            let bmax = V3::new(f32x8::new(node.max[0]), f32x8::new(node.max[1]), f32x8::new(node.max[2]));
-            let (near, far) = slab(bmin, bmax, inv8, noi8, f32x8::splat(0.0));
-            let ok = near.le(far * f32x8::splat(EXIT_SCALE)) & near.le(f32x8::splat(best.t * PRUNE_SCALE));
-            // The empty slots (the last ones) hold zero boxes that a ray may enter.
-            let mut mask = ok.to_bitmask() & ((1u32 << node.kids()) - 1);
-            let near = near.to_array();
-            // Leaves first (they tighten `best.t`), inner nodes pushed far-to-near.
-            let mut inner: [(u32, f32); 8] = [(0, 0.0); 8];
-            let mut ninner = 0;
-            while mask != 0 {
-                let k = mask.trailing_zeros() as usize;
-                mask &= mask - 1;
-                match node.count[k] {
-                    0 => {
-                        inner[ninner] = (node.child[k], near[k]);
-                        ninner += 1;
-                    }
-                    cnt => self.leaf_wide(node.child[k] as usize, cnt as usize, o8, d8, &mut best, &mut tally),
-                }
-            }
-            inner[..ninner].sort_unstable_by(|a, b| b.1.total_cmp(&a.1));
-            for &e in &inner[..ninner] {
-                stack.push(e);
-            }
-        }
+        self.walk8(o, d, &mut best, &mut tally, |start, cnt, best, tally| {
+            self.leaf_wide(start, cnt, o8, d8, best, tally);
+            false
+        });
         tally.flush(counter);
         (best.index, best.t)
     }
@@ -811,14 +804,14 @@ impl Bvh<LeafSphere> {
     ) -> (W::U32, W) {
         let mut hit = [MISS; MAX_LANES];
         let mut t = [f32::INFINITY; MAX_LANES];
+        let [ox, oy, oz, dx, dy, dz] = [o.x, o.y, o.z, d.x, d.y, d.z].map(lanes_of);
         let mut m = live;
         while m != 0 {
-            let k = m.trailing_zeros() as usize;
+            let k = m.trailing_zeros() as usize & (MAX_LANES - 1);
             m &= m - 1;
-            let lane = |v: V3<W>| V3::new(v.x.lane(k), v.y.lane(k), v.z.lane(k));
-            (hit[k], t[k]) = self.closest_hit_wide(lane(o), lane(d), counter);
+            (hit[k], t[k]) = self.closest_hit_wide(V3::new(ox[k], oy[k], oz[k]), V3::new(dx[k], dy[k], dz[k]), counter);
         }
-        (W::u_from_fn(|k| hit[k]), W::from_fn(|k| t[k]))
+        (W::load_u(&hit, 0), W::load(&t, 0))
     }
 
     /// One ray against the up-to-8 spheres of a leaf at once (`f32x8` lanes are
@@ -854,8 +847,8 @@ impl Bvh<LeafSphere> {
     }
 }
 
-/// The traversal stack (of nodes, or of (node, entry distance)), starting
-/// with the root. Uninitialized storage: filling 2 KiB per ray would cost
+/// The traversal stack (of nodes, of (node, entry distance), or of
+/// [`node_key`]s). Uninitialized storage: filling 2 KiB per ray would cost
 /// more than the walk.
 struct Stack<T: Copy> {
     items: [MaybeUninit<T>; STACK],
@@ -865,9 +858,13 @@ struct Stack<T: Copy> {
 impl<T: Copy> Stack<T> {
     #[inline(always)]
     fn new(root: T) -> Self {
-        let mut s = Stack { items: [const { MaybeUninit::uninit() }; STACK], len: 1 };
-        s.items[0].write(root);
+        let mut s = Stack::empty();
+        s.push(root);
         s
+    }
+    #[inline(always)]
+    fn empty() -> Self {
+        Stack { items: [const { MaybeUninit::uninit() }; STACK], len: 0 }
     }
     #[inline(always)]
     fn push(&mut self, e: T) {
@@ -885,7 +882,101 @@ impl<T: Copy> Stack<T> {
     }
 }
 
+/// A one-ray walk's stack entry: a node and the ray's entry distance into
+/// its box, the distance in the high half, so that entries order as their
+/// distances (non-negative floats order as their bits; the sign is cleared
+/// for a `-0.0`), ties by node.
+#[inline(always)]
+fn node_key(node: u32, near: f32) -> u64 {
+    (u64::from(near.to_bits() & 0x7fff_ffff) << 32) | u64::from(node)
+}
+
+/// The node and the entry distance of a [`node_key`].
+#[inline(always)]
+fn node_of(key: u64) -> (u32, f32) {
+    (key as u32, f32::from_bits((key >> 32) as u32))
+}
+
+impl Stack<u64> {
+    /// The inner children in `bits` (slot `k`: node `child[k]`, entered at
+    /// `near[k]`) as [`node_key`]s: the nearest returned (`None` for no
+    /// bits), the others pushed so that they pop nearest first. A lone
+    /// child (the most common case) touches no stack; more are each
+    /// inserted among the ones pushed before them (at most 8), with no sort
+    /// and no call.
+    #[inline(always)]
+    fn nearest_pushing_rest(&mut self, mut bits: u32, near: f32x8, child: &[u32; 8]) -> Option<u64> {
+        if bits == 0 {
+            return None;
+        }
+        let near = near.to_array();
+        if bits & (bits - 1) == 0 {
+            let k = bits.trailing_zeros() as usize & 7;
+            return Some(node_key(child[k], near[k]));
+        }
+        let base = self.len;
+        while bits != 0 {
+            let k = bits.trailing_zeros() as usize & 7;
+            bits &= bits - 1;
+            let key = node_key(child[k], near[k]);
+            let mut j = self.len;
+            while j > base {
+                // SAFETY: every index below `len` was written by `new` or a push.
+                let below = unsafe { self.items[j - 1].assume_init() };
+                if below >= key {
+                    break;
+                }
+                self.items[j].write(below);
+                j -= 1;
+            }
+            self.items[j].write(key);
+            self.len += 1;
+        }
+        self.pop()
+    }
+}
+
+/// The lanes of `v` as an array (one store), for a packet's walks one ray
+/// at a time.
+#[inline(always)]
+fn lanes_of<W: Wide>(v: W) -> [f32; MAX_LANES] {
+    let mut a = [0.0; MAX_LANES];
+    v.store(&mut a, 0);
+    a
+}
+
 #[inline(always)]
 fn splat3(v: V3<f32>) -> V3<f32x8> {
     V3::new(f32x8::splat(v.x), f32x8::splat(v.y), f32x8::splat(v.z))
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    /// The inner children a one-ray walk enters come back nearest first
+    /// (the nearest returned, the rest popping in order), ties by node, a
+    /// `-0.0` entry as `0.0`, and what was on the stack before stays below.
+    #[test]
+    fn inner_children_pop_nearest_first() {
+        let near = [3.0, -0.0, 7.5, 1.0, 3.0, 0.25, f32::INFINITY, 2.0];
+        let child = [10, 11, 12, 13, 14, 15, 16, 17];
+        for bits in [0u32, 1, 0b1000_0000, 0b1010_0110, 0b0101_1001, 0xff] {
+            let mut stack = Stack::<u64>::empty();
+            stack.push(node_key(99, 100.0));
+            let mut want: Vec<(f32, u32)> =
+                (0..8).filter(|k| bits >> k & 1 == 1).map(|k| (near[k].abs(), child[k])).collect();
+            want.sort_by(|a, b| a.0.total_cmp(&b.0).then(a.1.cmp(&b.1)));
+            let mut got = Vec::new();
+            if let Some(first) = stack.nearest_pushing_rest(bits, f32x8::new(near), &child) {
+                got.push(first);
+            }
+            while stack.len > 1 {
+                got.push(stack.pop().expect("entries above the first"));
+            }
+            let got: Vec<(f32, u32)> = got.into_iter().map(|key| (node_of(key).1, node_of(key).0)).collect();
+            assert_eq!(got, want, "bits {bits:#b}");
+            assert_eq!(stack.pop().map(node_of), Some((99, 100.0)));
+        }
+    }
 }

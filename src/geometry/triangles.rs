@@ -166,12 +166,25 @@ impl<R: Real> Projection<R> {
         Projection { along_x, along_y, sx: dx / dz, sy: dy / dz, dz }
     }
 
-    /// Vertex `v` relative to the origins `o`, projected along the rays, and
-    /// its coordinate along `kz`.
+    /// A vertex relative to the origins, its axes permuted (`(x, y, z)`
+    /// along `kx`, `ky`, `kz`), projected along the rays; and its
+    /// coordinate along `kz`.
     #[inline(always)]
-    fn point(&self, v: V3<R>, o: V3<R>) -> ((R, R), R) {
-        let (x, y, z) = permute(self.along_x, self.along_y, v - o);
+    fn point(&self, (x, y, z): (R, R, R)) -> ((R, R), R) {
         ((x - self.sx * z, y - self.sy * z), z)
+    }
+}
+
+impl Projection<f32> {
+    /// One ray's axes `[kx, ky, kz]` (as [`permute`] orders them), for
+    /// loading a leaf's coordinates already permuted.
+    #[inline(always)]
+    fn axes(&self) -> [usize; 3] {
+        match (self.along_x, self.along_y) {
+            (true, _) => [1, 2, 0],
+            (false, true) => [2, 0, 1],
+            (false, false) => [0, 1, 2],
+        }
     }
 }
 
@@ -194,7 +207,14 @@ pub fn triangle_hit<R: Real>(o: V3<R>, d: V3<R>, pr: &Projection<R>, tri: &LeafT
 /// against one ray broadcast): the same operations, so the same bits.
 #[inline(always)]
 fn hit<R: Real>(o: V3<R>, d: V3<R>, pr: &Projection<R>, v: [V3<R>; 3], n: V3<R>, dn: R) -> (R::Mask, R) {
-    let ((a, az), (b, bz), (c, cz)) = (pr.point(v[0], o), pr.point(v[1], o), pr.point(v[2], o));
+    hit_permuted(o, d, pr, v.map(|v| permute(pr.along_x, pr.along_y, v - o)), n, dn)
+}
+
+/// The test of [`hit`] from the vertices relative to the origins, already
+/// permuted (the same values, in the same operations).
+#[inline(always)]
+fn hit_permuted<R: Real>(o: V3<R>, d: V3<R>, pr: &Projection<R>, p: [(R, R, R); 3], n: V3<R>, dn: R) -> (R::Mask, R) {
+    let ((a, az), (b, bz), (c, cz)) = (pr.point(p[0]), pr.point(p[1]), pr.point(p[2]));
     let (u, v, w) = (edge(b, c), edge(c, a), edge(a, b));
     let zero = R::splat(0.0);
     let inside = (u.ge(zero) & v.ge(zero) & w.ge(zero)) | (u.le(zero) & v.le(zero) & w.le(zero));
@@ -210,11 +230,56 @@ fn hit<R: Real>(o: V3<R>, d: V3<R>, pr: &Projection<R>, v: [V3<R>; 3], n: V3<R>,
 /// at once ([`Leaf::test_lanes`]).
 #[derive(Clone, Debug, Default)]
 pub struct TriangleLanes {
-    /// Vertex `k`'s coordinate `i`: `v[k][i][j]` of triangle `j`.
-    v: [[Vec<f32>; 3]; 3],
-    n: [Vec<f32>; 3],
-    dn: Vec<f32>,
+    /// [`SECTIONS`] arrays of `stride` floats one after the other, one a
+    /// value of the test: vertex `k`'s coordinate `a` in section `3a + k`
+    /// (the three vertices along one axis together: a ray's axis picks
+    /// three neighbours), the normal's coordinate `a` in `9 + a`, `n.v0` in
+    /// 12. One allocation: a leaf's 13 loads share one base address and one
+    /// bounds check.
+    data: Vec<f32>,
+    /// The triangles, padding included.
+    stride: usize,
     index: Vec<u32>,
+}
+
+/// The sections of [`TriangleLanes`].
+const SECTIONS: usize = 13;
+
+impl TriangleLanes {
+    /// Lanes `start..start + 8` of every section, checked once.
+    #[inline(always)]
+    fn window(&self, start: usize) -> Window<'_> {
+        assert!(start + 8 <= self.stride, "8 lanes: the lanes are padded");
+        Window { lanes: self, start }
+    }
+}
+
+/// Lanes `start..start + 8` of [`TriangleLanes`], `start + 8 <= stride`.
+struct Window<'a> {
+    lanes: &'a TriangleLanes,
+    start: usize,
+}
+
+impl Window<'_> {
+    /// Section `s`'s 8 lanes (the check of `s` folds away: every caller's
+    /// section is a constant, or bounded as in [`Window::along`]).
+    #[inline(always)]
+    fn ld(&self, s: usize) -> f32x8 {
+        assert!(s < SECTIONS);
+        let at = s * self.lanes.stride + self.start;
+        debug_assert_eq!(self.lanes.data.len(), SECTIONS * self.lanes.stride);
+        // SAFETY: `s < SECTIONS` and `start + 8 <= stride` (`window`), so
+        // `at + 8 <= SECTIONS * stride`, which is `data`'s length (`lanes`).
+        f32x8::new(unsafe { self.lanes.data.as_ptr().add(at).cast::<[f32; 8]>().read() })
+    }
+
+    /// The three vertices' coordinates along axis `a` (sections `3a` to
+    /// `3a + 2`): one product of the stride for the three loads.
+    #[inline(always)]
+    fn along(&self, a: usize) -> [f32x8; 3] {
+        let first = 3 * a.min(2);
+        [self.ld(first), self.ld(first + 1), self.ld(first + 2)]
+    }
 }
 
 impl Leaf for LeafTriangle {
@@ -222,30 +287,29 @@ impl Leaf for LeafTriangle {
     type Lanes = TriangleLanes;
 
     fn lanes(leaf: impl Iterator<Item = Self>, len: usize) -> TriangleLanes {
-        // Each array exactly its length: a mesh's lanes are most of its memory.
-        let with_len = || Vec::with_capacity(len + 8);
-        let mut l = TriangleLanes {
-            v: std::array::from_fn(|_| std::array::from_fn(|_| with_len())),
-            n: std::array::from_fn(|_| with_len()),
-            dn: with_len(),
-            index: Vec::with_capacity(len + 8),
-        };
+        // Exactly their length: a mesh's lanes are most of its memory.
+        let stride = len + 8;
+        let (mut data, mut index) = (vec![0.0; SECTIONS * stride], Vec::with_capacity(stride));
         let pad = LeafTriangle { index: MISS, ..LeafTriangle::default() };
-        for t in leaf.chain(std::iter::repeat_n(pad, 8)) {
-            for k in 0..3 {
-                for i in 0..3 {
-                    l.v[k][i].push(t.v[k][i]);
-                }
-                l.n[k].push(t.n[k]);
+        for (j, t) in leaf.chain(std::iter::repeat_n(pad, 8)).take(stride).enumerate() {
+            let values: [f32; SECTIONS] = std::array::from_fn(|s| match s {
+                0..9 => t.v[s % 3][s / 3],
+                9..12 => t.n[s - 9],
+                _ => t.dn,
+            });
+            for (s, x) in values.into_iter().enumerate() {
+                data[s * stride + j] = x;
             }
-            l.dn.push(t.dn);
-            l.index.push(t.index);
+            index.push(t.index);
         }
-        l
+        assert_eq!(index.len(), stride, "{len} leaf records");
+        TriangleLanes { data, stride, index }
     }
 
     /// The leaf's triangles 8 at a time, the ray broadcast; hits offered in
-    /// lane order (the tie rule does not depend on it).
+    /// lane order (the tie rule does not depend on it). The ray's axes are
+    /// one for all 8 lanes, so the coordinates are loaded in its order:
+    /// [`hit`]'s permutation (18 blends) is left to the loads' addresses.
     #[inline(always)]
     fn test_lanes<C: Counter>(
         lanes: &TriangleLanes,
@@ -257,10 +321,14 @@ impl Leaf for LeafTriangle {
         counter: &mut C,
     ) {
         counter.work(Work::Triangle, count as u32);
-        let ld = |v: &[f32]| f32x8::new(v[start..start + 8].try_into().expect("8 lanes: the lanes are padded"));
-        let v = |k: usize| V3::new(ld(&lanes.v[k][0]), ld(&lanes.v[k][1]), ld(&lanes.v[k][2]));
-        let n = V3::new(ld(&lanes.n[0]), ld(&lanes.n[1]), ld(&lanes.n[2]));
-        let (hit, t) = hit(ray.o8, ray.d8, &ray.setup8, [v(0), v(1), v(2)], n, ld(&lanes.dn));
+        let w = lanes.window(start);
+        let [kx, ky, kz] = ray.setup.axes();
+        let o = ray.o.to_array();
+        let (ox, oy, oz) = (f32x8::splat(o[kx]), f32x8::splat(o[ky]), f32x8::splat(o[kz]));
+        let (x, y, z) = (w.along(kx), w.along(ky), w.along(kz));
+        let p = |k: usize| (x[k] - ox, y[k] - oy, z[k] - oz);
+        let n = V3::new(w.ld(9), w.ld(10), w.ld(11));
+        let (hit, t) = hit_permuted(ray.o8, ray.d8, &ray.setup8, [p(0), p(1), p(2)], n, w.ld(12));
         let mut m = hit.to_bitmask() & ((1u32 << count) - 1);
         if m == 0 {
             return;
