@@ -285,7 +285,7 @@ fn the_instruction_gate_has_a_baseline_for_each_case_each_with_a_reason() {
         .map(|l| l.split('|').collect::<Vec<_>>())
         .filter(|f| f.len() == 3)
         .collect();
-    assert_eq!(cases.len(), 4, "the gate's cases: {cases:?}");
+    assert_eq!(cases.len(), 5, "the gate's cases: {cases:?}");
     let mut files: Vec<String> = std::fs::read_dir(&dir)
         .unwrap()
         .map(|e| e.unwrap().file_name().into_string().unwrap())
