@@ -243,31 +243,37 @@ impl<'a> Builder<'a> {
         }
         let mut best: Option<(f32, usize, f32)> = None; // (cost, axis, split position)
         let area = bounds.area().max(f32::MIN_POSITIVE);
-        for axis in 0..3 {
-            let (lo_c, hi_c) = (cb.min[axis], cb.max[axis]);
-            if !(hi_c > lo_c) {
-                continue;
+        // Every axis binned in one pass over the primitives (each read once).
+        let scale: [f32; 3] = std::array::from_fn(|a| BINS as f32 / (cb.max[a] - cb.min[a]));
+        let spread: [bool; 3] = std::array::from_fn(|a| cb.max[a] > cb.min[a]);
+        let bin_of = |a: usize, c: f32| (((c - cb.min[a]) * scale[a]) as usize).min(BINS - 1);
+        let mut bin_box = [[Aabb::EMPTY; BINS]; 3];
+        let mut bin_n = [[0usize; BINS]; 3];
+        for &i in order.iter() {
+            let (c, bx) = (&self.centroid[i as usize], &self.boxes[i as usize]);
+            for a in (0..3).filter(|&a| spread[a]) {
+                let b = bin_of(a, c[a]);
+                bin_box[a][b].grow(bx);
+                bin_n[a][b] += 1;
             }
-            let scale = BINS as f32 / (hi_c - lo_c);
-            let bin_of = |c: f32| (((c - lo_c) * scale) as usize).min(BINS - 1);
-            let mut bin_box = [Aabb::EMPTY; BINS];
-            let mut bin_n = [0usize; BINS];
-            for &i in order.iter() {
-                let b = bin_of(self.centroid[i as usize][axis]);
-                bin_box[b].grow(&self.boxes[i as usize]);
-                bin_n[b] += 1;
+        }
+        for axis in (0..3).filter(|&a| spread[a]) {
+            let (bin_box, bin_n, scale, lo_c) = (&bin_box[axis], &bin_n[axis], scale[axis], cb.min[axis]);
+            // The bins right of each split, swept once from the right (min
+            // and max round nothing, so the boxes are the ones a sum of the
+            // bins in any order gives), then the left side swept with the splits.
+            let mut right = [(Aabb::EMPTY, 0usize); BINS];
+            let mut acc = (Aabb::EMPTY, 0);
+            for b in (1..BINS).rev() {
+                acc.0.grow(&bin_box[b]);
+                acc.1 += bin_n[b];
+                right[b] = acc;
             }
+            let (mut lb, mut ln) = (Aabb::EMPTY, 0);
             for split in 1..BINS {
-                let (mut lb, mut rb) = (Aabb::EMPTY, Aabb::EMPTY);
-                let (mut ln, mut rn) = (0, 0);
-                for b in 0..split {
-                    lb.grow(&bin_box[b]);
-                    ln += bin_n[b];
-                }
-                for b in split..BINS {
-                    rb.grow(&bin_box[b]);
-                    rn += bin_n[b];
-                }
+                lb.grow(&bin_box[split - 1]);
+                ln += bin_n[split - 1];
+                let (rb, rn) = right[split];
                 if ln == 0 || rn == 0 {
                     continue;
                 }
