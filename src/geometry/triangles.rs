@@ -230,14 +230,14 @@ fn hit_permuted<R: Real>(o: V3<R>, d: V3<R>, pr: &Projection<R>, p: [(R, R, R); 
 /// at once ([`Leaf::test_lanes`]).
 #[derive(Clone, Debug, Default)]
 pub struct TriangleLanes {
-    /// [`SECTIONS`] arrays of `stride` floats one after the other, one a
-    /// value of the test: vertex `k`'s coordinate `a` in section `3a + k`
-    /// (the three vertices along one axis together: a ray's axis picks
-    /// three neighbours), the normal's coordinate `a` in `9 + a`, `n.v0` in
-    /// 12. One allocation: a leaf's 13 loads share one base address and one
-    /// bounds check.
-    data: Vec<f32>,
-    /// The triangles, padding included.
+    /// [`SECTIONS`] arrays of `stride` floats, one a value of the test:
+    /// vertex `k`'s coordinate `a` in section `3a + k`, the normal's
+    /// coordinate `a` in `9 + a`, `n.v0` in 12. All of one length, so a
+    /// leaf's 13 loads take one bounds check. (One allocation of all 13
+    /// raised the process's peak memory by 20 bytes a triangle: the
+    /// allocator maps it anew instead of reusing what the build freed.)
+    sections: [Box<[f32]>; SECTIONS],
+    /// The triangles, padding included: every section's length.
     stride: usize,
     index: Vec<u32>,
 }
@@ -265,12 +265,11 @@ impl Window<'_> {
     /// section is a constant, or bounded as in [`Window::along`]).
     #[inline(always)]
     fn ld(&self, s: usize) -> f32x8 {
-        assert!(s < SECTIONS);
-        let at = s * self.lanes.stride + self.start;
-        debug_assert_eq!(self.lanes.data.len(), SECTIONS * self.lanes.stride);
-        // SAFETY: `s < SECTIONS` and `start + 8 <= stride` (`window`), so
-        // `at + 8 <= SECTIONS * stride`, which is `data`'s length (`lanes`).
-        f32x8::new(unsafe { self.lanes.data.as_ptr().add(at).cast::<[f32; 8]>().read() })
+        let section = &self.lanes.sections[s];
+        debug_assert_eq!(section.len(), self.lanes.stride);
+        // SAFETY: `start + 8 <= stride` (`window`), and every section is
+        // `stride` long (`lanes`).
+        f32x8::new(unsafe { section.as_ptr().add(self.start).cast::<[f32; 8]>().read() })
     }
 
     /// The three vertices' coordinates along axis `a` (sections `3a` to
@@ -289,21 +288,22 @@ impl Leaf for LeafTriangle {
     fn lanes(leaf: impl Iterator<Item = Self>, len: usize) -> TriangleLanes {
         // Exactly their length: a mesh's lanes are most of its memory.
         let stride = len + 8;
-        let (mut data, mut index) = (vec![0.0; SECTIONS * stride], Vec::with_capacity(stride));
+        let mut sections: [Vec<f32>; SECTIONS] = std::array::from_fn(|_| Vec::with_capacity(stride));
+        let mut index = Vec::with_capacity(stride);
         let pad = LeafTriangle { index: MISS, ..LeafTriangle::default() };
-        for (j, t) in leaf.chain(std::iter::repeat_n(pad, 8)).take(stride).enumerate() {
+        for t in leaf.chain(std::iter::repeat_n(pad, 8)).take(stride) {
             let values: [f32; SECTIONS] = std::array::from_fn(|s| match s {
                 0..9 => t.v[s % 3][s / 3],
                 9..12 => t.n[s - 9],
                 _ => t.dn,
             });
-            for (s, x) in values.into_iter().enumerate() {
-                data[s * stride + j] = x;
+            for (section, x) in sections.iter_mut().zip(values) {
+                section.push(x);
             }
             index.push(t.index);
         }
         assert_eq!(index.len(), stride, "{len} leaf records");
-        TriangleLanes { data, stride, index }
+        TriangleLanes { sections: sections.map(Vec::into_boxed_slice), stride, index }
     }
 
     /// The leaf's triangles 8 at a time, the ray broadcast; hits offered in
