@@ -309,7 +309,7 @@ impl Leaf for LeafTriangle {
     /// The leaf's triangles 8 at a time, the ray broadcast; hits offered in
     /// lane order (the tie rule does not depend on it). The ray's axes are
     /// one for all 8 lanes, so the coordinates are loaded in its order:
-    /// [`hit`]'s permutation (18 blends) is left to the loads' addresses.
+    /// the test's permutation (18 blends) is left to the loads' addresses.
     #[inline(always)]
     fn test_lanes<C: Counter>(
         lanes: &TriangleLanes,
