@@ -66,11 +66,17 @@ pub const MAX_MEDIA: usize = 64;
 /// [`MAX_SCENE_TRIANGLES`].
 pub const MAX_MESHES: usize = 1 << 16;
 /// The most triangles a scene may hold once flattened (every mesh, each
-/// group's copy included), checked before any is made: 2^23. Preparing a
+/// group's copy included; a mesh shared by instances once), checked before
+/// any is made: 2^23. Preparing a
 /// scene peaks at about 216 bytes a triangle (the tree's build included:
 /// 518 MiB measured for 2,488,320 triangles), about 1.8 GB at the limit.
 /// Also bounds the planar hit indices (quads and triangles below 2^29).
 pub const MAX_SCENE_TRIANGLES: u64 = 1 << 23;
+/// The most triangles the instances of shared meshes may place, every
+/// placement counted (`geometry::instances`): 2^30, the range of their hit
+/// indices. A shared mesh's triangles are held once, whatever its
+/// placements, and counted once toward [`MAX_SCENE_TRIANGLES`].
+pub const MAX_INSTANCED_TRIANGLES: u64 = 1 << 30;
 /// Shapes the `book` estimator samples toward, at most (its `sample_toward`
 /// list, or the lights it takes by default), and lights the `nee-mis`
 /// estimator samples: every diffuse vertex evaluates the density of each.

@@ -121,6 +121,14 @@ pub struct Plan {
     /// quad's surface).
     #[serde(skip_serializing_if = "Option::is_none")]
     pub triangles: Option<Accel>,
+    /// The placements of shared meshes (`geometry::instances`), when rays
+    /// are traced: searched after the moving spheres, through the
+    /// instances' own tree and each mesh's tree in its frame.
+    #[serde(skip_serializing_if = "is_zero")]
+    pub instances: usize,
+    /// The shared meshes those instances place, each held once.
+    #[serde(skip_serializing_if = "is_zero")]
+    pub shared_meshes: usize,
     /// The `book` estimator's shapes (its `sample_toward` list, else the
     /// scene's lights), when it runs and has any: each diffuse vertex then
     /// mixes the material's density with directions toward them. 0: the
@@ -192,6 +200,14 @@ impl Plan {
             Some(_) => "; triangles: their own bvh8, watertight test",
             None => "",
         };
+        let instances = match self.instances {
+            0 => String::new(),
+            n => format!(
+                "; instances: {n} placements of {} shared mesh(es), each mesh's bvh8 walked in its own frame under the \
+                 instances' bvh8",
+                self.shared_meshes
+            ),
+        };
         let textures: Vec<&str> = self.textures.iter().map(|t| t.name()).collect();
         let textures =
             if textures.is_empty() { String::new() } else { format!("; texture passes: {}", textures.join(", ")) };
@@ -221,7 +237,7 @@ impl Plan {
             ),
         };
         format!(
-            "plan: mode {:?}; material passes: {kinds}{textures}; camera: {} rays, {}; closest hit: {}{quads}{cuboids}{moving}{triangles}{media}{toward}; paths stop at zero throughput{film}",
+            "plan: mode {:?}; material passes: {kinds}{textures}; camera: {} rays, {}; closest hit: {}{quads}{cuboids}{moving}{triangles}{instances}{media}{toward}; paths stop at zero throughput{film}",
             self.mode,
             if self.lens { "thin-lens" } else { "pinhole" },
             if self.jitter { "jittered in the pixel" } else { "through pixel centres" },

@@ -157,6 +157,9 @@ pub enum Walk {
     /// One ray against 8 child boxes, then 8 leaf spheres, per `f32x8` test
     /// (`--accel bvh-ray`).
     Wide8,
+    /// One ray against 8 child boxes, each leaf a whole search of its own
+    /// (an instance: its mesh's walk), so leaves of one.
+    Searches,
 }
 
 /// The surface area heuristic's costs, in units of one primitive test of the
@@ -182,6 +185,8 @@ impl SahCost {
         match walk {
             Walk::OneByOne => SahCost { inner: 3.0, per_test: 1 },
             Walk::Wide8 => SahCost { inner: 0.5, per_test: 8 },
+            // A leaf's test is a walk of many nodes: a split always pays.
+            Walk::Searches => SahCost { inner: 0.01, per_test: 1 },
         }
     }
 
@@ -405,6 +410,12 @@ impl<L: Leaf> Bvh<L> {
         }
         bvh.nodes.shrink_to_fit();
         (bvh, order)
+    }
+
+    /// The tree's lanes ([`Leaf::Lanes`]), for a kind whose lanes hold
+    /// more than its leaf records (the instances' meshes).
+    pub(crate) fn lanes_mut(&mut self) -> &mut L::Lanes {
+        &mut self.wide
     }
 
     /// The walk the tree was built for.
@@ -674,7 +685,7 @@ impl<L: Leaf> Bvh<L> {
         let mut tally = WorkTally::<C>::new();
         let ray = OneRay::<L>::new(o, d, time);
         self.walk8(o, d, &mut best, &mut tally, |start, cnt, best, tally| {
-            L::test_lanes(&self.wide, &self.leaf, start, cnt, &ray, best, tally);
+            L::test_lanes::<_, ANY>(&self.wide, &self.leaf, start, cnt, &ray, best, tally);
             ANY && best.index != MISS
         });
         tally.flush(counter);
@@ -707,6 +718,14 @@ impl<L: Leaf> Bvh<L> {
                 tally.work(Work::Box, 8);
                 let node = &self.nodes[ni as usize];
                 let (mut leaves, inner, near) = node.enter8(inv8, noi8, best.t);
+                if L::LEAVES_NEAR_TO_FAR {
+                    if leaves_near_to_far(leaves, near, best, |k, best| {
+                        leaf(node.child[k] as usize, node.count[k] as usize, best, tally)
+                    }) {
+                        return;
+                    }
+                    leaves = 0;
+                }
                 while leaves != 0 {
                     let k = leaves.trailing_zeros() as usize & 7;
                     leaves &= leaves - 1;
@@ -940,6 +959,39 @@ impl Stack<u64> {
         }
         self.pop()
     }
+}
+
+/// A node's leaves in `bits` (slot `k` entered at `near[k]`), nearest
+/// first, each while its entry is within `best` (the walks' pruning rule):
+/// `leaf(k, best)` for each, which says whether to stop (then `true`).
+/// For kinds whose leaves are whole searches ([`Leaf::LEAVES_NEAR_TO_FAR`]).
+#[inline(always)]
+fn leaves_near_to_far(
+    mut bits: u32,
+    near: f32x8,
+    best: &mut Closest<f32>,
+    mut leaf: impl FnMut(usize, &mut Closest<f32>) -> bool,
+) -> bool {
+    let near = near.to_array();
+    while bits != 0 {
+        let mut k = bits.trailing_zeros() as usize & 7;
+        let mut rest = bits & (bits - 1);
+        while rest != 0 {
+            let j = rest.trailing_zeros() as usize & 7;
+            rest &= rest - 1;
+            if near[j] < near[k] {
+                k = j;
+            }
+        }
+        bits &= !(1 << k);
+        if near[k] > best.t * PRUNE_SCALE {
+            return false;
+        }
+        if leaf(k, best) {
+            return true;
+        }
+    }
+    false
 }
 
 /// The lanes of `v` as an array (one store), for a packet's walks one ray

@@ -4,7 +4,8 @@
 //!
 //! One tie order across kinds: hit indices are spheres `i`, then
 //! `QUAD_BASE + i` (quads, a cuboid's hit being its face's), then
-//! `MOVING_BASE + i`, then `MEDIUM_BASE + k`, below `MISS`; the smallest `t`
+//! `MOVING_BASE + i`, then `INSTANCE_BASE + i` (instanced meshes' triangles),
+//! then `MEDIUM_BASE + k`, below `MISS`; the smallest `t`
 //! wins, ties to the lowest index, so brute force and every walk find the
 //! same hit bit for bit whatever the order the kinds are searched in. The
 //! wavefront tells kinds apart lane by lane with one compare against a base;
@@ -21,11 +22,17 @@ pub const MISS: u32 = u32::MAX;
 pub const QUAD_BASE: u32 = 1 << 30;
 
 /// The hit index of moving sphere `i` is `MOVING_BASE + i`: above every
-/// quad's (`QUAD_BASE + i`, `i < 2^20`), below [`MEDIUM_BASE`].
+/// quad's (`QUAD_BASE + i`, `i < 2^29`), below [`INSTANCE_BASE`].
 pub const MOVING_BASE: u32 = 3 << 29;
 
-/// The hit index of medium `k` is `MEDIUM_BASE + k`: above every moving
-/// sphere's, below [`MISS`].
+/// The hit index of an instanced mesh's triangle is `INSTANCE_BASE + i`,
+/// `i` its place among every instance's triangles (`super::Instances`):
+/// above every moving sphere's (fewer than `2^20`), below [`MEDIUM_BASE`]
+/// (`i < 2^30`: `crate::limits::MAX_INSTANCED_TRIANGLES`).
+pub const INSTANCE_BASE: u32 = 1 << 31;
+
+/// The hit index of medium `k` is `MEDIUM_BASE + k`: above every instanced
+/// triangle's, below [`MISS`].
 pub const MEDIUM_BASE: u32 = 3 << 30;
 
 /// The kinds a hit can name, in the tie order.
@@ -35,6 +42,8 @@ pub enum HitKind {
     /// A quad, loose or a cuboid's face.
     Quad,
     Moving,
+    /// A triangle of an instanced mesh.
+    Instance,
     /// A scattering event inside a constant medium.
     Medium,
     Miss,
@@ -47,6 +56,7 @@ impl HitKind {
             HitKind::Sphere => 0,
             HitKind::Quad => QUAD_BASE,
             HitKind::Moving => MOVING_BASE,
+            HitKind::Instance => INSTANCE_BASE,
             HitKind::Medium => MEDIUM_BASE,
             HitKind::Miss => MISS,
         }
@@ -68,8 +78,10 @@ impl Hit {
             HitKind::Sphere
         } else if h < MOVING_BASE {
             HitKind::Quad
-        } else if h < MEDIUM_BASE {
+        } else if h < INSTANCE_BASE {
             HitKind::Moving
+        } else if h < MEDIUM_BASE {
+            HitKind::Instance
         } else if h < MISS {
             HitKind::Medium
         } else {

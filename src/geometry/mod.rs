@@ -16,7 +16,9 @@
 //!   its own frame), [`moving`] (spheres whose centre moves over the
 //!   shutter interval, tested at each path's time), [`triangles`] (meshes'
 //!   triangles in world space, a watertight test; their shading records
-//!   are planar records among the quads'). A primitive carries its
+//!   are planar records among the quads'), [`instances`] (a mesh several
+//!   groups place, held once in its own frame with its tree, each
+//!   placement a turn and a move). A primitive carries its
 //!   material's handle (`handle::Kind` and a row) and nothing else of
 //!   materials: the tables it indexes, and the shading, live above.
 //! - [`bvh`]: an 8-wide SAH tree over any kind, its one walk written once for
@@ -31,6 +33,7 @@
 pub mod bvh;
 pub mod cuboids;
 pub mod hit;
+pub mod instances;
 pub mod light_mesh;
 pub mod lights;
 pub mod media;
@@ -47,7 +50,8 @@ pub mod work;
 
 pub use bvh::{Bvh, SahCost, Walk, Walker};
 pub use cuboids::{cuboid_hit, CuboidRec, Cuboids, LeafCuboid};
-pub use hit::{Closest, Hit, HitKind, MEDIUM_BASE, MISS, MOVING_BASE, QUAD_BASE};
+pub use hit::{Closest, Hit, HitKind, INSTANCE_BASE, MEDIUM_BASE, MISS, MOVING_BASE, QUAD_BASE};
+pub use instances::{Instances, LeafInstance, SharedMesh};
 pub use light_mesh::LightMesh;
 pub use lights::{emission, Emitters, LightQuad, LightSample, LightSphere, Lights};
 pub use media::{sample_media, transmittance, Boundary, Media};

@@ -133,7 +133,7 @@ impl Leaf for LeafMoving {
 
 impl Primitive for MovingSpheres {
     type Leaf = LeafMoving;
-    const TIMED: bool = true;
+    const GENERAL: bool = true;
 
     fn count(&self) -> usize {
         self.s.len

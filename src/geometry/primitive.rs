@@ -78,6 +78,12 @@ pub trait Leaf: Copy + std::fmt::Debug {
         }
     }
 
+    /// A one-ray walk tests a node's leaves nearest first, each only while
+    /// its box is entered before the closest hit so far (a leaf that is a
+    /// whole search: an instance's mesh); by default in slot order, every
+    /// leaf the node test entered.
+    const LEAVES_NEAR_TO_FAR: bool = false;
+
     /// Sorts a leaf after the build (the quads: into runs of one form of
     /// the test). Nothing by default; a kind with [`Leaf::Lanes`] keeps the
     /// build's order ([`super::Bvh::build_lanes_only`] makes its lanes
@@ -98,9 +104,10 @@ pub trait Leaf: Copy + std::fmt::Debug {
     /// One ray against the primitives `start..start + count` of a tree's
     /// leaf records (`lanes` their [`Leaf::Lanes`]), improving `best`: by
     /// default one primitive at a time ([`Leaf::test_leaf`]); a kind with
-    /// lanes tests 8 at once (the same bits per primitive).
+    /// lanes tests 8 at once (the same bits per primitive). `ANY`: an
+    /// any-hit query, which may stop at its first hit below `best.t`.
     #[inline(always)]
-    fn test_lanes<C: Counter>(
+    fn test_lanes<C: Counter, const ANY: bool>(
         _lanes: &Self::Lanes,
         leaf: &[Self],
         start: usize,
@@ -118,9 +125,11 @@ pub trait Primitive {
     /// What a tree's leaf holds of one primitive.
     type Leaf: Leaf;
 
-    /// The primitives move: their test reads each ray's time, and a scene
-    /// without motion skips them at compile time.
-    const TIMED: bool = false;
+    /// The kind is searched on the kernels' general path only (`M`: a
+    /// scene with moving spheres, whose test reads each ray's time, or with
+    /// instanced meshes); a scene without such a kind skips its search at
+    /// compile time.
+    const GENERAL: bool = false;
 
     /// The kind's tree is walked one ray at a time, 8 child boxes per test
     /// ([`super::Bvh::walk_one_wide`]), in the packet kernels too: for big

@@ -14,6 +14,7 @@
 use super::bvh::{Bvh, Walk, Walker};
 use super::cuboids::{Cuboids, LeafCuboid};
 use super::hit::Closest;
+use super::instances::{Instances, LeafInstance};
 use super::moving::{LeafMoving, MovingSpheres};
 use super::primitive::Primitive;
 use super::quads::{LeafQuad, Quads};
@@ -35,6 +36,8 @@ pub struct Shapes {
     pub moving: MovingSpheres,
     /// The meshes' triangles (world space).
     pub triangles: Triangles,
+    /// The meshes several groups place, each held once (its own frame).
+    pub instances: Instances,
     /// The vertex normals of the planar records of meshes that give them
     /// (empty: every surface shades with its geometric normal).
     pub smooth: Smooth,
@@ -52,6 +55,7 @@ pub struct Trees {
     pub cuboids: Option<Bvh<LeafCuboid>>,
     pub moving: Option<Bvh<LeafMoving>>,
     pub triangles: Option<Bvh<LeafTriangle>>,
+    pub instances: Option<Bvh<LeafInstance>>,
 }
 
 /// The kinds after the spheres, in their search order: `$body` once per
@@ -72,6 +76,10 @@ macro_rules! for_each_kind_after_spheres {
         }
         {
             let ($prims, $tree) = (&$shapes.triangles, $shapes.trees.triangles.as_ref());
+            $body;
+        }
+        {
+            let ($prims, $tree) = (&$shapes.instances, $shapes.trees.instances.as_ref());
             $body;
         }
     }};
@@ -98,23 +106,38 @@ impl Shapes {
         cuboids: Cuboids,
         moving: MovingSpheres,
         triangles: Triangles,
+        instances: Instances,
     ) -> Shapes {
-        let others = quads.count() > 0 || cuboids.count() > 0 || moving.count() > 0 || triangles.count() > 0;
+        let others = quads.count() > 0
+            || cuboids.count() > 0
+            || moving.count() > 0
+            || triangles.count() > 0
+            || instances.count() > 0;
         Shapes {
             spheres,
             quads,
             cuboids,
             moving,
             triangles,
+            instances,
             smooth: Smooth::default(),
             trees: Trees::default(),
             others,
         }
     }
 
+    /// The scene needs the kernels' general path (`M`): it has moving
+    /// spheres (each path carries a time) or instanced meshes (hits decoded
+    /// lane by lane). The other scenes compile to a bounce without either.
+    pub fn general(&self) -> bool {
+        !self.moving.is_empty() || !self.instances.is_empty()
+    }
+
     /// Builds the trees `choice` asks for; `extent` bounds every ray origin
     /// (see [`Bvh::build`]). The triangles' records are then held by their
-    /// tree alone ([`Triangles::release`]).
+    /// tree alone ([`Triangles::release`]). Instances always get their tree
+    /// (over their boxes: a few per scene), whatever `choice` says: brute
+    /// force over them ([`Instances`]' own) serves the tests.
     pub fn build_trees(&mut self, choice: TreeChoice, extent: f32) {
         let one = Walk::OneByOne;
         self.trees = Trees {
@@ -125,6 +148,7 @@ impl Shapes {
             // Walked one ray at a time (`Primitive::WALK_ONE_RAY`), 8 boxes
             // and 8 triangles a test, from the tree's lanes alone.
             triangles: choice.triangles.then(|| Bvh::build_lanes_only(&self.triangles, extent, Walk::Wide8)),
+            instances: (!self.instances.is_empty()).then(|| self.instances.tree(extent)),
         };
         if self.trees.triangles.is_some() {
             self.triangles.release();
@@ -133,9 +157,10 @@ impl Shapes {
 
     /// The closest hits of the rays `o + t d` (one ray, or a packet; the
     /// lanes of `live` are searched, the others return `MISS` at
-    /// `t = -inf`). `M`: the scene has moving spheres (`false` compiles to
-    /// the search of a scene without); `time` gives the rays' times, called
-    /// only when `M`.
+    /// `t = -inf`). `M`: the scene is on the general path
+    /// ([`Shapes::general`]; `false` compiles to the search of a scene
+    /// without moving spheres and instances); `time` gives the rays' times,
+    /// called only when `M`.
     #[cfg_attr(not(feature = "phases"), inline(always))]
     #[cfg_attr(feature = "phases", inline(never))]
     pub fn closest<R: Walker, C: Counter, const M: bool>(
@@ -196,7 +221,8 @@ impl Shapes {
 }
 
 /// One kind's search: its tree's walk, or brute force; nothing for a kind
-/// without primitives, or a moving kind in a scene without motion (`M`).
+/// without primitives, or a kind of the general path (moving spheres,
+/// instances) in a scene without one (`M`).
 #[inline(always)]
 fn search<K: Primitive, R: Walker, C: Counter, const M: bool, const ANY: bool>(
     prims: &K,
@@ -207,7 +233,7 @@ fn search<K: Primitive, R: Walker, C: Counter, const M: bool, const ANY: bool>(
     best: &mut Closest<R>,
     counter: &mut C,
 ) {
-    if (K::TIMED && !M) || prims.count() == 0 {
+    if (K::GENERAL && !M) || prims.count() == 0 {
         return;
     }
     if K::WALK_ONE_RAY {

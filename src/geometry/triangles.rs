@@ -101,6 +101,15 @@ impl Triangles {
         self.len += 1;
     }
 
+    /// Appends the triangle `v` of an instanced mesh, in the mesh's own
+    /// frame, whose hit index in its tree is `k`, its place in the mesh
+    /// (`super::instances`: an instance adds its own base).
+    pub fn push_local(&mut self, v: [[f32; 3]; 3], k: u32) {
+        let (n, dn) = plane(v);
+        self.rec.push(LeafTriangle { v, n, dn, index: k });
+        self.len += 1;
+    }
+
     /// Room for `n` more triangles, exactly (a mesh's records are its
     /// largest allocation while its tree is built).
     pub fn reserve(&mut self, n: usize) {
@@ -311,7 +320,7 @@ impl Leaf for LeafTriangle {
     /// one for all 8 lanes, so the coordinates are loaded in its order:
     /// the test's permutation (18 blends) is left to the loads' addresses.
     #[inline(always)]
-    fn test_lanes<C: Counter>(
+    fn test_lanes<C: Counter, const ANY: bool>(
         lanes: &TriangleLanes,
         _leaf: &[Self],
         start: usize,

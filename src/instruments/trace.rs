@@ -121,6 +121,10 @@ impl Recorder<'_> {
                 let what = if index < quads { format!("quad {index}") } else { format!("triangle {}", index - quads) };
                 (what, sh.quads.kind.get(index).copied())
             }
+            HitKind::Instance => {
+                let (i, k) = sh.instances.of(hit);
+                (format!("triangle {k} of instance {i}"), Some(sh.instances.kind[i]))
+            }
             HitKind::Medium => (format!("medium {index} (stops inside it)"), Some(Kind::Isotropic)),
             HitKind::Miss => ("nothing".into(), None),
         };

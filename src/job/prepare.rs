@@ -11,8 +11,8 @@ use crate::estimator::Estimator;
 use crate::film::accum::Scale;
 use crate::geometry::triangles::plane;
 use crate::geometry::{
-    Boundary, Cuboids, Emitters, LightMesh, LightQuad, LightSphere, Lights, Media, MovingSpheres, Quads, Shade, Shapes,
-    Smooth, Spheres, TreeChoice, Triangles, Walk, QUAD_BASE,
+    Boundary, Cuboids, Emitters, Instances, LightMesh, LightQuad, LightSphere, Lights, Media, MovingSpheres, Quads,
+    Shade, Shapes, SharedMesh, Smooth, Spheres, TreeChoice, Triangles, Walk, QUAD_BASE,
 };
 use crate::handle::Kind;
 use crate::material::MaterialTables;
@@ -111,6 +111,8 @@ pub(super) fn plan(scene: &Scene, flat: &Flat, settings: &Settings, accel: Accel
         cuboids: choose_quad_accel(accel, flat.cuboids.len(), scene.mode),
         moving: choose_quad_accel(accel, flat.spheres.iter().filter(|s| s.center1.is_some()).count(), scene.mode),
         triangles: choose_quad_accel(accel, flat.triangle_count(), scene.mode),
+        instances: if scene.mode == Mode::Gradient { 0 } else { flat.instances.len() },
+        shared_meshes: if scene.mode == Mode::Gradient { 0 } else { flat.shared.len() },
         sample_toward,
         nee,
         film_exponent: Scale::for_brightness(brightest(scene, flat) as f64).exponent(),
@@ -183,9 +185,11 @@ pub(super) fn prepare(
     let (spheres, moving) = spheres(flat, &mut tables);
     let (mut quads, cuboids) = quads(flat, extent, &mut tables);
     let (triangles, smooth, placed) = triangles(flat, &mut quads, &mut tables);
+    let instances = if plan.instances > 0 { instances(flat, extent, &mut tables) } else { Instances::default() };
     let Tables { materials, textures, .. } = tables;
     let media = if plan.kinds.contains(Kind::Isotropic) { media(flat) } else { Media::default() };
-    let mut shapes = shapes(Kinds { spheres, quads, cuboids, moving, triangles }, &materials, &plan, extent);
+    let kinds = Kinds { spheres, quads, cuboids, moving, triangles, instances };
+    let mut shapes = shapes(kinds, &materials, &plan, extent);
     shapes.smooth = smooth;
     let camera =
         PreparedCamera { lens: plan.lens, ..PreparedCamera::new(&view, settings.width, settings.height, plan.jitter) };
@@ -306,7 +310,45 @@ fn extent(scene: &Scene, flat: &Flat, view: &View, plan: &Plan) -> f32 {
     for m in &flat.meshes {
         extent = m.positions.iter().fold(extent, |e, p| e.max(inf(p)));
     }
+    let reach: Vec<f64> = flat.shared.iter().map(|m| m.positions.iter().fold(0.0f64, |r, p| r.max(norm(p)))).collect();
+    for i in &flat.instances {
+        // The turn about y keeps a point's distance from the y axis.
+        extent = extent.max((reach[i.mesh] + i.translate.iter().fold(0.0f64, |m, x| m.max(x.abs()))) as f32);
+    }
     extent
+}
+
+/// The length of `p` (f64), at least its largest coordinate's magnitude.
+fn norm(p: &[f32; 3]) -> f64 {
+    p.iter().map(|&x| f64::from(x) * f64::from(x)).sum::<f64>().sqrt() * (1.0 + 1e-15)
+}
+
+/// The shared meshes (each in its own frame, with its tree) and their
+/// instances, in group order, with their materials' rows. A mesh's tree is
+/// padded for rays moved into its frame: their coordinates reach at most
+/// `extent` plus its instances' largest move, turned (a factor up to
+/// `sqrt 2`).
+fn instances(flat: &Flat, extent: f32, tables: &mut Tables) -> Instances {
+    let meshes = flat
+        .shared
+        .iter()
+        .enumerate()
+        .map(|(k, m)| {
+            let moved = flat
+                .instances
+                .iter()
+                .filter(|i| i.mesh == k)
+                .flat_map(|i| i.translate)
+                .fold(0.0f64, |r, x| r.max(x.abs()));
+            SharedMesh::new((0..m.triangles.len()).map(|t| m.triangle(t)), 2.0 * (extent + moved as f32))
+        })
+        .collect();
+    let mut instances = Instances::new(meshes);
+    for i in &flat.instances {
+        let (kind, row) = (kind(&i.material), tables.row_of(&i.material));
+        instances.push(i.mesh, (i.cos, i.sin), i.translate, kind, row);
+    }
+    instances
 }
 
 /// The static and the moving spheres, in scene order, with their materials' rows.
@@ -402,7 +444,7 @@ fn media(flat: &Flat) -> Media {
 /// spheres' tree pads by their own extent too); the spheres' tree is shaped
 /// for the walk that uses it (`geometry::bvh::SahCost`).
 fn shapes(kinds: Kinds, materials: &MaterialTables, plan: &Plan, extent: f32) -> Shapes {
-    let Kinds { mut spheres, mut quads, cuboids, mut moving, triangles } = kinds;
+    let Kinds { mut spheres, mut quads, cuboids, mut moving, triangles, mut instances } = kinds;
     spheres.pad();
     quads.pad();
     moving.pad();
@@ -413,7 +455,11 @@ fn shapes(kinds: Kinds, materials: &MaterialTables, plan: &Plan, extent: f32) ->
         let (albedo, param) = materials.record(quads.kind[i], quads.row[i]);
         quads.shade[i].0[4..].copy_from_slice(&[albedo[0], albedo[1], albedo[2], param]);
     }
-    let mut shapes = Shapes::new(spheres, quads, cuboids, moving, triangles);
+    for i in 0..instances.len() {
+        let (albedo, param) = materials.record(instances.kind[i], instances.row[i]);
+        instances.material[i] = [albedo[0], albedo[1], albedo[2], param];
+    }
+    let mut shapes = Shapes::new(spheres, quads, cuboids, moving, triangles, instances);
     let tree = |a: Option<Accel>| a.is_some_and(|a| a != Accel::Brute);
     let choice = TreeChoice {
         spheres: match plan.accel {
@@ -437,6 +483,7 @@ struct Kinds {
     cuboids: Cuboids,
     moving: MovingSpheres,
     triangles: Triangles,
+    instances: Instances,
 }
 
 /// Fills the spheres' shading records ([`Spheres::shade`], after

@@ -52,17 +52,18 @@ pub struct FirstHit {
 pub fn first_hit<S: PathSampler>(prep: &Prepared, sampler: S, x: u32, y: u32, sample: u32) -> FirstHit {
     let pixel = y as u64 * prep.settings.width as u64 + x as u64;
     let mut rng = sampler.scalar(prep.settings.seed, pixel, sample);
-    if prep.shapes.moving.is_empty() {
+    if !prep.shapes.general() {
         first_hit_in::<false>(prep, x, y, &mut rng)
     } else {
         first_hit_in::<true>(prep, x, y, &mut rng)
     }
 }
 
-/// [`first_hit`] for a scene with moving spheres (`M`) or without.
+/// [`first_hit`] for a scene on the general path (`M`: moving spheres or
+/// instanced meshes) or not.
 fn first_hit_in<const M: bool>(prep: &Prepared, x: u32, y: u32, rng: &mut impl Stream<f32>) -> FirstHit {
     let (o, d) = prep.camera.ray(x as f32, y as f32, rng);
-    let time = if M {
+    let time = if M && !prep.shapes.moving.is_empty() {
         rng.seek(layout::TIME);
         rng.next()
     } else {
@@ -91,7 +92,7 @@ fn pixel_mean<W: Wide, S: PathSampler, const M: bool>(
         let words: [[u32; 4]; 16] = std::array::from_fn(|k| sampler.words_at(pixel_words, s0 + k.min(live - 1) as u32));
         let mut rng = sampler.lanes::<W>(std::array::from_fn(|w| W::U::from_fn(|k| words[k][w])));
         let (o, d) = prep.camera.ray(W::splat(x as f32), W::splat(y as f32), &mut rng);
-        let time = if M {
+        let time = if M && !prep.shapes.moving.is_empty() {
             rng.seek(layout::TIME);
             rng.next()
         } else {
@@ -148,7 +149,7 @@ pub fn features<S: PathSampler>(
     aovs: Aovs,
 ) -> Features {
     let (w, h) = (cols.len() as u32, rows.len() as u32);
-    let moving = !prep.shapes.moving.is_empty();
+    let moving = prep.shapes.general();
     let per_row: Vec<Vec<FirstHit>> = rows
         .into_par_iter()
         .map(|y| {

@@ -24,7 +24,8 @@ use std::ops::Range;
 /// the paths' values drawn by `sampler`; returns the rays traced. With
 /// adaptive sampling a pixel stops at the first decision point where its
 /// error estimate is low enough.
-/// Instantiated for a scene with moving spheres and for one without (see
+/// Instantiated for a scene on the general path (moving spheres or
+/// instanced meshes: `Shapes::general`) and for one without (see
 /// `trace_in`), chosen once per tile.
 pub fn render_tile<S: PathSampler, P: Probe>(
     prep: &Prepared,
@@ -33,14 +34,14 @@ pub fn render_tile<S: PathSampler, P: Probe>(
     samples: Range<u32>,
     probe: &mut P,
 ) -> u64 {
-    if prep.shapes.moving.is_empty() {
+    if !prep.shapes.general() {
         render_tile_in::<S, P, false>(prep, sampler, tile, samples, probe)
     } else {
         render_tile_in::<S, P, true>(prep, sampler, tile, samples, probe)
     }
 }
 
-/// [`render_tile`] for a scene with moving spheres (`M`) or without.
+/// [`render_tile`] for a scene on the general path (`M`) or not.
 #[cfg_attr(feature = "phases", inline(never))]
 fn render_tile_in<S: PathSampler, P: Probe, const M: bool>(
     prep: &Prepared,
@@ -211,7 +212,7 @@ pub fn trace<P: Probe>(
     rng: &mut impl Stream<f32>,
     probe: &mut P,
 ) -> ([f32; 3], u32) {
-    let (c, rays, _) = if prep.shapes.moving.is_empty() {
+    let (c, rays, _) = if !prep.shapes.general() {
         trace_in::<P, false>(prep, x, y, id, rng, probe)
     } else {
         trace_in::<P, true>(prep, x, y, id, rng, probe)
@@ -253,7 +254,7 @@ impl Path {
     ) -> Path {
         let (o, d) = camera_ray(prep, x, y, rng);
         let o = if P::PATHS && probe.paths() { probe.camera(id, o, d, 1) } else { o };
-        let time = if M {
+        let time = if M && !prep.shapes.moving.is_empty() {
             rng.seek(layout::TIME);
             rng.next()
         } else {
@@ -270,8 +271,9 @@ impl Path {
     }
 }
 
-/// [`trace`] for a scene with moving spheres (`M`: the path draws a time)
-/// or without (`false` compiles to the path of a scene without). Also
+/// [`trace`] for a scene on the general path (`M`: moving spheres, and the
+/// path draws a time, or instanced meshes) or not (`false` compiles to the
+/// path of a scene without either). Also
 /// returns the shadow rays it traced.
 ///
 /// The radiance is a sum: under `nee-mis` each unblocked light sample adds
@@ -484,6 +486,11 @@ pub(super) fn hit_surface<const M: bool>(
             let m = &prep.shapes.moving;
             let r = m.s.r[i];
             (surface(o, d, t, m.centre(i, time), r), m.s.kind[i], m.s.row[i] as usize, r)
+        }
+        HitKind::Instance if M => {
+            let is = &prep.shapes.instances;
+            let (srf, k) = is.surface(o, d, t, hit);
+            (srf, is.kind[k], is.row[k] as usize, 0.0)
         }
         _ => {
             let qs = &prep.shapes.quads;

@@ -34,6 +34,78 @@ pub struct Flat {
     /// The meshes (the scene's, then each group's), their vertices in world
     /// space; their triangles come after every quad in the tie order.
     pub meshes: Vec<FlatMesh>,
+    /// The meshes several groups place ([`Sharing`]), each once, in its own
+    /// frame.
+    pub shared: Vec<FlatShared>,
+    /// Each group's placement of a shared mesh, in group order; their
+    /// triangles come after every moving sphere in the tie order.
+    pub instances: Vec<FlatInstance>,
+}
+
+/// A mesh several groups place, held once: its vertices in its own frame
+/// (an OBJ file's times the mesh's `scale`, each rounded once to f32) and
+/// its triangles.
+#[derive(Clone, Debug, PartialEq)]
+pub struct FlatShared {
+    pub positions: Vec<[f32; 3]>,
+    pub triangles: Arc<Vec<[u32; 3]>>,
+}
+
+impl FlatShared {
+    /// Triangle `k`'s vertices (the mesh's frame).
+    pub fn triangle(&self, k: usize) -> [[f32; 3]; 3] {
+        self.triangles[k].map(|i| self.positions[i as usize])
+    }
+}
+
+/// A group's placement of shared mesh `mesh`: its turn about y (`cos`,
+/// `sin`, the groups' rule) and its move, in f64, and its material.
+#[derive(Clone, Debug, PartialEq)]
+pub struct FlatInstance {
+    pub mesh: usize,
+    pub cos: f64,
+    pub sin: f64,
+    pub translate: [f64; 3],
+    pub material: Material,
+}
+
+/// Which meshes are instanced: an OBJ mesh (one file read, one `scale`)
+/// that two groups or more place, flat shaded (its file gives no vertex
+/// normals) and not a light, is held once in its own frame and placed by
+/// each group (`geometry::instances`); every other mesh is flattened into
+/// world space. The scene's own meshes (outside groups) are flattened.
+pub struct Sharing {
+    /// Placements per mesh key ([`Sharing::key`]).
+    placed: HashMap<(usize, u32), usize>,
+}
+
+impl Sharing {
+    /// The placements of the scene's group meshes that could be shared.
+    pub fn of(scene: &Scene, objs: &ObjMeshes) -> Sharing {
+        let mut placed = HashMap::new();
+        for g in &scene.groups {
+            for m in &g.meshes {
+                if let Some(key) = Sharing::key(m, objs) {
+                    *placed.entry(key).or_insert(0) += 1;
+                }
+            }
+        }
+        Sharing { placed }
+    }
+
+    /// The key of a group's mesh that could be shared: its file's read
+    /// (shared by every name of one file) and its scale's bits.
+    fn key(m: &Mesh, objs: &ObjMeshes) -> Option<(usize, u32)> {
+        let MeshShape::Obj { ref file, scale } = m.shape else { return None };
+        let obj = objs.get(file)?;
+        let light = matches!(m.material, Material::DiffuseLight { .. });
+        (obj.normals.is_none() && !light).then(|| (Arc::as_ptr(&obj.positions) as usize, scale.to_bits()))
+    }
+
+    /// Whether a group's mesh `m` is instanced, and if so its key.
+    pub fn shared(&self, m: &Mesh, objs: &ObjMeshes) -> Option<(usize, u32)> {
+        Sharing::key(m, objs).filter(|k| self.placed[k] >= 2)
+    }
 }
 
 /// A mesh in world space: its vertices (each rounded once to f32 from f64),
@@ -278,10 +350,46 @@ impl Flat {
         self.meshes.extend(meshes.iter().map(|m| mesh(t, m, icospheres, objs)));
     }
 
-    /// Every primitive's material: the spheres', the quads', the meshes'.
+    /// Places the shared OBJ mesh `m` (its [`Sharing`] key `key`) by
+    /// transform `t`, its vertices made in its own frame the first time
+    /// (`shared`: key to place in `self.shared`).
+    fn add_instance(
+        &mut self,
+        t: &Transform,
+        m: &Mesh,
+        key: (usize, u32),
+        shared: &mut HashMap<(usize, u32), usize>,
+        objs: &ObjMeshes,
+    ) {
+        let MeshShape::Obj { ref file, scale } = m.shape else { unreachable!("only OBJ meshes are shared") };
+        let mesh = *shared.entry(key).or_insert_with(|| {
+            let obj = objs.get(file).expect("Scene::flatten_with: every OBJ file the scene names is read first");
+            let s = scale as f64;
+            let positions = match scale == 1.0 {
+                true => obj.positions.to_vec(),
+                false => obj.positions.iter().map(|p| f32s(f64s(*p).map(|x| s * x))).collect(),
+            };
+            self.shared.push(FlatShared { positions, triangles: obj.triangles.clone() });
+            self.shared.len() - 1
+        });
+        let (cos, sin, translate) = (t.cos, t.sin, t.t);
+        self.instances.push(FlatInstance { mesh, cos, sin, translate, material: m.material.clone() });
+    }
+
+    /// Every primitive's material: the spheres', the quads', the meshes',
+    /// the instances'.
     pub fn materials(&self) -> impl Iterator<Item = &Material> {
         let spheres = self.spheres.iter().map(|s| &s.material);
-        spheres.chain(self.quads.iter().map(|q| &q.material)).chain(self.meshes.iter().map(|m| &m.material))
+        spheres
+            .chain(self.quads.iter().map(|q| &q.material))
+            .chain(self.meshes.iter().map(|m| &m.material))
+            .chain(self.instances.iter().map(|i| &i.material))
+    }
+
+    /// The triangles the instances place, every instance's counted (their
+    /// hit indices' range).
+    pub fn instanced_triangles(&self) -> u64 {
+        self.instances.iter().map(|i| self.shared[i.mesh].triangles.len() as u64).sum()
     }
 
     /// The number of triangles.
@@ -456,8 +564,16 @@ impl Scene {
         }
         let mut icospheres = Icospheres::default();
         flat.add_meshes(None, &self.meshes, &mut icospheres, objs);
+        let sharing = Sharing::of(self, objs);
+        let mut shared = HashMap::new();
         for g in &self.groups {
-            flat.add_meshes(Some(&Transform::of(g)), &g.meshes, &mut icospheres, objs);
+            let t = Transform::of(g);
+            for m in &g.meshes {
+                match sharing.shared(m, objs) {
+                    Some(key) => flat.add_instance(&t, m, key, &mut shared, objs),
+                    None => flat.meshes.push(mesh(Some(&t), m, &mut icospheres, objs)),
+                }
+            }
         }
         flat
     }

@@ -25,7 +25,7 @@ pub use assignment::{apply as apply_assignments, Assignment};
 pub use file::{load_scene, save_meshes_obj, save_scene, scene_from_bytes, scene_from_str, scene_to_string, Format};
 #[cfg(test)]
 pub(crate) use flatten::FLATTENED;
-pub use flatten::{box_quads, Flat, FlatBoundary, FlatMedium, FlatMesh};
+pub use flatten::{box_quads, Flat, FlatBoundary, FlatInstance, FlatMedium, FlatMesh, FlatShared, Sharing};
 pub use presets::{final_scene, preset, presets, Preset, PresetGroup};
 pub use render_table::{BookTable, RenderTable};
 #[cfg(feature = "schema")]

@@ -463,19 +463,39 @@ impl Mesh {
 impl Scene {
     /// The checks that need the scene's OBJ files read (`objs`, by the
     /// render job): every mesh within [`limits::MAX_COORD`] once scaled and
-    /// moved, and every mesh's triangles together at most
-    /// [`MAX_SCENE_TRIANGLES`].
+    /// moved, every mesh's triangles together at most
+    /// [`MAX_SCENE_TRIANGLES`] (an instanced mesh's counted once) and the
+    /// instances' triangles (each instance's counted) at most
+    /// [`limits::MAX_INSTANCED_TRIANGLES`].
     pub fn validate_obj_meshes(&self, objs: &ObjMeshes) -> Result<()> {
         let mut triangles = self.generated_triangles();
+        let sharing = super::Sharing::of(self, objs);
+        let (mut held, mut instanced) = (std::collections::HashSet::new(), 0u64);
         for (g, i, m) in self.all_meshes() {
             let MeshShape::Obj { ref file, scale } = m.shape else { continue };
             let field = g.map_or_else(|| format!("meshes[{i}]"), |g| format!("groups[{g}].meshes[{i}]"));
             let Some(obj) = objs.get(file) else {
                 return Err(Error::invalid(format!("{field}.shape.obj.file"), "was not read (a bug in rtow)"));
             };
-            triangles += obj.triangles.len() as u64;
+            let shared = g.and_then(|_| sharing.shared(m, objs));
+            if shared.is_none_or(|key| held.insert(key)) {
+                triangles += obj.triangles.len() as u64;
+            }
             if triangles > MAX_SCENE_TRIANGLES {
                 return Err(too_many_triangles(triangles));
+            }
+            if shared.is_some() {
+                instanced += obj.triangles.len() as u64;
+                if instanced > limits::MAX_INSTANCED_TRIANGLES {
+                    return Err(Error::invalid(
+                        format!("{field}.shape.obj.file"),
+                        format!(
+                            "the groups place more than {} triangles of shared meshes, every placement counted \
+                             (limits::MAX_INSTANCED_TRIANGLES)",
+                            limits::MAX_INSTANCED_TRIANGLES
+                        ),
+                    ));
+                }
             }
             let reach = super::flatten::obj_reach(g.map(|g| &self.groups[g]), scale, obj);
             if reach > limits::MAX_COORD as f64 {

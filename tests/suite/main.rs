@@ -42,6 +42,7 @@ subjects!(
     fuzz,
     hostile,
     images,
+    instances,
     lambertian,
     lights,
     materials,

@@ -76,10 +76,16 @@ pub(super) fn surfaces<W: Wide, P: Probe, const M: bool>(
             front: W::select(is_sphere, s_srf.front, q_srf.front),
             offset: W::select(is_sphere, s_srf.offset, q_srf.offset),
         };
+        let rec = std::array::from_fn(|k| W::select(is_sphere, srec[k], qrec[k]));
+        let (srf, rec) = if M && !prep.shapes.instances.is_empty() {
+            instance_surfaces::<W>(prep, o, d, t, sph, srf, rec)
+        } else {
+            (srf, rec)
+        };
         if P::PATHS && probe.paths() {
             probe.shaded(ws.ids::<W>(&at.idx()), sph, r, srf.n, srf.front, at.live());
         }
-        (srf, std::array::from_fn(|k| W::select(is_sphere, srec[k], qrec[k])))
+        (srf, rec)
     };
     let a = Shade::ALBEDO;
     Hits { d, srf, albedo: V3::new(rec[a], rec[a + 1], rec[a + 2]), param: rec[Shade::PARAM] }
@@ -107,6 +113,50 @@ pub(super) fn moving_records<W: Wide>(
         centre_at(V3::new(mrec[Shade::CX], mrec[Shade::CY], mrec[Shade::CZ]), V3::new(vel[0], vel[1], vel[2]), time);
     (mrec[Shade::CX], mrec[Shade::CY], mrec[Shade::CZ]) = (c.x, c.y, c.z);
     (is_sphere | is_moving, std::array::from_fn(|k| W::select(is_moving, mrec[k], srec[k])))
+}
+
+/// A packet's surfaces and records where some lanes may have hit an
+/// instanced mesh: in those lanes the instanced triangle's surface and its
+/// instance's material (`Instances::surface`, the scalar kernel's
+/// function, lane by lane: the same bits).
+#[inline(never)]
+fn instance_surfaces<W: Wide>(
+    prep: &Prepared,
+    o: V3<W>,
+    d: V3<W>,
+    t: W,
+    hit: W::U32,
+    srf: Surface<W>,
+    rec: [W; 8],
+) -> (Surface<W>, [W; 8]) {
+    let is = &prep.shapes.instances;
+    let mut lanes = 0u32;
+    let mut s = [[0.0f32; 8]; MAX_LANES];
+    let mut m = [[0.0f32; 4]; MAX_LANES];
+    for k in 0..W::LANES {
+        let h = W::lane_u(hit, k);
+        if (INSTANCE_BASE..MEDIUM_BASE).contains(&h) {
+            let at = |v: V3<W>| V3::new(v.x.lane(k), v.y.lane(k), v.z.lane(k));
+            let (f, i) = is.surface(at(o), at(d), t.lane(k), h);
+            let front = if f.front { 1.0 } else { 0.0 };
+            s[k] = [f.p.x, f.p.y, f.p.z, f.n.x, f.n.y, f.n.z, front, f.offset];
+            m[k] = is.material[i];
+            lanes |= 1 << k;
+        }
+    }
+    if lanes == 0 {
+        return (srf, rec);
+    }
+    let on = W::mask_from_bits(lanes);
+    let c = |j: usize| W::from_fn(|k| s[k][j]);
+    let surface = Surface {
+        p: V3::select(on, V3::new(c(0), c(1), c(2)), srf.p),
+        n: V3::select(on, V3::new(c(3), c(4), c(5)), srf.n),
+        front: W::select(on, c(6).gt(W::splat(0.5)), srf.front),
+        offset: W::select(on, c(7), srf.offset),
+    };
+    let rec = std::array::from_fn(|j| if j < 4 { rec[j] } else { W::select(on, W::from_fn(|k| m[k][j - 4]), rec[j]) });
+    (surface, rec)
 }
 
 pub(super) fn debug_shade<W: Wide, P: Probe, const M: bool>(

@@ -51,7 +51,7 @@ use crate::estimator::{
 use crate::film::TileFilm;
 use crate::geometry::{
     below, centre_at, emission, quad_surface, sample_media, shading_normal, spawn, surface, transmittance, Shade,
-    Surface, MEDIUM_BASE, MISS, MOVING_BASE, QUAD_BASE,
+    Surface, INSTANCE_BASE, MEDIUM_BASE, MISS, MOVING_BASE, QUAD_BASE,
 };
 use crate::handle::Kind;
 use crate::kernel::{background, normal_colour, texture_albedo};
@@ -95,10 +95,11 @@ pub(super) struct Bounce<'a, S> {
 /// the others, so fewer active pixels get more samples per batch and the
 /// packets stay full.
 ///
-/// The kernel is instantiated twice: for a scene with moving spheres (each
-/// path carries a time) and for one without (`M = false`), which compiles to
-/// the bounce it ran before motion blur existed; the choice is made here,
-/// once per tile.
+/// The kernel is instantiated twice: for a scene on the general path
+/// (`Shapes::general`: moving spheres, each path carrying a time, or
+/// instanced meshes, whose hits are decoded lane by lane) and for one
+/// without (`M = false`), which compiles to the bounce it ran before motion
+/// blur existed; the choice is made here, once per tile.
 pub fn render_tile<W: Wide, P: Probe, S: PathSampler>(
     prep: &Prepared,
     sampler: S,
@@ -107,14 +108,14 @@ pub fn render_tile<W: Wide, P: Probe, S: PathSampler>(
     samples: Range<u32>,
     probe: &mut P,
 ) -> u64 {
-    if prep.shapes.moving.is_empty() {
+    if !prep.shapes.general() {
         render_tile_in::<W, P, S, false>(prep, sampler, ws, tile, samples, probe)
     } else {
         render_tile_in::<W, P, S, true>(prep, sampler, ws, tile, samples, probe)
     }
 }
 
-/// [`render_tile`] for a scene with moving spheres (`M`) or without.
+/// [`render_tile`] for a scene on the general path (`M`) or not.
 pub(super) fn render_tile_in<W: Wide, P: Probe, S: PathSampler, const M: bool>(
     prep: &Prepared,
     sampler: S,
@@ -226,7 +227,7 @@ pub(super) fn generate<W: Wide, P: Probe, S: PathSampler, const M: bool>(
         let p = &mut ws.cur;
         let mut rng = p.rng::<W, S>(sampler, Run { i, live: low_bits(n - i) });
         let (o, d) = prep.camera.ray(W::load_pow2(&p.thr[0], i), W::load_pow2(&p.thr[1], i), &mut rng);
-        if M {
+        if M && !prep.shapes.moving.is_empty() {
             // The path's time, after its camera ray, as the scalar kernel draws it.
             rng.seek(layout::TIME);
             let time: W = rng.next();
@@ -285,8 +286,8 @@ pub(super) fn bounce<W: Wide, P: Probe, S: PathSampler, const M: bool>(
     let mut q =
         Queues { q: ws.queue.take().expect("the queues are put back after every bounce"), len: [0; MISS_QUEUE + 1] };
     ws.next.len = 0;
-    // A scene without moving spheres or media classifies W paths at a time
-    // (`classify_packets`); the others one path at a time.
+    // A scene without moving spheres, instances or media classifies W paths
+    // at a time (`classify_packets`); the others one path at a time.
     if !M && prep.media.is_empty() {
         classify_bounce::<W, P, S, M>(b, ws, n, &mut q, probe);
     } else {
@@ -364,16 +365,20 @@ fn classify_paths<const M: bool>(prep: &Prepared, ws: &Workspace, n: usize, q: &
     let quad_mask = prep.shapes.quads.kind.len().wrapping_sub(1);
     let moving_mask = prep.shapes.moving.s.kind.len().wrapping_sub(1);
     for (i, &h) in ws.hit[..n].iter().enumerate() {
-        // Hit indices in order: spheres, quads, moving spheres, media,
-        // MISS (two tests for a sphere or a quad, as before media existed;
-        // moving spheres only in a scene that has them).
+        // Hit indices in order: spheres, quads, moving spheres, instanced
+        // triangles, media, MISS (two tests for a sphere or a quad, as
+        // before media existed; moving spheres only in a scene that has
+        // them).
         let k = if h < QUAD_BASE {
             prep.shapes.spheres.kind[h as usize & kind_mask] as usize
         } else if h < MEDIUM_BASE {
             if !M || h < MOVING_BASE {
                 prep.shapes.quads.kind[(h - QUAD_BASE) as usize & quad_mask] as usize
-            } else {
+            } else if h < INSTANCE_BASE {
                 prep.shapes.moving.s.kind[(h - MOVING_BASE) as usize & moving_mask] as usize
+            } else {
+                let is = &prep.shapes.instances;
+                is.kind[is.of(h).0] as usize
             }
         } else if h == MISS {
             MISS_QUEUE

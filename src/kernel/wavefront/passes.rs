@@ -193,15 +193,19 @@ pub(super) fn textured_lambertian_pass<W: Wide, P: Probe, S: PathSampler, const 
     });
 }
 
-/// The material row of the primitive of hit index `h` (not `MISS`).
+/// The material row of the primitive of hit index `h` (not `MISS`, not
+/// a medium's).
 #[inline(always)]
 pub(super) fn material_row<const M: bool>(prep: &Prepared, h: u32) -> usize {
     if h < QUAD_BASE {
         prep.shapes.spheres.row[h as usize] as usize
     } else if !M || h < MOVING_BASE {
         prep.shapes.quads.row[(h - QUAD_BASE) as usize] as usize
-    } else {
+    } else if h < INSTANCE_BASE {
         prep.shapes.moving.s.row[(h - MOVING_BASE) as usize] as usize
+    } else {
+        let is = &prep.shapes.instances;
+        is.row[is.of(h).0] as usize
     }
 }
 

@@ -247,10 +247,7 @@ fn packets<W: Wide + Walker>(
     rays: &[(V3<f32>, V3<f32>)],
 ) -> Result<(), TestCaseError> {
     for chunk in rays.chunks(W::LANES) {
-        let n = chunk.len();
-        let at = |k: usize| chunk[k.min(n - 1)];
-        let o = V3::new(W::from_fn(|k| at(k).0.x), W::from_fn(|k| at(k).0.y), W::from_fn(|k| at(k).0.z));
-        let d = V3::new(W::from_fn(|k| at(k).1.x), W::from_fn(|k| at(k).1.y), W::from_fn(|k| at(k).1.z));
+        let (o, d) = super::packet::<W>(chunk);
         let tree = bvh.walk::<W, (), false>(o, d, W::splat(0.0), Closest::none(), &mut ());
         let any = bvh.walk::<W, (), true>(
             o,
