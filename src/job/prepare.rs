@@ -329,19 +329,16 @@ fn norm(p: &[f32; 3]) -> f64 {
 /// `extent` plus its instances' largest move, turned (a factor up to
 /// `sqrt 2`).
 fn instances(flat: &Flat, extent: f32, tables: &mut Tables) -> Instances {
+    // Each mesh's largest move, in one pass over the instances.
+    let mut moved = vec![0.0f64; flat.shared.len()];
+    for i in &flat.instances {
+        moved[i.mesh] = i.translate.iter().fold(moved[i.mesh], |r, x| r.max(x.abs()));
+    }
     let meshes = flat
         .shared
         .iter()
-        .enumerate()
-        .map(|(k, m)| {
-            let moved = flat
-                .instances
-                .iter()
-                .filter(|i| i.mesh == k)
-                .flat_map(|i| i.translate)
-                .fold(0.0f64, |r, x| r.max(x.abs()));
-            SharedMesh::new((0..m.triangles.len()).map(|t| m.triangle(t)), 2.0 * (extent + moved as f32))
-        })
+        .zip(moved)
+        .map(|(m, moved)| SharedMesh::new((0..m.triangles.len()).map(|t| m.triangle(t)), 2.0 * (extent + moved as f32)))
         .collect();
     let mut instances = Instances::new(meshes);
     for i in &flat.instances {

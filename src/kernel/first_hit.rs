@@ -149,11 +149,11 @@ pub fn features<S: PathSampler>(
     aovs: Aovs,
 ) -> Features {
     let (w, h) = (cols.len() as u32, rows.len() as u32);
-    let moving = prep.shapes.general();
+    let general = prep.shapes.general();
     let per_row: Vec<Vec<FirstHit>> = rows
         .into_par_iter()
         .map(|y| {
-            let at = |x| match moving {
+            let at = |x| match general {
                 false => pixel_mean::<f32x8, S, false>(prep, sampler, (x, y), samples.clone()),
                 true => pixel_mean::<f32x8, S, true>(prep, sampler, (x, y), samples.clone()),
             };
