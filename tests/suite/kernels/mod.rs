@@ -3,9 +3,9 @@
 //! against brute force (`bvh`), the width-generic numerics against f64
 //! (`math`), triangles against an f64 oracle, watertight, and their tree
 //! (`triangles`), instanced meshes' tree, hits and self-hits
-//! (`instances`). CI also runs them on the baseline instruction set (SSE2)
-//! with debug assertions on: the suite built with `--cfg rtow_kernel_tests`
-//! holds these alone (`main.rs`).
+//! (`instances`). CI also runs them on the baseline instruction set (SSE2),
+//! unoptimized, with debug assertions on: the suite built with `--cfg
+//! rtow_kernel_tests` holds these alone (`main.rs`).
 
 mod bvh;
 mod equivalence;
