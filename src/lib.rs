@@ -91,6 +91,7 @@ pub use job::{Job, Overrides, RenderOptions, DEFAULT_TILE, IMAGES_ENV};
 pub use kernel::{build_description, isa, Kernel, HAS_SIMD16};
 pub use render::{
     render, render_counted, render_crop, render_features, render_probed, AovReport, Crop, Progress, Rendered, Stats,
+    WORKER_STACK,
 };
 pub use sampling::Sampler;
 pub use scene::{Scene, SceneSource};

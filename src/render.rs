@@ -342,6 +342,13 @@ pub fn render_probed<P: Probe + Send>(
     render_inner(job, Portion::default(), false, None, progress, make).map(|(r, p, _)| (r, p))
 }
 
+/// The stack of a render's worker threads. An optimized build needs a few
+/// hundred kilobytes; an unoptimized one (`cargo run` without `--release`)
+/// gives each of the 16-lane kernel's temporaries a slot of its own and
+/// overflowed rayon's default 2 MiB. Address space only: a thread's stack
+/// takes memory as it is used.
+pub const WORKER_STACK: usize = 16 << 20;
+
 fn render_inner<P: Probe + Send>(
     job: &Job,
     portion: Portion,
@@ -355,6 +362,7 @@ fn render_inner<P: Probe + Send>(
     let opts = job.options();
     let pool = rayon::ThreadPoolBuilder::new()
         .num_threads(opts.threads.unwrap_or(0))
+        .stack_size(WORKER_STACK)
         .build()
         .map_err(|e| Error::System(format!("cannot start {} worker threads: {e}", opts.threads.unwrap_or(0))))?;
     let threads = pool.current_num_threads();

@@ -213,6 +213,10 @@ fn write_stdout(bytes: &[u8]) -> Result<u8> {
 
 pub fn main() -> ExitCode {
     rtow::output::install_signal_cleanup();
+    // The pool that prepares scenes (the trees' parallel builds) and renders
+    // feature buffers and verified merges' pixels, with a render's stack
+    // (`rtow::WORKER_STACK`). It cannot fail before any other pool exists.
+    let _ = rayon::ThreadPoolBuilder::new().stack_size(rtow::WORKER_STACK).build_global();
     let cli = match command().try_get_matches().and_then(|m| Cli::from_arg_matches(&m)) {
         Ok(c) => c,
         Err(e) => clap_exit(e),
