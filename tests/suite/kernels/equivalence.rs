@@ -7,7 +7,7 @@ use common::*;
 use proptest::prelude::*;
 use rtow::scene::{self, Background, Camera, Group, Material, Mode, Quad, QuadBox, Scene, Sky, Sphere};
 use rtow::KernelChoice::{self, Scalar, Simd, Simd16, Simd8};
-use rtow::{AccelChoice, EstimatorChoice, Kernel, Settings};
+use rtow::{AccelChoice, EstimatorChoice, Kernel, RenderOptions, Settings};
 
 /// Every SIMD kernel this build has (8 lanes; 16 on AVX-512 builds), with
 /// every accelerator, against the scalar kernel with brute force.
@@ -60,6 +60,13 @@ fn every_preset_is_bit_identical_across_kernels() {
             assert_eq!(a.stats.rays, b.stats.rays, "{}: ray counts differ", p.name);
         }
         assert_eq!(a.stats.rejected_samples, 0, "{}", p.name);
+        // The tools' counting probe (`--stats-json`, `rtow bench`'s work)
+        // renders the same image.
+        for kernel in [Scalar, Simd] {
+            let opts = RenderOptions { kernel, threads: Some(2), tile: 16, accel: reference, ..Default::default() };
+            let counted = rtow::render_counted(&job(&sc, s, opts), None).expect("render");
+            assert_identical(&a.image, &counted.image, &format!("{} {kernel:?} counted", p.name));
+        }
         // 1 spp takes pixel centres (no jitter): also identical.
         let s1 = settings(24, 16, 1, d.max_depth, 3);
         assert_identical(&image(&sc, s1, Scalar), &image(&sc, s1, Simd), p.name);
