@@ -300,13 +300,7 @@ fn unpack_u<R: Real>(x: R::U32) -> [u32; MAX_LANES] {
 }
 
 fn unpack3<R: Real>(v: V3<R>) -> [V3<f32>; MAX_LANES] {
-    std::array::from_fn(|k| {
-        if k < R::LANES {
-            V3::new(v.x.lane(k), v.y.lane(k), v.z.lane(k))
-        } else {
-            V3::new(0.0, 0.0, 0.0)
-        }
-    })
+    std::array::from_fn(|k| if k < R::LANES { v.lane(k) } else { V3::new(0.0, 0.0, 0.0) })
 }
 
 /// A tool's view of the path events of [`Probe`], lane by lane and not

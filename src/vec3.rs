@@ -53,6 +53,11 @@ impl<R: Real> V3<R> {
     pub fn max_abs(self) -> R {
         self.x.abs().max(self.y.abs()).max(self.z.abs())
     }
+    /// Lane `k`: the vector of one ray.
+    #[inline(always)]
+    pub fn lane(self, k: usize) -> V3<f32> {
+        V3::new(self.x.lane(k), self.y.lane(k), self.z.lane(k))
+    }
 }
 
 impl<R: Real> Add for V3<R> {

@@ -348,26 +348,22 @@ impl Primitive for Instances {
         best: &mut Closest<R>,
         counter: &mut C,
     ) {
-        let mut found = [(f32::INFINITY, MISS); crate::real::MAX_LANES];
-        for (k, lane) in found.iter_mut().enumerate().take(R::LANES) {
+        // Lane by lane; a lane's offer changes that lane of `best` alone.
+        for k in 0..R::LANES {
             let mut b = Closest { t: best.t.lane(k), index: R::lane_u(best.index, k) };
             if b.t == f32::NEG_INFINITY {
                 continue;
             }
-            let (o, d) =
-                (V3::new(o.x.lane(k), o.y.lane(k), o.z.lane(k)), V3::new(d.x.lane(k), d.y.lane(k), d.z.lane(k)));
+            let (o, d) = (o.lane(k), d.lane(k));
             for inst in &self.rec {
                 inst.search::<C, ANY>(&self.meshes[inst.mesh as usize], o, d, &mut b, counter);
                 if ANY && b.index != MISS {
                     break;
                 }
             }
-            *lane = (b.t, b.index);
-        }
-        for (k, &(t, index)) in found.iter().enumerate().take(R::LANES) {
-            if index != MISS {
+            if b.index != MISS {
                 let lane = R::from_fn(|j| if j == k { 1.0 } else { 0.0 }).gt(R::splat(0.5));
-                best.offer(lane, R::splat(t), R::u_splat(index));
+                best.offer(lane, R::splat(b.t), R::u_splat(b.index));
             }
         }
     }

@@ -169,14 +169,20 @@ impl LightMesh {
     /// [`LightMesh::pdf_line`] for every lane.
     #[inline(always)]
     pub fn pdf_lines<R: Real>(&self, o: V3<R>, d: V3<R>) -> R {
-        R::from_fn(|k| self.pdf_line(lane3(o, k), lane3(d, k)))
+        R::from_fn(|k| self.pdf_line(o.lane(k).to_array(), d.lane(k).to_array()))
     }
 
     /// [`LightMesh::pdf_hit`] for the lanes of `mine`, else 0.
     #[inline(always)]
     pub fn pdf_hits<R: Real>(&self, o: V3<R>, d: V3<R>, hit: R::U32, mine: R::Mask) -> R {
         let bits = R::mask_bits(mine);
-        R::from_fn(|k| if bits >> k & 1 == 1 { self.pdf_hit(lane3(o, k), lane3(d, k), R::lane_u(hit, k)) } else { 0.0 })
+        R::from_fn(|k| {
+            if bits >> k & 1 == 1 {
+                self.pdf_hit(o.lane(k).to_array(), d.lane(k).to_array(), R::lane_u(hit, k))
+            } else {
+                0.0
+            }
+        })
     }
 }
 
@@ -250,12 +256,6 @@ impl Line {
             Meets::No
         }
     }
-}
-
-/// Lane `k` of `v`.
-#[inline(always)]
-fn lane3<R: Real>(v: V3<R>, k: usize) -> [f32; 3] {
-    [v.x.lane(k), v.y.lane(k), v.z.lane(k)]
 }
 
 /// `x` where it is a density (positive and finite), else 0.

@@ -101,9 +101,8 @@ fn pixel_mean<W: Wide, S: PathSampler, const M: bool>(
         let all = W::splat(1.0).gt(W::splat(0.5));
         let best = prep.shapes.closest::<W, (), M>(o, d, all, || time, &mut ());
         for k in 0..live {
-            let v = |a: V3<W>| V3::new(a.x.lane(k), a.y.lane(k), a.z.lane(k));
             let (index, t) = (W::lane_u(best.index, k), best.t.lane(k));
-            sum.add(surface_of::<M>(prep, v(o), v(d), index, t, time.lane(k)));
+            sum.add(surface_of::<M>(prep, o.lane(k), d.lane(k), index, t, time.lane(k)));
         }
         s0 += live as u32;
     }

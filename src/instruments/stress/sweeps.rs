@@ -508,10 +508,6 @@ impl SweepLanes for f32x8 {
     }
 }
 
-fn lane3<R: Real>(v: V3<R>, k: usize) -> V3<f32> {
-    V3::new(v.x.lane(k), v.y.lane(k), v.z.lane(k))
-}
-
 pub(super) fn self_sweep(scatter: Scatter, imp: Impl, sizes: &Sizes, seed: u64, rule: OffsetRule) -> SelfOut {
     match imp {
         Impl::Scalar => kernel_sweep::<f32>(scatter, sizes, seed, rule),
@@ -548,7 +544,7 @@ fn kernel_sweep<R: SweepLanes>(scatter: Scatter, sizes: &Sizes, seed: u64, rule:
             continue;
         }
         let mut srf = surface(v(hs.o), v(hs.d), R::splat(th), v(hs.c), R::splat(hs.r));
-        let (p0, n0) = (lane3(srf.p, 0), lane3(srf.n, 0));
+        let (p0, n0) = (srf.p.lane(0), srf.n.lane(0));
         let p = v64(p0);
         let t = &mut ts[!(kernel_offset(r_abs, p) <= r_abs) as usize];
         if !(finite3(p0) && finite3(n0) && srf.offset.lane(0).is_finite()) {
@@ -574,13 +570,13 @@ fn kernel_sweep<R: SweepLanes>(scatter: Scatter, sizes: &Sizes, seed: u64, rule:
             let o2 = spawn(&srf, dir);
             let (i2, t2) = closest_brute(&sph, o2, dir, R::splat(0.0), &mut ());
             for l in (0..n).filter(|l| alive & (1 << l) != 0) {
-                let dl = lane3(dir, l);
+                let dl = dir.lane(l);
                 if !finite3(dl) {
                     t.nan += 1;
                     continue;
                 }
                 let (i2, t2) = (R::lane_u(i2, l), t2.lane(l));
-                h.v(lane3(o2, l));
+                h.v(o2.lane(l));
                 h.v(dl);
                 h.u32(i2);
                 h.f(t2);

@@ -136,8 +136,7 @@ fn instance_surfaces<W: Wide>(
     for k in 0..W::LANES {
         let h = W::lane_u(hit, k);
         if (INSTANCE_BASE..MEDIUM_BASE).contains(&h) {
-            let at = |v: V3<W>| V3::new(v.x.lane(k), v.y.lane(k), v.z.lane(k));
-            let (f, i) = is.surface(at(o), at(d), t.lane(k), h);
+            let (f, i) = is.surface(o.lane(k), d.lane(k), t.lane(k), h);
             let front = if f.front { 1.0 } else { 0.0 };
             s[k] = [f.p.x, f.p.y, f.p.z, f.n.x, f.n.y, f.n.z, front, f.offset];
             m[k] = is.material[i];
