@@ -19,6 +19,19 @@ mod kernels;
 #[path = "../bad_input/mod.rs"]
 mod bad_input;
 
+/// The library's front-page example, which `src/lib.rs` shows as it is (a
+/// doctest would link the whole library once more under the release
+/// profile's LTO: 20 s of the test command).
+#[cfg(not(rtow_kernel_tests))]
+mod front_page {
+    include!("front_page.rs");
+
+    #[test]
+    fn the_front_page_example_runs() {
+        main().unwrap();
+    }
+}
+
 /// The subjects beyond the kernels, left out of the baseline build.
 macro_rules! subjects {
     ($($subject:ident),* $(,)?) => {
