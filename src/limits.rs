@@ -68,9 +68,10 @@ pub const MAX_MESHES: usize = 1 << 16;
 /// The most triangles a scene may hold once flattened (every mesh, each
 /// group's copy included; a mesh shared by instances once), checked before
 /// any is made: 2^23. Preparing a
-/// scene peaks at about 216 bytes a triangle (the tree's build included:
-/// 518 MiB measured for 2,488,320 triangles), about 1.8 GB at the limit.
-/// Also bounds the planar hit indices (quads and triangles below 2^29).
+/// scene peaks at about 150 bytes a triangle (the tree's build included:
+/// 376 MiB measured for 2,488,320 triangles), about 1.3 GB at the limit.
+/// Also bounds the triangles' hit indices (`TRIANGLE_BASE + i`, `i <
+/// 2^28`).
 pub const MAX_SCENE_TRIANGLES: u64 = 1 << 23;
 /// The most triangles the instances of shared meshes may place, every
 /// placement counted (`geometry::instances`): 2^30, the range of their hit

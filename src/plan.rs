@@ -117,8 +117,7 @@ pub struct Plan {
     #[serde(skip_serializing_if = "Option::is_none")]
     pub moving: Option<Accel>,
     /// The closest-hit search over the meshes' triangles, when the scene
-    /// has any (searched last; a hit is a planar record's, shaded as a
-    /// quad's surface).
+    /// has any (a hit's surface is a quad's, on the triangle's plane).
     #[serde(skip_serializing_if = "Option::is_none")]
     pub triangles: Option<Accel>,
     /// The placements of shared meshes (`geometry::instances`), when rays

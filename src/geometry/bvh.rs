@@ -418,6 +418,18 @@ impl<L: Leaf> Bvh<L> {
         &mut self.wide
     }
 
+    /// The bytes the tree holds on the heap (its arrays' capacities): its
+    /// nodes, its leaf records and its lanes.
+    pub fn heap_bytes(&self) -> usize {
+        let l = &self.lanes;
+        let sphere_lanes = [&l.cx, &l.cy, &l.cz, &l.r2].iter().map(|a| a.capacity() * 4).sum::<usize>();
+        self.nodes.capacity() * std::mem::size_of::<Node8>()
+            + self.leaf.capacity() * std::mem::size_of::<L>()
+            + sphere_lanes
+            + l.index.capacity() * 4
+            + L::lanes_bytes(&self.wide)
+    }
+
     /// The walk the tree was built for.
     pub fn built_for(&self) -> Walk {
         self.walk

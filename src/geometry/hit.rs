@@ -4,10 +4,11 @@
 //!
 //! One tie order across kinds: hit indices are spheres `i`, then
 //! `QUAD_BASE + i` (quads, a cuboid's hit being its face's), then
-//! `MOVING_BASE + i`, then `INSTANCE_BASE + i` (instanced meshes' triangles),
-//! then `MEDIUM_BASE + k`, below `MISS`; the smallest `t`
-//! wins, ties to the lowest index, so brute force and every walk find the
-//! same hit bit for bit whatever the order the kinds are searched in. The
+//! `TRIANGLE_BASE + i` (the meshes' triangles), then `MOVING_BASE + i`,
+//! then `INSTANCE_BASE + i` (instanced meshes' triangles), then
+//! `MEDIUM_BASE + k`, below `MISS`; the smallest `t` wins, ties to the
+//! lowest index, so brute force and every walk find the same hit bit for
+//! bit whatever the order the kinds are searched in. The
 //! wavefront tells kinds apart lane by lane with one compare against a base;
 //! scalar code decodes a hit with [`Hit::of`].
 
@@ -21,8 +22,14 @@ pub const MISS: u32 = u32::MAX;
 /// [`MOVING_BASE`].
 pub const QUAD_BASE: u32 = 1 << 30;
 
+/// The hit index of triangle `i` of the scene's meshes (world space) is
+/// `TRIANGLE_BASE + i`: above every quad's (`QUAD_BASE + i`, `i < 2^28`:
+/// `crate::limits::MAX_QUADS`), below [`MOVING_BASE`] (`i < 2^28`:
+/// `crate::limits::MAX_SCENE_TRIANGLES`).
+pub const TRIANGLE_BASE: u32 = QUAD_BASE + (1 << 28);
+
 /// The hit index of moving sphere `i` is `MOVING_BASE + i`: above every
-/// quad's (`QUAD_BASE + i`, `i < 2^29`), below [`INSTANCE_BASE`].
+/// triangle's (`TRIANGLE_BASE + i`, `i < 2^28`), below [`INSTANCE_BASE`].
 pub const MOVING_BASE: u32 = 3 << 29;
 
 /// The hit index of an instanced mesh's triangle is `INSTANCE_BASE + i`,
@@ -41,6 +48,8 @@ pub enum HitKind {
     Sphere,
     /// A quad, loose or a cuboid's face.
     Quad,
+    /// A triangle of the scene's meshes (world space).
+    Triangle,
     Moving,
     /// A triangle of an instanced mesh.
     Instance,
@@ -55,6 +64,7 @@ impl HitKind {
         match self {
             HitKind::Sphere => 0,
             HitKind::Quad => QUAD_BASE,
+            HitKind::Triangle => TRIANGLE_BASE,
             HitKind::Moving => MOVING_BASE,
             HitKind::Instance => INSTANCE_BASE,
             HitKind::Medium => MEDIUM_BASE,
@@ -76,8 +86,10 @@ impl Hit {
     pub fn of(h: u32) -> Hit {
         let kind = if h < QUAD_BASE {
             HitKind::Sphere
-        } else if h < MOVING_BASE {
+        } else if h < TRIANGLE_BASE {
             HitKind::Quad
+        } else if h < MOVING_BASE {
+            HitKind::Triangle
         } else if h < INSTANCE_BASE {
             HitKind::Moving
         } else if h < MEDIUM_BASE {

@@ -38,7 +38,7 @@ use super::primitive::{Leaf, OneRay, Primitive};
 use super::quads::quad_surface;
 use super::slab::Aabb;
 use super::surface::{Surface, OFFSET_ULPS};
-use super::triangles::{plane, LeafTriangle, Triangles};
+use super::triangles::{LeafTriangle, Triangles};
 use super::work::Counter;
 use crate::handle::Kind;
 use crate::real::Real;
@@ -51,7 +51,7 @@ use std::sync::Arc;
 pub struct SharedMesh {
     tree: Bvh<LeafTriangle>,
     /// Per triangle: its plane's unit normal and `n.v0` in the mesh's frame
-    /// ([`plane`]), for the surface of a hit.
+    /// ([`super::triangles::plane`]), for the surface of a hit.
     plane: Vec<[f32; 4]>,
     /// The vertices' box in the mesh's frame.
     bounds: Aabb,
@@ -64,17 +64,15 @@ impl SharedMesh {
     pub fn new(tri: impl ExactSizeIterator<Item = [[f32; 3]; 3]>, extent: f32) -> SharedMesh {
         let mut t = Triangles::default();
         t.reserve(tri.len());
-        let mut planes = Vec::with_capacity(tri.len());
         let mut bounds = Aabb::EMPTY;
         for (k, v) in tri.enumerate() {
-            let (n, dn) = plane(v);
-            planes.push([n[0], n[1], n[2], dn]);
             for p in v {
                 bounds.grow(&Aabb { min: p, max: p });
             }
-            t.push_local(v, k as u32);
+            t.push(v, k as u32);
         }
-        SharedMesh { tree: Bvh::build_lanes_only(&t, extent, Walk::Wide8), plane: planes, bounds }
+        let tree = Bvh::build_lanes_only(&t, extent, Walk::Wide8);
+        SharedMesh { tree, plane: t.take_planes(), bounds }
     }
 
     /// The number of triangles.
@@ -213,7 +211,7 @@ pub struct Instances {
     pub kind: Vec<Kind>,
     pub row: Vec<u32>,
     /// Each instance's material's albedo and parameter, the last four slots
-    /// of a planar shading record (`super::Shade`).
+    /// of a shading record (`super::Shade`).
     pub material: Vec<[f32; 4]>,
     /// The instanced triangles (every instance's), the hit indices' range.
     triangles: u32,

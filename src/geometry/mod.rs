@@ -15,8 +15,8 @@
 //!   (a box, six quads after the search, tested whole by one slab test in
 //!   its own frame), [`moving`] (spheres whose centre moves over the
 //!   shutter interval, tested at each path's time), [`triangles`] (meshes'
-//!   triangles in world space, a watertight test; their shading records
-//!   are planar records among the quads'), [`instances`] (a mesh several
+//!   triangles in world space, a watertight test; a hit's surface is a
+//!   quad's on the triangle's plane), [`instances`] (a mesh several
 //!   groups place, held once in its own frame with its tree, each
 //!   placement a turn and a move). A primitive carries its
 //!   material's handle (`handle::Kind` and a row) and nothing else of
@@ -50,7 +50,7 @@ pub mod work;
 
 pub use bvh::{Bvh, SahCost, Walk, Walker};
 pub use cuboids::{cuboid_hit, CuboidRec, Cuboids, LeafCuboid};
-pub use hit::{Closest, Hit, HitKind, INSTANCE_BASE, MEDIUM_BASE, MISS, MOVING_BASE, QUAD_BASE};
+pub use hit::{Closest, Hit, HitKind, INSTANCE_BASE, MEDIUM_BASE, MISS, MOVING_BASE, QUAD_BASE, TRIANGLE_BASE};
 pub use instances::{Instances, LeafInstance, SharedMesh};
 pub use light_mesh::LightMesh;
 pub use lights::{emission, Emitters, LightQuad, LightSample, LightSphere, Lights};

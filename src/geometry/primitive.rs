@@ -101,6 +101,11 @@ pub trait Leaf: Copy + std::fmt::Debug {
         Self::Lanes::default()
     }
 
+    /// The bytes the lanes hold on the heap (their arrays' capacities).
+    fn lanes_bytes(_lanes: &Self::Lanes) -> usize {
+        0
+    }
+
     /// One ray against the primitives `start..start + count` of a tree's
     /// leaf records (`lanes` their [`Leaf::Lanes`]), improving `best`: by
     /// default one primitive at a time ([`Leaf::test_leaf`]); a kind with

@@ -148,26 +148,20 @@ pub(super) fn next_down(x: f64) -> f32 {
 
 /// Quads, structure of arrays, padded to a power of two (at least 8) with
 /// quads no ray can hit, so a quad index masked with `len - 1` is in bounds.
-///
-/// The shading side (`kind`, `row`, `shade`) holds every **planar record**:
-/// the quads' (rows `0..len`), then the triangles' (rows `len..planes`,
-/// [`Quads::push_plane`]), each a flat surface of hit index `QUAD_BASE +
-/// row`; the quads' own records (`rec`, `loose`) hold the quads alone.
+/// Quad `i` is hit index `QUAD_BASE + i`.
 #[derive(Clone, Debug, Default)]
 pub struct Quads {
     pub rec: Vec<QuadRec>,
-    /// Each planar record's material, as a handle (`crate::handle`): its
-    /// kind and row.
+    /// Each quad's material, as a handle (`crate::handle`): its kind and
+    /// row.
     pub kind: Vec<Kind>,
     pub row: Vec<u32>,
-    /// The unit normal (a quad's `u x v / |u x v|`) and its product with a
-    /// point of the plane, per planar record, for the surface
-    /// ([`quad_surface`]), in the shading record's first four slots.
+    /// The unit normal (`u x v / |u x v|`) and its product with a point of
+    /// the plane, per quad, for the surface ([`quad_surface`]), in the
+    /// shading record's first four slots.
     pub shade: Vec<Shade>,
     /// Number of real quads (the arrays are longer: padding).
     pub len: usize,
-    /// Number of real planar records: the quads, then the triangles.
-    pub planes: usize,
     /// The quads the quad searches test (brute force, the quad tree): all but
     /// the faces of cuboids ([`super::Cuboids`]), which are tested whole.
     pub loose: Vec<u32>,
@@ -241,32 +235,8 @@ impl Quads {
         self.kind.push(kind);
         self.row.push(row);
         self.shade.push(Shade([unit[0], unit[1], unit[2], dn as f32, 0.0, 0.0, 0.0, 0.0]));
-        debug_assert_eq!(self.len, self.planes, "the quads come before the triangles' records");
         self.loose.push(self.len as u32);
         self.len += 1;
-        self.planes += 1;
-    }
-
-    /// Room for `n` more planar records (a scene's triangles), exactly as
-    /// many as [`Quads::pad`] makes of them: a mesh's planar records are the
-    /// next largest part of its memory after its tree's lanes.
-    pub fn reserve_planes(&mut self, n: usize) {
-        let room = (self.kind.len() + n).max(8).next_power_of_two() - self.kind.len();
-        self.kind.reserve_exact(room);
-        self.row.reserve_exact(room);
-        self.shade.reserve_exact(room);
-    }
-
-    /// Appends a triangle's planar record: its plane's unit normal `n` and
-    /// `dn = n.p` ([`super::triangles::plane`]) and its material's handle;
-    /// returns the triangle's hit index (`QUAD_BASE + row`). After every
-    /// quad.
-    pub fn push_plane(&mut self, n: [f32; 3], dn: f32, kind: Kind, row: u32) -> u32 {
-        self.kind.push(kind);
-        self.row.push(row);
-        self.shade.push(Shade([n[0], n[1], n[2], dn, 0.0, 0.0, 0.0, 0.0]));
-        self.planes += 1;
-        QUAD_BASE + self.planes as u32 - 1
     }
 
     /// For each `first`, quads `first..first + 6` are a cuboid's faces: the
@@ -304,8 +274,6 @@ impl Quads {
                 ..QuadRec::default()
             });
         }
-        let target = self.kind.len().max(8).next_power_of_two();
-        self.reserve_planes(0);
         while self.kind.len() < target {
             self.kind.push(Kind::Lambertian);
             self.row.push(0);
@@ -313,9 +281,9 @@ impl Quads {
         }
     }
 
-    /// No planar record: no quad and no triangle.
+    /// No quad.
     pub fn is_empty(&self) -> bool {
-        self.planes == 0
+        self.len == 0
     }
 }
 

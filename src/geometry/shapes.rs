@@ -38,13 +38,15 @@ pub struct Shapes {
     pub triangles: Triangles,
     /// The meshes several groups place, each held once (its own frame).
     pub instances: Instances,
-    /// The vertex normals of the planar records of meshes that give them
+    /// The vertex normals of the triangles of meshes that give them
     /// (empty: every surface shades with its geometric normal).
     pub smooth: Smooth,
     /// Each kind's tree, where the plan chose one (else brute force).
     pub trees: Trees,
     /// Some kind beyond the spheres has primitives to search.
     others: bool,
+    /// The scene's primitives are all triangles in world space.
+    only_triangles: bool,
 }
 
 /// A tree per kind, or none (brute force).
@@ -113,6 +115,12 @@ impl Shapes {
             || moving.count() > 0
             || triangles.count() > 0
             || instances.count() > 0;
+        let only_triangles = triangles.count() > 0
+            && spheres.count() == 0
+            && quads.count() == 0
+            && cuboids.count() == 0
+            && moving.count() == 0
+            && instances.count() == 0;
         Shapes {
             spheres,
             quads,
@@ -123,14 +131,36 @@ impl Shapes {
             smooth: Smooth::default(),
             trees: Trees::default(),
             others,
+            only_triangles,
         }
     }
 
     /// The scene needs the kernels' general path (`M`): it has moving
-    /// spheres (each path carries a time) or instanced meshes (hits decoded
-    /// lane by lane). The other scenes compile to a bounce without either.
+    /// spheres (each path carries a time), or meshes (their triangles' and
+    /// instances' hits are told apart from the quads'). The other scenes
+    /// compile to a bounce without them.
     pub fn general(&self) -> bool {
-        !self.moving.is_empty() || !self.instances.is_empty()
+        !self.moving.is_empty() || self.has_meshes()
+    }
+
+    /// The scene's primitives are all triangles in world space.
+    pub fn only_triangles(&self) -> bool {
+        self.only_triangles
+    }
+
+    /// The scene has triangles, in world space or instanced.
+    pub fn has_meshes(&self) -> bool {
+        !self.triangles.is_empty() || !self.instances.is_empty()
+    }
+
+    /// The bytes the scene's triangles (world space) hold on the heap once
+    /// prepared: their planes and meshes, their vertex normals (smooth
+    /// meshes) and their tree (its nodes and lanes; the vertices too while
+    /// no tree holds them, brute force).
+    pub fn triangle_bytes(&self) -> usize {
+        self.triangles.heap_bytes()
+            + self.smooth.rec.capacity() * std::mem::size_of::<[f32; 18]>()
+            + self.trees.triangles.as_ref().map_or(0, Bvh::heap_bytes)
     }
 
     /// Builds the trees `choice` asks for; `extent` bounds every ray origin

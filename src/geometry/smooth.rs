@@ -2,8 +2,8 @@
 //! with `vn` lines), interpolated across each triangle, over [`Real`] (one
 //! formula for the scalar kernel and every lane width).
 //!
-//! A triangle's planar record (its hit index `QUAD_BASE + i`, among the
-//! quads' records: [`super::triangles`]) still decides everything geometric:
+//! A triangle's plane (its hit index `TRIANGLE_BASE + i`:
+//! [`super::triangles`]) still decides everything geometric:
 //! the hit point, which face was hit, and the offset and side of every ray
 //! that leaves it ([`super::spawn`]). The interpolated normal only shades:
 //! the materials' directions, densities and the debug and feature normals.
@@ -21,18 +21,18 @@
 //! dual basis of the edges `e1 = v1 - v0`, `e2 = v2 - v0` (computed once, in
 //! f64), and the shading normal is `n0 + b1 (n1 - n0) + b2 (n2 - n0)`,
 //! normalized and turned to the side of the geometric normal the ray sees.
-//! A record of zeros (a flat triangle or a quad, in a scene with smooth
-//! meshes) or an interpolated normal of (nearly) zero length shades with
+//! A record of zeros (a flat mesh's triangle, in a scene with smooth
+//! meshes), a hit of another kind, or an interpolated normal of (nearly) zero length shades with
 //! the geometric normal.
 
-use super::hit::{MOVING_BASE, QUAD_BASE};
+use super::hit::{MOVING_BASE, TRIANGLE_BASE};
 use super::surface::Surface;
 use crate::real::{Real, MAX_LANES};
 use crate::vec3::V3;
 use glam::DVec3;
 
-/// The vertex normals of a scene's planar records (by record: quads, then
-/// triangles), or none when no mesh gives normals (then no kernel reads it).
+/// The vertex normals of a scene's triangles (by triangle, in hit-index
+/// order), or none when no mesh gives normals (then no kernel reads it).
 #[derive(Clone, Debug, Default)]
 pub struct Smooth {
     /// Per record: `v0`, `a1`, `a2`, `n0`, `n1 - n0`, `n2 - n0` (see the
@@ -84,7 +84,7 @@ impl Smooth {
 pub fn shading_normal<R: Real>(smooth: &Smooth, hit: impl Fn(usize) -> u32, srf: &Surface<R>) -> V3<R> {
     let rec = |k: usize| {
         let h = hit(k);
-        (QUAD_BASE..MOVING_BASE).contains(&h).then(|| smooth.rec.get((h - QUAD_BASE) as usize)).flatten()
+        (TRIANGLE_BASE..MOVING_BASE).contains(&h).then(|| smooth.rec.get((h - TRIANGLE_BASE) as usize)).flatten()
     };
     let recs: [[f32; 18]; MAX_LANES] = std::array::from_fn(|k| match k < R::LANES {
         true => rec(k).copied().unwrap_or([0.0; 18]),
@@ -124,9 +124,9 @@ mod tests {
         let s2 = 0.5f32.sqrt();
         let n = [[0.0, 0.0, 1.0], [s2, 0.0, s2], [0.0, s2, s2]];
         let mut sm = Smooth::default();
-        sm.push_flat(); // a quad before it
+        sm.push_flat(); // a flat triangle before it
         sm.push(v, n);
-        let hit = |_| QUAD_BASE + 1;
+        let hit = |_| TRIANGLE_BASE + 1;
         for (p, want) in [(v[0], n[0]), (v[1], n[1]), (v[2], n[2])] {
             let got = shading_normal(&sm, hit, &srf(p, [0.0, 0.0, 1.0])).to_array();
             (0..3).for_each(|c| assert!((got[c] - want[c]).abs() < 1e-6, "{got:?} {want:?}"));
@@ -147,12 +147,12 @@ mod tests {
         sm.push_flat();
         sm.push([[0.0; 3], [1.0, 0.0, 0.0], [2.0, 0.0, 0.0]], [[0.0, 0.0, 1.0]; 3]);
         let n = [0.6, 0.0, 0.8];
-        for hit in [QUAD_BASE, QUAD_BASE + 1, QUAD_BASE + 7, 3, MOVING_BASE + 1] {
+        for hit in [TRIANGLE_BASE, TRIANGLE_BASE + 1, TRIANGLE_BASE + 7, TRIANGLE_BASE - 1, 3, MOVING_BASE + 1] {
             assert_eq!(shading_normal(&sm, |_| hit, &srf([0.5, 0.0, 0.0], n)).to_array(), n, "hit {hit}");
         }
         // Opposite normals cancel at the middle: the geometric normal.
         let mut sm = Smooth::default();
         sm.push([[0.0; 3], [1.0, 0.0, 0.0], [0.0, 1.0, 0.0]], [[0.0, 0.0, 1.0], [0.0, 0.0, -1.0], [0.0, 0.0, 1.0]]);
-        assert_eq!(shading_normal(&sm, |_| QUAD_BASE, &srf([0.5, 0.0, 0.0], n)).to_array(), n);
+        assert_eq!(shading_normal(&sm, |_| TRIANGLE_BASE, &srf([0.5, 0.0, 0.0], n)).to_array(), n);
     }
 }

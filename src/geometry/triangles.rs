@@ -1,13 +1,13 @@
-//! Triangles (meshes, in world space) as records a tree's leaf holds, their
-//! watertight hit test over [`Real`] (one formula for the scalar kernel and
-//! every lane width), closest hit and any hit.
+//! Triangles (meshes, in world space): their records, the watertight hit
+//! test over [`Real`] (one formula for the scalar kernel and every lane
+//! width), closest hit and any hit, and what a hit's surface reads.
 //!
-//! A triangle's shading record (its plane's unit normal and offset, and its
-//! material) is a planar record among the quads' ([`super::Quads`]): its
-//! hit index is `QUAD_BASE + i` with `i` past the last quad, so every pass
-//! after the closest-hit search treats a triangle's hit as a flat surface,
-//! with the quads' surface and its offset rule ([`super::quad_surface`]).
-//! Only the search differs.
+//! Triangle `i` of the scene's meshes is hit index `TRIANGLE_BASE + i`
+//! ([`super::hit`]). A hit's surface is a flat surface: the quads' surface
+//! and offset rule ([`super::quad_surface`]) on the triangle's plane (its
+//! unit normal and offset, 16 bytes a triangle, [`Triangles::plane`]); its
+//! material is its mesh's ([`Triangles::mesh`], 4 bytes a triangle). Only
+//! the search and where the plane is read from differ from a quad's.
 //!
 //! # The test: inside by edge functions, `t` by the plane
 //!
@@ -55,10 +55,13 @@
 //! large the triangle (the error of `t` grows with the triangle's size; the
 //! plane's sign does not).
 
-use super::hit::{Closest, MISS, QUAD_BASE};
+use super::hit::{Closest, MISS, TRIANGLE_BASE};
 use super::primitive::{Leaf, OneRay, Primitive};
+use super::quads::quad_surface;
 use super::slab::Aabb;
+use super::surface::Surface;
 use super::work::{Counter, Work};
+use crate::handle::Kind;
 use crate::real::Real;
 use crate::vec3::V3;
 use wide::f32x8;
@@ -74,11 +77,30 @@ pub struct LeafTriangle {
     pub index: u32,
 }
 
-/// The scene's triangles, in hit-index order. After a tree is built over
-/// them, the tree holds the records ([`Triangles::release`]).
+/// Triangles in hit-index order, triangle `k` of hit index `base + k`:
+/// their vertices while a search needs them (brute force, a tree's build),
+/// their planes, and for the scene's meshes each triangle's mesh and each
+/// mesh's material.
+///
+/// Memory: 36 bytes a triangle for its vertices (dropped once a tree holds
+/// them, [`Triangles::release`]), 16 for its plane, and 4 for its mesh.
 #[derive(Clone, Debug, Default)]
 pub struct Triangles {
-    rec: Vec<LeafTriangle>,
+    v: Vec<[[f32; 3]; 3]>,
+    /// Per triangle: its plane's unit normal and `n.v0` ([`plane`]), for
+    /// the test's side of the plane and a hit's surface.
+    pub plane: Vec<[f32; 4]>,
+    /// Per triangle of the scene's meshes: its mesh, a row of the tables
+    /// below (empty for triangles pushed without one: a light's or a shared
+    /// mesh's, whose materials are kept elsewhere).
+    pub mesh: Vec<u32>,
+    /// Per mesh: its material's kind and row, and its shading record's
+    /// material slots (albedo and parameter, as `super::Shade`'s).
+    pub kind: Vec<Kind>,
+    pub row: Vec<u32>,
+    pub material: Vec<[f32; 4]>,
+    /// The hit index of triangle 0.
+    base: u32,
     len: usize,
 }
 
@@ -90,37 +112,108 @@ impl Triangles {
         self.len == 0
     }
 
-    /// Appends the triangle `v` whose hit index is `index` (`QUAD_BASE + i`,
-    /// `i` its planar record's row); its plane is computed from the f32
-    /// vertices in f64 ([`plane`]). A degenerate triangle (zero area) has no
-    /// normal and is never hit.
+    /// Appends the triangle `v` whose hit index is `index`: the first
+    /// triangle's index is the base, the others follow it one by one. Its
+    /// plane is computed from the f32 vertices in f64 ([`plane`]). A
+    /// degenerate triangle (zero area) has no normal and is never hit.
     pub fn push(&mut self, v: [[f32; 3]; 3], index: u32) {
-        debug_assert!(index >= QUAD_BASE);
+        if self.len == 0 {
+            self.base = index;
+        }
+        assert_eq!(index, self.base.wrapping_add(self.len as u32), "consecutive hit indices");
         let (n, dn) = plane(v);
-        self.rec.push(LeafTriangle { v, n, dn, index });
+        self.v.push(v);
+        self.plane.push([n[0], n[1], n[2], dn]);
         self.len += 1;
     }
 
-    /// Appends the triangle `v` of an instanced mesh, in the mesh's own
-    /// frame, whose hit index in its tree is `k`, its place in the mesh
-    /// (`super::instances`: an instance adds its own base).
-    pub fn push_local(&mut self, v: [[f32; 3]; 3], k: u32) {
-        let (n, dn) = plane(v);
-        self.rec.push(LeafTriangle { v, n, dn, index: k });
-        self.len += 1;
+    /// Appends the triangle `v` of the scene's mesh `mesh` (a row of
+    /// [`Triangles::push_mesh`]); returns its hit index, `TRIANGLE_BASE +
+    /// i` for the `i`-th.
+    pub fn push_in(&mut self, v: [[f32; 3]; 3], mesh: u32) -> u32 {
+        let index = TRIANGLE_BASE + self.len as u32;
+        self.push(v, index);
+        self.mesh.push(mesh);
+        index
     }
 
-    /// Room for `n` more triangles, exactly (a mesh's records are its
-    /// largest allocation while its tree is built).
+    /// Appends a mesh of material kind `kind` and row `row`; returns its
+    /// row (its shading slots, [`Triangles::material`], are filled when the
+    /// scene is prepared).
+    pub fn push_mesh(&mut self, kind: Kind, row: u32) -> u32 {
+        self.kind.push(kind);
+        self.row.push(row);
+        self.material.push([0.0; 4]);
+        self.kind.len() as u32 - 1
+    }
+
+    /// Room for `n` more triangles of the scene's meshes, exactly (a
+    /// mesh's triangles are its largest allocation while its tree is
+    /// built).
     pub fn reserve(&mut self, n: usize) {
-        self.rec.reserve_exact(n);
+        self.v.reserve_exact(n);
+        self.plane.reserve_exact(n);
+        self.mesh.reserve_exact(n);
     }
 
-    /// Drops the records once a tree holds them (the tree is then the only
-    /// search: brute force needs them). Memory: a triangle's record is 56
-    /// bytes.
+    /// Drops the vertices once a tree holds them (the tree is then the only
+    /// search: brute force needs them); the planes and meshes stay, for
+    /// the surfaces.
     pub fn release(&mut self) {
-        self.rec = Vec::new();
+        self.v = Vec::new();
+    }
+
+    /// Takes the planes out (a shared mesh keeps them beside its tree).
+    pub fn take_planes(&mut self) -> Vec<[f32; 4]> {
+        std::mem::take(&mut self.plane)
+    }
+
+    /// The bytes the triangles hold on the heap (their arrays'
+    /// capacities; a tree's are its own, [`super::Bvh::heap_bytes`]).
+    pub fn heap_bytes(&self) -> usize {
+        self.v.capacity() * std::mem::size_of::<[[f32; 3]; 3]>()
+            + self.plane.capacity() * 16
+            + self.mesh.capacity() * 4
+            + self.kind.capacity()
+            + self.row.capacity() * 4
+            + self.material.capacity() * 16
+    }
+
+    /// Triangle `i`'s mesh material: kind and row.
+    #[inline(always)]
+    pub fn material_of(&self, i: usize) -> (Kind, u32) {
+        let m = self.mesh[i] as usize;
+        (self.kind[m], self.row[m])
+    }
+
+    /// The material kind of the triangle of hit index `h`; an index that is
+    /// not one of these triangles' reads the last one's (a miss, whose
+    /// value is not taken). Not for no triangles.
+    #[inline(always)]
+    pub fn kind_of_hit(&self, h: u32) -> Kind {
+        let i = (h.wrapping_sub(self.base) as usize).min(self.len.saturating_sub(1));
+        self.kind[self.mesh[i] as usize]
+    }
+
+    /// The surface of the hit on triangle `i` at `t` along the ray (`o`,
+    /// `d`), as the quads' rule makes it on the triangle's plane.
+    #[inline(always)]
+    pub fn surface(&self, o: V3<f32>, d: V3<f32>, t: f32, i: usize) -> Surface<f32> {
+        let [nx, ny, nz, dn] = self.plane[i];
+        quad_surface(o, d, t, V3::new(nx, ny, nz), dn)
+    }
+
+    /// The shading record (`super::Shade`'s slots: the plane's unit normal
+    /// and offset, the albedo, the parameter) of the triangle of hit index
+    /// `h`; an index that is not one of these triangles' reads the last
+    /// one's (a lane of another kind, whose value is not taken). Not for no
+    /// triangles.
+    #[inline(always)]
+    pub fn shade_of(&self, h: u32) -> [f32; 8] {
+        let i = (h.wrapping_sub(self.base) as usize).min(self.len.saturating_sub(1));
+        let ([nx, ny, nz, dn], m) = (self.plane[i], self.mesh[i] as usize);
+        let [a0, a1, a2, p] = self.material[m];
+        [nx, ny, nz, dn, a0, a1, a2, p]
     }
 }
 
@@ -315,6 +408,10 @@ impl Leaf for LeafTriangle {
         TriangleLanes { sections: sections.map(Vec::into_boxed_slice), stride, index }
     }
 
+    fn lanes_bytes(lanes: &TriangleLanes) -> usize {
+        lanes.sections.iter().map(|s| s.len() * 4).sum::<usize>() + lanes.index.capacity() * 4
+    }
+
     /// The leaf's triangles 8 at a time, the ray broadcast; hits offered in
     /// lane order (the tie rule does not depend on it). The ray's axes are
     /// one for all 8 lanes, so the coordinates are loaded in its order:
@@ -381,7 +478,8 @@ impl Primitive for Triangles {
 
     #[inline(always)]
     fn leaf(&self, k: usize) -> LeafTriangle {
-        self.rec[k]
+        let [nx, ny, nz, dn] = self.plane[k];
+        LeafTriangle { v: self.v[k], n: [nx, ny, nz], dn, index: self.base.wrapping_add(k as u32) }
     }
 
     /// The vertices' box, padded: a flat triangle's box gets the padding's
@@ -389,7 +487,7 @@ impl Primitive for Triangles {
     /// lies within a few units of roundoff of the plane), so brute force and
     /// the tree agree bit for bit.
     fn bounds(&self, k: usize, pad: f32) -> Aabb {
-        let v = &self.rec[k].v;
+        let v = &self.v[k];
         let min = std::array::from_fn(|a| v[0][a].min(v[1][a]).min(v[2][a]));
         let max = std::array::from_fn(|a| v[0][a].max(v[1][a]).max(v[2][a]));
         Aabb::padded(min, max, pad)
@@ -397,6 +495,6 @@ impl Primitive for Triangles {
 
     /// The triangles' own extent too: the largest vertex coordinate.
     fn extent(&self, extent: f32) -> f32 {
-        self.rec.iter().flat_map(|r| r.v.iter().flatten()).fold(extent.abs(), |m, x| m.max(x.abs()))
+        self.v.iter().flatten().flatten().fold(extent.abs(), |m, x| m.max(x.abs()))
     }
 }

@@ -116,10 +116,10 @@ impl Recorder<'_> {
         let (what, material) = match kind {
             HitKind::Sphere => (format!("sphere {index}"), Some(sh.spheres.kind[index])),
             HitKind::Moving => (format!("moving sphere {index}"), Some(sh.moving.s.kind[index])),
-            HitKind::Quad => {
-                let quads = sh.quads.kind.len() - sh.triangles.len();
-                let what = if index < quads { format!("quad {index}") } else { format!("triangle {}", index - quads) };
-                (what, sh.quads.kind.get(index).copied())
+            HitKind::Quad => (format!("quad {index}"), sh.quads.kind.get(index).copied()),
+            HitKind::Triangle => {
+                let material = (index < sh.triangles.len()).then(|| sh.triangles.material_of(index).0);
+                (format!("triangle {index}"), material)
             }
             HitKind::Instance => {
                 let (i, k) = sh.instances.of(hit);

@@ -9,10 +9,9 @@ use crate::camera::{PreparedCamera, View};
 use crate::choice::{AccelChoice, EstimatorChoice, Mode};
 use crate::estimator::Estimator;
 use crate::film::accum::Scale;
-use crate::geometry::triangles::plane;
 use crate::geometry::{
     Boundary, Cuboids, Emitters, Instances, LightMesh, LightQuad, LightSphere, Lights, Media, MovingSpheres, Quads,
-    Shade, Shapes, SharedMesh, Smooth, Spheres, TreeChoice, Triangles, Walk, QUAD_BASE,
+    Shade, Shapes, SharedMesh, Smooth, Spheres, TreeChoice, Triangles, Walk, TRIANGLE_BASE,
 };
 use crate::handle::Kind;
 use crate::material::MaterialTables;
@@ -183,8 +182,8 @@ pub(super) fn prepare(
     let extent = extent(scene, flat, &view, &plan);
     let mut tables = Tables { images, materials: MaterialTables::default(), textures: TextureTables::default() };
     let (spheres, moving) = spheres(flat, &mut tables);
-    let (mut quads, cuboids) = quads(flat, extent, &mut tables);
-    let (triangles, smooth, placed) = triangles(flat, &mut quads, &mut tables);
+    let (quads, cuboids) = quads(flat, extent, &mut tables);
+    let (triangles, smooth, placed) = triangles(flat, &mut tables);
     let instances = if plan.instances > 0 { instances(flat, extent, &mut tables) } else { Instances::default() };
     let Tables { materials, textures, .. } = tables;
     let media = if plan.kinds.contains(Kind::Isotropic) { media(flat) } else { Media::default() };
@@ -375,11 +374,10 @@ fn quads(flat: &Flat, extent: f32, tables: &mut Tables) -> (Quads, Cuboids) {
     (quads, cuboids)
 }
 
-/// The meshes' triangles, in mesh order, each with its planar record among
-/// the quads' (after every quad: [`Quads::push_plane`]) and its mesh's
-/// material row; and, when some mesh gives vertex normals, every planar
-/// record's smooth-shading record (flat for the quads and the other meshes).
-fn triangles(flat: &Flat, quads: &mut Quads, tables: &mut Tables) -> (Triangles, Smooth, Vec<Placed>) {
+/// The meshes' triangles, in mesh order (hit indices `TRIANGLE_BASE + i`),
+/// each with its mesh's material; and, when some mesh gives vertex normals,
+/// every triangle's smooth-shading record (flat for the other meshes).
+fn triangles(flat: &Flat, tables: &mut Tables) -> (Triangles, Smooth, Vec<Placed>) {
     let mut triangles = Triangles::default();
     let mut smooth = Smooth::default();
     let mut placed = Vec::with_capacity(flat.meshes.len());
@@ -388,18 +386,16 @@ fn triangles(flat: &Flat, quads: &mut Quads, tables: &mut Tables) -> (Triangles,
     // doubling Vec would hold up to twice its triangles' records.
     let count: usize = flat.meshes.iter().map(|m| m.triangles.len()).sum();
     triangles.reserve(count);
-    quads.reserve_planes(count);
     if smooth_meshes {
-        smooth.reserve(quads.planes + count);
-        (0..quads.planes).for_each(|_| smooth.push_flat());
+        smooth.reserve(count);
     }
     for m in &flat.meshes {
         let (kind, row) = (kind(&m.material), tables.row_of(&m.material));
-        placed.push(Placed { first: QUAD_BASE + quads.planes as u32, row });
+        let mesh = triangles.push_mesh(kind, row);
+        placed.push(Placed { first: TRIANGLE_BASE + triangles.len() as u32, row });
         for k in 0..m.triangles.len() {
             let v = m.triangle(k);
-            let (n, dn) = plane(v);
-            triangles.push(v, quads.push_plane(n, dn, kind, row));
+            triangles.push_in(v, mesh);
             match m.triangle_normals(k) {
                 Some(n) => smooth.push(v, n),
                 None if smooth_meshes => smooth.push_flat(),
@@ -441,16 +437,20 @@ fn media(flat: &Flat) -> Media {
 /// spheres' tree pads by their own extent too); the spheres' tree is shaped
 /// for the walk that uses it (`geometry::bvh::SahCost`).
 fn shapes(kinds: Kinds, materials: &MaterialTables, plan: &Plan, extent: f32) -> Shapes {
-    let Kinds { mut spheres, mut quads, cuboids, mut moving, triangles, mut instances } = kinds;
+    let Kinds { mut spheres, mut quads, cuboids, mut moving, mut triangles, mut instances } = kinds;
     spheres.pad();
     quads.pad();
     moving.pad();
     // The wavefront's per-primitive shading records (geometry::Shade).
     shade_spheres(&mut spheres, materials);
     shade_spheres(&mut moving.s, materials);
-    for i in 0..quads.planes {
+    for i in 0..quads.len {
         let (albedo, param) = materials.record(quads.kind[i], quads.row[i]);
         quads.shade[i].0[4..].copy_from_slice(&[albedo[0], albedo[1], albedo[2], param]);
+    }
+    for m in 0..triangles.kind.len() {
+        let (albedo, param) = materials.record(triangles.kind[m], triangles.row[m]);
+        triangles.material[m] = [albedo[0], albedo[1], albedo[2], param];
     }
     for i in 0..instances.len() {
         let (albedo, param) = materials.record(instances.kind[i], instances.row[i]);

@@ -150,8 +150,8 @@ fn surface_uv<R: Real>(prep: &Prepared, p: V3<R>, hit: impl Fn(usize) -> u32) ->
     let of_kind = |k: usize, kind: HitKind| Some(Hit::of(hit(k))).filter(|h| h.kind == kind).map(|h| h.index);
     let sphere = |k: usize| of_kind(k, HitKind::Sphere);
     // Image textures are on static spheres and quads only (`Scene::validate`
-    // refuses them on moving spheres and meshes, whose planar records follow
-    // the quads'): any other lane reads zeros.
+    // refuses them on moving spheres and meshes): any other lane reads
+    // zeros.
     let quad = |k: usize| of_kind(k, HitKind::Quad).filter(|&i| i < qs.len).map(|i| &qs.rec[i]);
     let is_sphere = R::from_fn(|k| if sphere(k).is_some() { 1.0 } else { 0.0 }).gt(R::splat(0.5));
     let (su, sv) = if sp.len > 0 {

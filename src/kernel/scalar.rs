@@ -465,7 +465,7 @@ fn shade<P: Probe, const M: bool>(
 
 /// The surface of hit `hit` at `t` along the ray (`o`, `d`) at `time`
 /// (scenes with moving spheres, `M`): the surface, its material's kind and
-/// row, and the sphere's signed radius (0 for a planar record).
+/// row, and the sphere's signed radius (0 for a flat surface).
 #[inline(always)]
 pub(super) fn hit_surface<const M: bool>(
     prep: &Prepared,
@@ -486,6 +486,11 @@ pub(super) fn hit_surface<const M: bool>(
             let m = &prep.shapes.moving;
             let r = m.s.r[i];
             (surface(o, d, t, m.centre(i, time), r), m.s.kind[i], m.s.row[i] as usize, r)
+        }
+        HitKind::Triangle if M => {
+            let tr = &prep.shapes.triangles;
+            let (kind, row) = tr.material_of(i);
+            (tr.surface(o, d, t, i), kind, row as usize, 0.0)
         }
         HitKind::Instance if M => {
             let is = &prep.shapes.instances;

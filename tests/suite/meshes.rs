@@ -201,3 +201,22 @@ fn tessellated_final_converges_to_final_as_the_level_rises() {
     }
     assert!(errors[3] < errors[0] / 8.0, "{errors:?}");
 }
+
+/// Once prepared, a triangle of `final-mesh` (622,080 of them, in one tree)
+/// holds at most 100 bytes: its plane and mesh, and its share of the tree's
+/// nodes and lanes, counted from the arrays' capacities. (The build's peak
+/// is `tests/memory.rs`'s.)
+#[test]
+fn a_prepared_triangle_holds_at_most_100_bytes_with_its_tree() {
+    let src = SceneSource::open("final-mesh").unwrap();
+    let o = Overrides { width: Some(16), height: Some(9), spp: Some(1), ..Overrides::default() };
+    let job = Job::from_source(&src, &o, &RenderOptions::default()).unwrap();
+    let shapes = &job.prepared().shapes;
+    let n = shapes.triangles.len();
+    assert_eq!(n, 622_080);
+    assert!(shapes.trees.triangles.is_some(), "final-mesh's triangles get a tree");
+    let per = shapes.triangle_bytes() as f64 / n as f64;
+    eprintln!("final-mesh: {per:.2} bytes a triangle once prepared, its tree included");
+    assert!(per <= 100.0, "{per:.2} bytes a triangle");
+    assert!(per >= 56.0 + 20.0, "{per:.2} bytes a triangle: fewer than its lanes and plane take");
+}

@@ -58,7 +58,7 @@ pub(super) fn classify_packets<W: Wide, P: Probe, S: PathSampler, const M: bool,
     for i in (0..n).step_by(W::LANES) {
         let hit = W::load_u_pow2(&ws.hit, i);
         let hits = W::mask_bits(W::u_lt(hit, W::u_splat(MISS))) & low_bits(n - i);
-        let kind = tables.kinds::<W, Q>(hit);
+        let kind = tables.kinds::<W, Q, M>(hit);
         if hits != 0 {
             let first = W::lane_u(kind, hits.trailing_zeros() as usize & (W::LANES - 1));
             let same = W::mask_bits(W::u_eq(kind, W::u_splat(first))) & hits;
@@ -87,10 +87,12 @@ pub(super) fn classify_packets<W: Wide, P: Probe, S: PathSampler, const M: bool,
 }
 
 /// The material kind tables of the spheres and the quads, each a power of
-/// two long above every index it is read at (`Spheres::pad`, `Quads::pad`).
+/// two long above every index it is read at (`Spheres::pad`, `Quads::pad`),
+/// and the triangles' (by mesh).
 struct KindTables<'a> {
     spheres: &'a [Kind],
     quads: &'a [Kind],
+    triangles: &'a Triangles,
     /// The scene has quads and no static sphere.
     only_quads: bool,
 }
@@ -99,13 +101,15 @@ impl<'a> KindTables<'a> {
     fn of(prep: &'a Prepared) -> Self {
         let (spheres, quads) = (&prep.shapes.spheres.kind[..], &prep.shapes.quads.kind[..]);
         debug_assert!(quads.len() as u32 <= QUAD_BASE);
-        KindTables { spheres, quads, only_quads: prep.shapes.spheres.is_empty() }
+        KindTables { spheres, quads, triangles: &prep.shapes.triangles, only_quads: prep.shapes.spheres.is_empty() }
     }
 
     /// The material kind of each lane's hit (misses read some kind; their
-    /// lanes are not hits). `Q`: the scene has quads.
+    /// lanes are not hits). `Q`: the scene has quads; `M`: the scene is on
+    /// the general path, which classifies packets only when its primitives
+    /// are all triangles (`Shapes::only_triangles`).
     #[inline(always)]
-    fn kinds<W: Wide, const Q: bool>(&self, hit: W::U32) -> W::U32 {
+    fn kinds<W: Wide, const Q: bool, const M: bool>(&self, hit: W::U32) -> W::U32 {
         let (kind_mask, quad_mask) = (self.spheres.len().wrapping_sub(1), self.quads.len().wrapping_sub(1));
         if Q && self.only_quads {
             // Every hit is a quad's: its index masked into the quads' table
@@ -121,6 +125,9 @@ impl<'a> KindTables<'a> {
                     self.quads[(h - QUAD_BASE) as usize & quad_mask] as u32
                 }
             })
+        } else if M {
+            // Every hit is a triangle's (misses read some triangle's kind).
+            W::u_from_fn(|k| self.triangles.kind_of_hit(W::lane_u(hit, k)) as u32)
         } else {
             W::u_from_fn(|k| self.spheres[W::lane_u(hit, k) as usize & kind_mask] as u32)
         }

@@ -14,9 +14,9 @@ pub(super) struct Hits<W: Wide> {
 
 /// The hit surfaces of a packet of queued paths. The hit primitives'
 /// shading records ([`Shade`]) are loaded whole, one per lane, and
-/// transposed. In a scene with quads a packet may hold both kinds: both
-/// records and both surfaces are computed, and each lane keeps its own (the
-/// same values the scalar kernel computes for its one kind).
+/// transposed. In a scene of several kinds a packet may hold them all: each
+/// kind's records and surfaces are computed, and each lane keeps its own
+/// (the same values the scalar kernel computes for its one kind).
 #[inline(always)]
 pub(super) fn surfaces<W: Wide, P: Probe, const M: bool>(
     prep: &Prepared,
@@ -25,7 +25,8 @@ pub(super) fn surfaces<W: Wide, P: Probe, const M: bool>(
     probe: &mut P,
 ) -> Hits<W> {
     let sph = at.u(&ws.hit);
-    if !M && prep.shapes.quads.is_empty() {
+    let sh = &prep.shapes;
+    if !M && sh.quads.is_empty() {
         // Book one's surfaces, as they were. The index is masked into the
         // records' range: a no-op on a hit index, and a lane of a run that is
         // not live (a miss's index, or a stale one) reads some record.
@@ -47,11 +48,21 @@ pub(super) fn surfaces<W: Wide, P: Probe, const M: bool>(
     let o = at.v3(&ws.cur.o);
     let t = at.f(&ws.t);
     let q_mask = W::u_splat(prep.shapes.quads.shade.len() as u32 - 1);
-    if !M && prep.shapes.spheres.is_empty() {
+    if !M && sh.spheres.is_empty() {
         // A scene of quads alone (the Cornell boxes): every hit is a quad's,
         // so the sphere records and surfaces the mixed case computes and
         // then selects away are not computed (the same lanes, bit for bit).
         let rec = W::gather_rows8(&prep.shapes.quads.shade, &W::idx_of(sph & q_mask));
+        let srf = quad_surface(o, d, t, V3::new(rec[0], rec[1], rec[2]), rec[3]);
+        if P::PATHS && probe.paths() {
+            probe.shaded(ws.ids::<W>(&at.idx()), sph, W::splat(0.0), srf.n, srf.front, at.live());
+        }
+        let a = Shade::ALBEDO;
+        return Hits { d, srf, albedo: V3::new(rec[a], rec[a + 1], rec[a + 2]), param: rec[Shade::PARAM] };
+    }
+    if M && sh.only_triangles() {
+        // A scene of triangles alone (`final-mesh`): every hit is one's.
+        let rec = triangle_records::<W>(&sh.triangles, sph);
         let srf = quad_surface(o, d, t, V3::new(rec[0], rec[1], rec[2]), rec[3]);
         if P::PATHS && probe.paths() {
             probe.shaded(ws.ids::<W>(&at.idx()), sph, W::splat(0.0), srf.n, srf.front, at.live());
@@ -77,11 +88,8 @@ pub(super) fn surfaces<W: Wide, P: Probe, const M: bool>(
             offset: W::select(is_sphere, s_srf.offset, q_srf.offset),
         };
         let rec = std::array::from_fn(|k| W::select(is_sphere, srec[k], qrec[k]));
-        let (srf, rec) = if M && !prep.shapes.instances.is_empty() {
-            instance_surfaces::<W>(prep, o, d, t, sph, srf, rec)
-        } else {
-            (srf, rec)
-        };
+        let (srf, rec) =
+            if M && sh.has_meshes() { mesh_surfaces::<W>(prep, o, d, t, sph, srf, rec) } else { (srf, rec) };
         if P::PATHS && probe.paths() {
             probe.shaded(ws.ids::<W>(&at.idx()), sph, r, srf.n, srf.front, at.live());
         }
@@ -115,11 +123,71 @@ pub(super) fn moving_records<W: Wide>(
     (is_sphere | is_moving, std::array::from_fn(|k| W::select(is_moving, mrec[k], srec[k])))
 }
 
+/// A packet's surfaces and records where some lanes may have hit a mesh's
+/// triangle, in world space or instanced.
+#[inline(never)]
+fn mesh_surfaces<W: Wide>(
+    prep: &Prepared,
+    o: V3<W>,
+    d: V3<W>,
+    t: W,
+    hit: W::U32,
+    srf: Surface<W>,
+    rec: [W; 8],
+) -> (Surface<W>, [W; 8]) {
+    let (srf, rec) = if prep.shapes.triangles.is_empty() {
+        (srf, rec)
+    } else {
+        triangle_surfaces::<W>(prep, o, d, t, hit, srf, rec)
+    };
+    match prep.shapes.instances.is_empty() {
+        true => (srf, rec),
+        false => instance_surfaces::<W>(prep, o, d, t, hit, srf, rec),
+    }
+}
+
+/// A packet's surfaces and records where some lanes may have hit a
+/// triangle of the scene's meshes: in those lanes the quads' surface on the
+/// triangle's plane and the shading record of its plane and its mesh's
+/// material ([`triangle_records`]).
+#[inline(always)]
+fn triangle_surfaces<W: Wide>(
+    prep: &Prepared,
+    o: V3<W>,
+    d: V3<W>,
+    t: W,
+    hit: W::U32,
+    srf: Surface<W>,
+    rec: [W; 8],
+) -> (Surface<W>, [W; 8]) {
+    let trec = triangle_records::<W>(&prep.shapes.triangles, hit);
+    let on = !W::u_lt(hit, W::u_splat(TRIANGLE_BASE)) & W::u_lt(hit, W::u_splat(MOVING_BASE));
+    let t_srf = quad_surface(o, d, t, V3::new(trec[0], trec[1], trec[2]), trec[3]);
+    let surface = Surface {
+        p: V3::select(on, t_srf.p, srf.p),
+        n: V3::select(on, t_srf.n, srf.n),
+        front: W::select(on, t_srf.front, srf.front),
+        offset: W::select(on, t_srf.offset, srf.offset),
+    };
+    (surface, std::array::from_fn(|k| W::select(on, trec[k], rec[k])))
+}
+
+/// The shading records of the triangles of hit indices `hit`, one row a
+/// lane ([`crate::geometry::Triangles::shade_of`]), transposed.
+#[inline(always)]
+fn triangle_records<W: Wide>(tr: &crate::geometry::Triangles, hit: W::U32) -> [W; 8] {
+    let mut rows = [Shade::default(); MAX_LANES];
+    for (k, row) in rows.iter_mut().enumerate().take(W::LANES) {
+        row.0 = tr.shade_of(W::lane_u(hit, k));
+    }
+    W::gather_rows8(&rows[..W::LANES], &index_run::<W>(0))
+}
+
 /// A packet's surfaces and records where some lanes may have hit an
 /// instanced mesh: in those lanes the instanced triangle's surface and its
 /// instance's material (`Instances::surface`, the scalar kernel's
 /// function, lane by lane: the same bits).
-#[inline(never)]
+#[inline(always)]
 fn instance_surfaces<W: Wide>(
     prep: &Prepared,
     o: V3<W>,

@@ -51,7 +51,7 @@ use crate::estimator::{
 use crate::film::TileFilm;
 use crate::geometry::{
     below, centre_at, emission, quad_surface, sample_media, shading_normal, spawn, surface, transmittance, Shade,
-    Surface, INSTANCE_BASE, MEDIUM_BASE, MISS, MOVING_BASE, QUAD_BASE,
+    Surface, Triangles, INSTANCE_BASE, MEDIUM_BASE, MISS, MOVING_BASE, QUAD_BASE, TRIANGLE_BASE,
 };
 use crate::handle::Kind;
 use crate::kernel::{background, normal_colour, texture_albedo};
@@ -286,9 +286,10 @@ pub(super) fn bounce<W: Wide, P: Probe, S: PathSampler, const M: bool>(
     let mut q =
         Queues { q: ws.queue.take().expect("the queues are put back after every bounce"), len: [0; MISS_QUEUE + 1] };
     ws.next.len = 0;
-    // A scene without moving spheres, instances or media classifies W paths
-    // at a time (`classify_packets`); the others one path at a time.
-    if !M && prep.media.is_empty() {
+    // A scene without moving spheres, instances or media (on the general
+    // path, one of triangles alone) classifies W paths at a time
+    // (`classify_packets`); the others one path at a time.
+    if (!M || prep.shapes.only_triangles()) && prep.media.is_empty() {
         classify_bounce::<W, P, S, M>(b, ws, n, &mut q, probe);
     } else {
         classify_paths::<M>(prep, ws, n, &mut q);
@@ -372,8 +373,10 @@ fn classify_paths<const M: bool>(prep: &Prepared, ws: &Workspace, n: usize, q: &
         let k = if h < QUAD_BASE {
             prep.shapes.spheres.kind[h as usize & kind_mask] as usize
         } else if h < MEDIUM_BASE {
-            if !M || h < MOVING_BASE {
+            if !M || h < TRIANGLE_BASE {
                 prep.shapes.quads.kind[(h - QUAD_BASE) as usize & quad_mask] as usize
+            } else if h < MOVING_BASE {
+                prep.shapes.triangles.material_of((h - TRIANGLE_BASE) as usize).0 as usize
             } else if h < INSTANCE_BASE {
                 prep.shapes.moving.s.kind[(h - MOVING_BASE) as usize & moving_mask] as usize
             } else {

@@ -199,8 +199,10 @@ pub(super) fn textured_lambertian_pass<W: Wide, P: Probe, S: PathSampler, const 
 pub(super) fn material_row<const M: bool>(prep: &Prepared, h: u32) -> usize {
     if h < QUAD_BASE {
         prep.shapes.spheres.row[h as usize] as usize
-    } else if !M || h < MOVING_BASE {
+    } else if !M || h < TRIANGLE_BASE {
         prep.shapes.quads.row[(h - QUAD_BASE) as usize] as usize
+    } else if h < MOVING_BASE {
+        prep.shapes.triangles.material_of((h - TRIANGLE_BASE) as usize).1 as usize
     } else if h < INSTANCE_BASE {
         prep.shapes.moving.s.row[(h - MOVING_BASE) as usize] as usize
     } else {
